@@ -1,0 +1,1 @@
+"""Fitting analytic models to measured BRDFs with nlopt."""

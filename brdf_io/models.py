@@ -1,0 +1,251 @@
+"""Analytic isotropic BRDF models.
+
+Each model is an immutable object with ``eval`` (rho, 1/sr, no cosine) and
+``rho_hat`` (rho * cos, RH02 §3.1). Parameters may be scalars or RGB triples.
+
+Models
+------
+``phong``
+    RH02 §6.3 (eq. in Appendix D): rho_hat = (s+1)/(2π) max(R·L, 0)^s with R the mirror
+    direction of V. The model *defines* rho_hat; there is no horizon clipping, so the
+    lobe is exactly radially symmetric about R.
+``microfacet``
+    RH02 eq. 11: rho_hat = exp(-(θ_h/σ)²) / (4πσ²), θ_h the angle between N and the half
+    vector; zero where N·L <= 0. The model defines rho_hat; ``eval`` divides by cos θ_i.
+``lambert``
+    rho = albedo / π.
+``lafortune``
+    Lafortune et al. 1997, isotropic: rho = kd/π + Σ_k ks_k max(Cxy_k (LxVx + LyVy)
+    + Cz_k LzVz, 0)^n_k.
+``cook-torrance``
+    Cook & Torrance 1982 with a Beckmann (Walter et al. 2007 Smith G1 rational
+    approximation) or GGX (exact separable Smith G1) distribution and Schlick's Fresnel:
+    rho = kd/π + ks D(θ_h) F(V·H) G(L, V) / (4 cos θ_i cos θ_o).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .brdf import BRDF, Kind, as_directions
+
+__all__ = [
+    "PhongLobe",
+    "SimplifiedMicrofacet",
+    "Lambert",
+    "LafortuneLobe",
+    "Lafortune",
+    "CookTorrance",
+    "rgb",
+]
+
+
+def rgb(value: float | tuple[float, float, float] | np.ndarray) -> np.ndarray:
+    """A scalar or an RGB triple as a float64 array of shape (3,)."""
+    a = np.asarray(value, dtype=np.float64)
+    if a.ndim == 0:
+        return np.full(3, float(a))
+    if a.shape != (3,):
+        raise ValueError(f"expected a scalar or an RGB triple, got shape {a.shape}")
+    return a.copy()
+
+
+def _fmt(a: np.ndarray) -> str:
+    a = np.asarray(a)
+    if np.all(a == a[0]):
+        return f"{a[0]:.9g}"
+    return "/".join(f"{v:.9g}" for v in a)
+
+
+def _safe_pow(base: np.ndarray, exponent: np.ndarray) -> np.ndarray:
+    """max(base, 0) ** exponent without overflow warnings for huge exponents."""
+    with np.errstate(divide="ignore", over="ignore", under="ignore"):
+        positive = base > 0
+        out = np.where(positive, np.exp(exponent * np.log(np.where(positive, base, 1.0))), 0.0)
+    return out
+
+
+def _half_vector_cos(L: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(cos θ_h, cos θ_d) of the half vector H = normalize(L + V)."""
+    H = L + V
+    norm = np.linalg.norm(H, axis=-1)
+    norm = np.where(norm > 0, norm, 1.0)
+    cos_h = np.clip(H[..., 2] / norm, -1.0, 1.0)
+    cos_d = np.clip(np.sum(L * H, axis=-1) / norm, -1.0, 1.0)
+    return cos_h, cos_d
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class _Analytic(BRDF):
+    kind: Kind = field(default="analytic", init=False)
+
+    @property
+    def name(self) -> str:  # type: ignore[override]
+        return self.to_spec()
+
+    def to_spec(self) -> str:  # pragma: no cover - every model overrides it
+        raise NotImplementedError
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class PhongLobe(_Analytic):
+    """RH02 Phong lobe about the mirror direction (RH02 §6.3, Appendix D)."""
+
+    s: float
+    ks: np.ndarray = field(default_factory=lambda: rgb(1.0))
+
+    def rho_hat(self, L: np.ndarray, V: np.ndarray) -> np.ndarray:
+        L, V = as_directions(L, V)
+        # R = mirror of V about the normal +z; R.L = -Vx Lx - Vy Ly + Vz Lz
+        r_dot_l = -V[..., 0] * L[..., 0] - V[..., 1] * L[..., 1] + V[..., 2] * L[..., 2]
+        lobe = (self.s + 1.0) / (2.0 * np.pi) * _safe_pow(r_dot_l, np.float64(self.s))
+        return lobe[..., None] * self.ks
+
+    def eval(self, L: np.ndarray, V: np.ndarray) -> np.ndarray:
+        L, V = as_directions(L, V)
+        cos_i = L[..., 2]
+        above = (cos_i > 0) & (V[..., 2] > 0)
+        return np.where(above[..., None], self.rho_hat(L, V) / np.where(above, cos_i, 1.0)[..., None], 0.0)
+
+    def to_spec(self) -> str:
+        spec = f"phong:s={self.s:.9g}"
+        return spec if np.all(self.ks == 1.0) else spec + f",ks={_fmt(self.ks)}"
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class SimplifiedMicrofacet(_Analytic):
+    """RH02 eq. 11: rho_hat = exp(-(θ_h/σ)²)/(4πσ²), zero where N·L <= 0."""
+
+    sigma: float
+    ks: np.ndarray = field(default_factory=lambda: rgb(1.0))
+
+    def rho_hat(self, L: np.ndarray, V: np.ndarray) -> np.ndarray:
+        L, V = as_directions(L, V)
+        cos_h, _ = _half_vector_cos(L, V)
+        theta_h = np.arccos(cos_h)
+        lobe = np.exp(-((theta_h / self.sigma) ** 2)) / (4.0 * np.pi * self.sigma**2)
+        lobe = np.where((L[..., 2] > 0) & (V[..., 2] > 0), lobe, 0.0)
+        return lobe[..., None] * self.ks
+
+    def eval(self, L: np.ndarray, V: np.ndarray) -> np.ndarray:
+        L, V = as_directions(L, V)
+        cos_i = L[..., 2]
+        safe = np.where(cos_i > 0, cos_i, 1.0)
+        return self.rho_hat(L, V) / safe[..., None]
+
+    def to_spec(self) -> str:
+        spec = f"microfacet:sigma={self.sigma:.9g}"
+        return spec if np.all(self.ks == 1.0) else spec + f",ks={_fmt(self.ks)}"
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class Lambert(_Analytic):
+    """rho = albedo / π."""
+
+    albedo: np.ndarray
+
+    def eval(self, L: np.ndarray, V: np.ndarray) -> np.ndarray:
+        L, V = as_directions(L, V)
+        above = (L[..., 2] > 0) & (V[..., 2] > 0)
+        return np.where(above[..., None], self.albedo / np.pi, 0.0)
+
+    def to_spec(self) -> str:
+        return f"lambert:albedo={_fmt(self.albedo)}"
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class LafortuneLobe:
+    """One isotropic generalized-cosine lobe: ks * max(Cxy (LxVx+LyVy) + Cz LzVz, 0)^n.
+
+    Each parameter is an RGB array of shape (3,).
+    """
+
+    cxy: np.ndarray
+    cz: np.ndarray
+    n: np.ndarray
+    ks: np.ndarray
+
+    def value(self, L: np.ndarray, V: np.ndarray) -> np.ndarray:
+        dot_xy = (L[..., 0] * V[..., 0] + L[..., 1] * V[..., 1])[..., None]
+        dot_z = (L[..., 2] * V[..., 2])[..., None]
+        return self.ks * _safe_pow(self.cxy * dot_xy + self.cz * dot_z, self.n)
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class Lafortune(_Analytic):
+    """Lafortune et al. 1997: kd/π + Σ_k generalized-cosine lobes (isotropic)."""
+
+    kd: np.ndarray
+    lobes: tuple[LafortuneLobe, ...]
+
+    def eval(self, L: np.ndarray, V: np.ndarray) -> np.ndarray:
+        L, V = as_directions(L, V)
+        out = np.broadcast_to(self.kd / np.pi, L.shape[:-1] + (3,)).copy()
+        for lobe in self.lobes:
+            out += lobe.value(L, V)
+        above = (L[..., 2] > 0) & (V[..., 2] > 0)
+        return np.where(above[..., None], out, 0.0)
+
+    def to_spec(self) -> str:
+        parts = [f"kd={_fmt(self.kd)}"]
+        for k, lobe in enumerate(self.lobes, start=1):
+            sfx = "" if k == 1 else str(k)
+            parts += [
+                f"cxy{sfx}={_fmt(lobe.cxy)}",
+                f"cz{sfx}={_fmt(lobe.cz)}",
+                f"n{sfx}={_fmt(lobe.n)}",
+                f"ks{sfx}={_fmt(lobe.ks)}",
+            ]
+        return "lafortune:" + ",".join(parts)
+
+
+def _smith_g1(cos_t: np.ndarray, alpha: float, distribution: str) -> np.ndarray:
+    """Smith masking G1 for a direction at cos θ to the normal (Walter et al. 2007)."""
+    cos_t = np.clip(cos_t, 1e-12, 1.0)
+    tan2 = (1.0 - cos_t**2) / cos_t**2
+    if distribution == "ggx":
+        return 2.0 / (1.0 + np.sqrt(1.0 + alpha**2 * tan2))
+    with np.errstate(divide="ignore"):
+        a = 1.0 / (alpha * np.sqrt(tan2))
+    return np.where(a < 1.6, (3.535 * a + 2.181 * a**2) / (1.0 + 2.276 * a + 2.577 * a**2), 1.0)
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class CookTorrance(_Analytic):
+    """Cook–Torrance microfacet BRDF + Lambert (Beckmann or GGX D, Schlick F, Smith G)."""
+
+    kd: np.ndarray
+    ks: np.ndarray
+    alpha: float
+    f0: np.ndarray
+    distribution: str = "beckmann"
+
+    def distribution_value(self, cos_h: np.ndarray) -> np.ndarray:
+        """Normal distribution D(θ_h), normalized so ∫ D cos θ_h dω = 1."""
+        a2 = self.alpha**2
+        c2 = np.clip(cos_h, 1e-12, 1.0) ** 2
+        if self.distribution == "ggx":
+            return a2 / (np.pi * (c2 * (a2 - 1.0) + 1.0) ** 2)
+        return np.exp(-(1.0 - c2) / (c2 * a2)) / (np.pi * a2 * c2**2)
+
+    def eval(self, L: np.ndarray, V: np.ndarray) -> np.ndarray:
+        L, V = as_directions(L, V)
+        cos_i, cos_o = L[..., 2], V[..., 2]
+        above = (cos_i > 0) & (cos_o > 0)
+        cos_h, cos_d = _half_vector_cos(L, V)
+        D = np.where(cos_h > 0, self.distribution_value(cos_h), 0.0)
+        G = _smith_g1(cos_i, self.alpha, self.distribution) * _smith_g1(
+            cos_o, self.alpha, self.distribution
+        )
+        fresnel = self.f0 + (1.0 - self.f0) * (1.0 - np.clip(cos_d, 0, 1))[..., None] ** 5
+        denom = 4.0 * np.where(above, cos_i * cos_o, 1.0)
+        spec = (D * G / denom)[..., None] * fresnel * self.ks
+        return np.where(above[..., None], self.kd / np.pi + spec, 0.0)
+
+    def to_spec(self) -> str:
+        return (
+            f"cook-torrance:kd={_fmt(self.kd)},ks={_fmt(self.ks)},alpha={self.alpha:.9g},"
+            f"f0={_fmt(self.f0)},dist={self.distribution}"
+        )

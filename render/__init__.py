@@ -1,0 +1,1 @@
+"""Mesh rendering with the global SHRM through a pyvista/VTK GLSL shader (DESIGN §5)."""
