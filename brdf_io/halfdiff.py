@@ -1,0 +1,105 @@
+"""Rusinkiewicz half/difference coordinates of a pair of directions, both ways.
+
+For a light direction L and a view direction V (unit vectors in the local frame, normal
++z, both pointing away from the surface) the half vector is H = normalize(L + V), with
+spherical angles (θ_h, φ_h). The *difference* vector D is L expressed in a frame where H
+is the pole: D = Ry(−θ_h) Rz(−φ_h) L (rotate by −φ_h about z, then by −θ_h about y), and
+(θ_d, φ_d) are its spherical angles (Rusinkiewicz 1998, §3 and Fig. 2). In that frame V
+is the mirror image of D about the pole, V' = (−D_x, −D_y, D_z), so swapping L and V
+keeps θ_h, θ_d and maps φ_d to φ_d + π (mod 2π): reciprocity is a half turn in φ_d.
+
+Conventions: θ_h ∈ [0, π], θ_d ∈ [0, π/2], φ_h and φ_d ∈ (−π, π] (``arctan2``). D is
+built from L (the incident direction), as MERL's ``BRDFRead.cpp`` builds it from its
+``theta_in, fi_in`` pair.
+
+References
+----------
+S. Rusinkiewicz, "A New Change of Variables for Efficient BRDF Representation",
+Eurographics Workshop on Rendering 1998, doi:10.1007/978-3-7091-6453-2_2.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["directions_to_halfdiff", "halfdiff_to_directions", "spherical_angles"]
+
+
+def spherical_angles(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(θ, φ) of unit vectors ``w`` (..., 3), DESIGN §2: w = (sin θ cos φ, sin θ sin φ, cos θ).
+
+    θ is computed with ``arctan2`` so it stays accurate near the poles; φ ∈ (−π, π].
+    """
+    w = np.asarray(w, dtype=np.float64)
+    rho = np.hypot(w[..., 0], w[..., 1])
+    return np.arctan2(rho, w[..., 2]), np.arctan2(w[..., 1], w[..., 0])
+
+
+def directions_to_halfdiff(
+    L: np.ndarray, V: np.ndarray, *, return_phi_h: bool = False
+) -> tuple[np.ndarray, ...]:
+    """Half/difference angles of direction pairs (Rusinkiewicz 1998, §3).
+
+    Parameters
+    ----------
+    L, V
+        Unit vectors (..., 3), broadcast against each other. L + V must not vanish.
+    return_phi_h
+        Also return the azimuth φ_h of the half vector (last element).
+
+    Returns
+    -------
+    theta_h, theta_d, phi_d (, phi_h)
+        Arrays of the broadcast shape; φ_d ∈ (−π, π].
+    """
+    L = np.asarray(L, dtype=np.float64)
+    V = np.asarray(V, dtype=np.float64)
+    L, V = np.broadcast_arrays(L, V)
+    H = L + V
+    norm = np.linalg.norm(H, axis=-1, keepdims=True)
+    H = H / np.where(norm > 0, norm, 1.0)
+    theta_h, phi_h = spherical_angles(H)
+    # D = Ry(−θ_h) Rz(−φ_h) L, written out (R_axis(a) is the right-handed rotation by a)
+    cp, sp = np.cos(phi_h), np.sin(phi_h)
+    x1 = cp * L[..., 0] + sp * L[..., 1]
+    y1 = -sp * L[..., 0] + cp * L[..., 1]
+    z1 = L[..., 2]
+    ct, st = np.cos(theta_h), np.sin(theta_h)
+    dx = ct * x1 - st * z1
+    dz = st * x1 + ct * z1
+    theta_d = np.arctan2(np.hypot(dx, y1), dz)
+    phi_d = np.arctan2(y1, dx)
+    if return_phi_h:
+        return theta_h, theta_d, phi_d, phi_h
+    return theta_h, theta_d, phi_d
+
+
+def halfdiff_to_directions(
+    theta_h: np.ndarray, theta_d: np.ndarray, phi_d: np.ndarray, phi_h: np.ndarray | float = 0.0
+) -> tuple[np.ndarray, np.ndarray]:
+    """Directions (L, V) from half/difference angles, the inverse of ``directions_to_halfdiff``.
+
+    L = Rz(φ_h) Ry(θ_h) D and V = Rz(φ_h) Ry(θ_h) D', with D = (sin θ_d cos φ_d,
+    sin θ_d sin φ_d, cos θ_d) and D' = (−D_x, −D_y, D_z) its mirror about the half vector.
+    The default φ_h = 0 is enough for isotropic BRDFs.
+
+    Returns
+    -------
+    L, V
+        Arrays of shape (..., 3) (the broadcast shape of the angles).
+    """
+    theta_h, theta_d, phi_d, phi_h = np.broadcast_arrays(
+        *(np.asarray(a, dtype=np.float64) for a in (theta_h, theta_d, phi_d, phi_h))
+    )
+    sd = np.sin(theta_d)
+    dx, dy, dz = sd * np.cos(phi_d), sd * np.sin(phi_d), np.cos(theta_d)
+    ct, st = np.cos(theta_h), np.sin(theta_h)
+    cp, sp = np.cos(phi_h), np.sin(phi_h)
+
+    def to_local(x: np.ndarray, y: np.ndarray, z: np.ndarray) -> np.ndarray:
+        # Ry(θ_h) then Rz(φ_h)
+        x1 = ct * x + st * z
+        z1 = -st * x + ct * z
+        return np.stack((cp * x1 - sp * y, sp * x1 + cp * y, z1), axis=-1)
+
+    return to_local(dx, dy, dz), to_local(-dx, -dy, dz)

@@ -1,0 +1,164 @@
+"""Reparameterization of an isotropic BRDF by the reflection vector (RH02 §3.1, DESIGN §3).
+
+In a frame where the reflection direction R is +z, the outgoing (view) direction is
+V' = (θ_o', φ_o') and the incident direction L' = (θ_i', φ_i'). The surface normal is the
+bisector N = normalize(R + V') (so θ_v = θ_o'/2 and the viewer is always above the
+surface), and
+
+    ρ̂(θ_i', θ_o', φ') = ρ(L, V; N) · max(N·L', 0),      φ' = φ_o' − φ_i',
+
+with ρ evaluated in its own normal-based frame. For an isotropic ρ the result depends
+only on (θ_i', θ_o', φ') and is even in φ'. The grid is a quadrature grid for the
+transform of RH02 eq. 13: Gauss–Legendre in cos θ_i' and cos θ_o' (nodes strictly inside
+(0, π): the grazing singularity θ_o' = π is never sampled) and uniform in φ'.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .brdf import BRDF
+from .errors import BadInputError
+
+__all__ = ["ReparamGrid", "ReparamBRDF", "reparameterize", "reparam_directions"]
+
+
+@dataclass(frozen=True)
+class ReparamGrid:
+    """Quadrature grid (θ_i', θ_o', φ') for RH02 eq. 13.
+
+    Parameters
+    ----------
+    n_theta_i, n_theta_o
+        Gauss–Legendre nodes in cos θ over [−1, 1]. n nodes integrate f_lq f_l'q
+        exactly for l + l' <= 2n − 1, so ``n_theta_i > F`` and ``n_theta_o > P`` keep
+        the discrete basis orthonormal (discrete Bessel inequality: ε >= 0).
+    n_phi
+        Uniform nodes φ'_k = 2πk/n_phi; cos(qφ') are orthogonal for q + q' < n_phi.
+    """
+
+    n_theta_i: int
+    n_theta_o: int
+    n_phi: int
+
+    def __post_init__(self) -> None:
+        for name in ("n_theta_i", "n_theta_o", "n_phi"):
+            value = getattr(self, name)
+            if not isinstance(value, int | np.integer) or value < 1:
+                raise BadInputError(None, f"ReparamGrid.{name} must be a positive integer, got {value!r}")
+
+    @classmethod
+    def for_orders(cls, F: int, P: int, oversample: float = 1.0) -> ReparamGrid:
+        """A grid resolving orders up to (F, P): ~2F+24 nodes in θ_i', ~2P+16 in θ_o'."""
+        n_i = int(np.ceil(oversample * (2 * F + 24)))
+        n_o = int(np.ceil(oversample * (2 * P + 16)))
+        n_phi = int(np.ceil(oversample * max(4 * P + 16, 24)))
+        return cls(n_i, n_o, n_phi + (n_phi % 2))
+
+    def theta_i(self) -> tuple[np.ndarray, np.ndarray]:
+        """(cos θ_i' nodes, weights), nodes descending from near +1 (θ ascending)."""
+        x, w = np.polynomial.legendre.leggauss(self.n_theta_i)
+        return x[::-1], w[::-1]
+
+    def theta_o(self) -> tuple[np.ndarray, np.ndarray]:
+        """(cos θ_o' nodes, weights), θ ascending; all strictly inside (0, π)."""
+        x, w = np.polynomial.legendre.leggauss(self.n_theta_o)
+        return x[::-1], w[::-1]
+
+    def phi(self) -> np.ndarray:
+        """φ' nodes 2πk/n_phi."""
+        return 2.0 * np.pi * np.arange(self.n_phi) / self.n_phi
+
+
+@dataclass(frozen=True, eq=False)
+class ReparamBRDF:
+    """ρ̂(θ_i', θ_o', φ') sampled on a :class:`ReparamGrid`.
+
+    Attributes
+    ----------
+    values
+        float64 (n_theta_i, n_theta_o, n_phi, 3), RGB, cosine factor included.
+    grid
+        The quadrature grid.
+    name
+        Name of the source BRDF.
+    n_without_data
+        Grid points where a tabulated source had no valid measurement to interpolate
+        (they hold 0).
+    """
+
+    values: np.ndarray
+    grid: ReparamGrid
+    name: str
+    n_without_data: int = 0
+
+    def energy(self) -> np.ndarray:
+        """∫∫ ρ̂² dω_i dω_o per channel, by quadrature of the samples (shape (3,))."""
+        _, wi = self.grid.theta_i()
+        _, wo = self.grid.theta_o()
+        dphi = 2.0 * np.pi / self.grid.n_phi
+        # 2π from the integral over φ_i' (ρ̂ depends on φ_o' − φ_i' only)
+        return 2.0 * np.pi * dphi * np.einsum("i,o,iopk->k", wi, wo, self.values**2)
+
+
+def reparam_directions(
+    cos_theta_i: np.ndarray, cos_theta_o: np.ndarray, phi: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Local-frame (L, V) for reparameterized coordinates, broadcast over the inputs.
+
+    The reflection frame has R = +z, V' = (θ_o', φ'), L' = (θ_i', 0); the returned
+    vectors are expressed in the surface frame whose normal N = normalize(R + V') is +z
+    (rotate by −φ' about z, then by −θ_o'/2 about y).
+    """
+    ci, co, ph = np.broadcast_arrays(
+        np.asarray(cos_theta_i, float), np.asarray(cos_theta_o, float), np.asarray(phi, float)
+    )
+    si = np.sqrt(np.clip(1.0 - ci * ci, 0.0, None))
+    # half-angle of θ_o' from cos θ_o' (stable on (0, π)): cos(θ/2), sin(θ/2)
+    ch = np.sqrt(np.clip((1.0 + co) / 2.0, 0.0, None))
+    sh = np.sqrt(np.clip((1.0 - co) / 2.0, 0.0, None))
+    cp, sp = np.cos(ph), np.sin(ph)
+    # L' = (si, 0, ci); rotate by -φ' about z: (si cp, -si sp, ci)
+    lx, ly, lz = si * cp, -si * sp, ci
+    # then by -θ_o'/2 about y: x' = x cos(t) - z sin(t), z' = x sin(t) + z cos(t)
+    L = np.stack([lx * ch - lz * sh, ly, lx * sh + lz * ch], axis=-1)
+    # V' is at polar angle θ_o' and azimuth φ'; in the normal frame it sits at θ_o'/2, azimuth 0
+    V = np.stack([sh, np.zeros_like(sh), ch], axis=-1)
+    return L, V
+
+
+def reparameterize(brdf: BRDF, grid: ReparamGrid) -> ReparamBRDF:
+    """Sample ρ̂(θ_i', θ_o', φ') of ``brdf`` on ``grid`` (RH02 §3.1; DESIGN §3).
+
+    Parameters
+    ----------
+    brdf
+        Any BRDF that can be evaluated everywhere (models, MERL, tables). Scattered
+        measurements must be fitted first.
+    grid
+        The quadrature grid.
+
+    Returns
+    -------
+    ReparamBRDF
+        Values with the cosine factor max(N·L', 0) included, zero below the horizon.
+    """
+    xi, _ = grid.theta_i()
+    xo, _ = grid.theta_o()
+    ph = grid.phi()
+    L, V = reparam_directions(xi[:, None, None], xo[None, :, None], ph[None, None, :])
+    values, missing = _rho_hat_counted(brdf, L, V)
+    if not np.all(np.isfinite(values)):
+        bad = int(np.count_nonzero(~np.isfinite(values)))
+        raise BadInputError(brdf.name, f"BRDF evaluates to {bad} non-finite values on the reparameterized grid")
+    return ReparamBRDF(values=values, grid=grid, name=brdf.name, n_without_data=missing)
+
+
+def _rho_hat_counted(brdf: BRDF, L: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, int]:
+    """ρ̂ = ρ max(N·L, 0) (or the model's own ρ̂) and the count of points without data."""
+    if brdf.kind == "analytic":
+        return brdf.rho_hat(L, V), 0
+    rho, missing = brdf.eval_counted(L, V)
+    return rho * np.maximum(L[..., 2], 0.0)[..., None], int(missing)
