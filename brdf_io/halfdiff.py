@@ -56,21 +56,27 @@ def directions_to_halfdiff(
     V = np.asarray(V, dtype=np.float64)
     L, V = np.broadcast_arrays(L, V)
     H = L + V
-    norm = np.linalg.norm(H, axis=-1, keepdims=True)
-    H = H / np.where(norm > 0, norm, 1.0)
-    theta_h, phi_h = spherical_angles(H)
+    norm = np.sqrt(np.einsum("...i,...i->...", H, H))
+    norm = np.where(norm > 0, norm, 1.0)
+    hx, hy, hz = H[..., 0] / norm, H[..., 1] / norm, H[..., 2] / norm
+    # sin θ_h, cos θ_h and cos φ_h, sin φ_h straight from H (φ_h = 0 on the pole)
+    st = np.hypot(hx, hy)
+    ct = hz
+    on_pole = st == 0
+    safe = np.where(on_pole, 1.0, st)
+    cp = np.where(on_pole, 1.0, hx / safe)
+    sp = np.where(on_pole, 0.0, hy / safe)
+    theta_h = np.arctan2(st, ct)
     # D = Ry(−θ_h) Rz(−φ_h) L, written out (R_axis(a) is the right-handed rotation by a)
-    cp, sp = np.cos(phi_h), np.sin(phi_h)
     x1 = cp * L[..., 0] + sp * L[..., 1]
     y1 = -sp * L[..., 0] + cp * L[..., 1]
     z1 = L[..., 2]
-    ct, st = np.cos(theta_h), np.sin(theta_h)
     dx = ct * x1 - st * z1
     dz = st * x1 + ct * z1
     theta_d = np.arctan2(np.hypot(dx, y1), dz)
     phi_d = np.arctan2(y1, dx)
     if return_phi_h:
-        return theta_h, theta_d, phi_d, phi_h
+        return theta_h, theta_d, phi_d, np.arctan2(hy, hx)
     return theta_h, theta_d, phi_d
 
 

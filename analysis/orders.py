@@ -1,0 +1,209 @@
+"""Accuracy table ε(F, P) and the error-driven choice of orders (RH02 §5.1, Appendix C).
+
+    A(F, P) = Σ_{l<=F, p<=P, |q|<=min(l,p)} ρ̂_{lq,pq}² / ∫∫ ρ̂² dω_i dω_o,   ε = 1 − A,
+
+with the total energy computed independently by quadrature of ρ̂² (not by summing
+coefficients). RGB: ε is computed per channel and the *worst* channel is reported (a
+material is as hard as its sharpest channel); channels with no energy are ignored.
+
+Choice rule (RH02 §5.1): with (F0, P0) large enough that ε(F0, P0) <= tol,
+P = min{p : ε(F0, p) <= tol}, then F = min{f : ε(f, P) <= tol}.
+
+(F0, P0) are the full capacity of the quadrature grid (every order the grid integrates
+orthonormally), so the rule sees all the energy the samples hold. When ε(F0, P0) > tol
+the grid is refined (doubled) until the tolerance is met or the caps ``max_F``/``max_P``
+are hit; then the result says so (``capped``) instead of looping. The choice is
+re-checked on a 1.5× finer grid (``converged``).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..brdf_io.brdf import BRDF
+from ..brdf_io.errors import BadInputError
+from ..brdf_io.reparam import ReparamBRDF, ReparamGrid, reparameterize
+from .brdf_coeffs import BRDFCoefficients, rho_lpq
+
+__all__ = ["OrderChoice", "eps_table", "choose_from_table", "choose_orders", "DEFAULT_MAX_F", "DEFAULT_MAX_P"]
+
+DEFAULT_MAX_F = 512
+DEFAULT_MAX_P = 16
+
+
+@dataclass(frozen=True, eq=False)
+class OrderChoice:
+    """Result of :func:`choose_orders`.
+
+    Attributes
+    ----------
+    F, P
+        Chosen orders.
+    eps
+        Achieved ε(F, P) (worst channel).
+    tolerance
+        Requested tolerance.
+    table
+        ε[F, P] for F <= F0, P <= P0 (worst channel).
+    capped
+        True when the tolerance could not be met within ``max_F``/``max_P``; (F, P) are
+        then the caps and ``eps`` what they achieve.
+    converged
+        True when a 1.5× finer quadrature grid gave the same choice (ΔF <= 1, same P).
+    message
+        Human-readable notes (caps, convergence, missing data).
+    coefficients
+        The ρ̂_lpq used (on the final grid).
+    """
+
+    F: int
+    P: int
+    eps: float
+    tolerance: float
+    table: np.ndarray
+    capped: bool
+    converged: bool
+    message: str
+    seconds: float
+    grid: ReparamGrid
+    n_without_data: int
+    coefficients: BRDFCoefficients = field(repr=False)
+
+    @property
+    def F0(self) -> int:
+        return self.table.shape[0] - 1
+
+    @property
+    def P0(self) -> int:
+        return self.table.shape[1] - 1
+
+
+def eps_table(coefficients: BRDFCoefficients) -> np.ndarray:
+    """ε(F, P) for every F <= F0, P <= P0, worst channel (RH02 §5.1).
+
+    Raises
+    ------
+    BadInputError
+        If the BRDF has no energy at all (an all-zero BRDF has no meaningful orders).
+    """
+    energy = coefficients.energy
+    if not np.any(energy > 0):
+        raise BadInputError(coefficients.name, "the BRDF is zero everywhere: no orders to choose")
+    live = energy > 1e-12 * energy.max()
+    terms = coefficients.parseval_terms().sum(axis=2)  # (F0+1, P0+1, 3)
+    captured = np.cumsum(np.cumsum(terms, axis=0), axis=1)
+    eps = 1.0 - captured[..., live] / energy[live]
+    return eps.max(axis=-1)
+
+
+def choose_from_table(table: np.ndarray, tolerance: float) -> tuple[int, int, bool]:
+    """(F, P, capped) by the RH02 rule: smallest P at F0, then smallest F at that P."""
+    last_row = table[-1]
+    ok_p = np.nonzero(last_row <= tolerance)[0]
+    if ok_p.size == 0:
+        return table.shape[0] - 1, table.shape[1] - 1, True
+    P = int(ok_p[0])
+    F = int(np.nonzero(table[:, P] <= tolerance)[0][0])
+    return F, P, False
+
+
+def _coefficients_on(brdf: BRDF, grid: ReparamGrid, max_F: int, max_P: int) -> tuple[BRDFCoefficients, int]:
+    reparam: ReparamBRDF = reparameterize(brdf, grid)
+    F0 = min(grid.n_theta_i - 1, max_F)
+    P0 = min(grid.n_theta_o - 1, (grid.n_phi - 1) // 2, max_P)
+    return rho_lpq(reparam, F0, P0), reparam.n_without_data
+
+
+def _validate(tolerance: float, max_F: int, max_P: int) -> None:
+    if not (0.0 < tolerance < 1.0):
+        raise BadInputError(None, f"eps must be in (0, 1), got {tolerance!r}")
+    if int(max_F) < 1 or int(max_F) > 2000:
+        raise BadInputError(None, f"max_F must be in [1, 2000], got {max_F!r}")
+    if int(max_P) < 0 or int(max_P) > 64:
+        raise BadInputError(None, f"max_P must be in [0, 64], got {max_P!r}")
+
+
+def choose_orders(
+    brdf: BRDF,
+    eps: float = 0.03,
+    *,
+    max_F: int = DEFAULT_MAX_F,
+    max_P: int = DEFAULT_MAX_P,
+    start_F: int = 24,
+    start_P: int = 4,
+) -> OrderChoice:
+    """Choose (F, P) for ``brdf`` at tolerance ``eps`` (RH02 §5.1, Appendix C).
+
+    Parameters
+    ----------
+    brdf
+        Any evaluable BRDF (model, MERL, table, fitted model).
+    eps
+        Tolerance on the uncaptured energy fraction, in (0, 1).
+    max_F, max_P
+        Caps on the orders; beyond them the result is ``capped`` (documented, no loop).
+    start_F, start_P
+        Orders the first quadrature grid is sized for.
+
+    Returns
+    -------
+    OrderChoice
+    """
+    _validate(eps, max_F, max_P)
+    t0 = time.perf_counter()
+    notes: list[str] = []
+    F_goal, P_goal = min(start_F, max_F), min(start_P, max_P)
+    for _ in range(16):
+        grid = ReparamGrid.for_orders(F_goal, P_goal)
+        coefficients, missing = _coefficients_on(brdf, grid, max_F, max_P)
+        table = eps_table(coefficients)
+        F, P, capped = choose_from_table(table, eps)
+        at_caps = coefficients.F0 >= max_F and coefficients.P0 >= max_P
+        if capped and not at_caps:
+            F_goal, P_goal = min(2 * F_goal, max_F), min(P_goal + 4, max_P)
+        elif F > F_goal or P > P_goal:
+            # the grid holds orders up to ~2x what it resolves well: resize it for the choice
+            F_goal, P_goal = max(F_goal, F), max(P_goal, P)
+        else:
+            break
+    if capped:
+        notes.append(
+            f"tolerance {eps:g} not met within the caps F<={max_F}, P<={max_P}: "
+            f"ε({F}, {P}) = {table[F, P]:.3g}; raise --max-F/--max-P"
+        )
+    # convergence check on a 1.5x finer grid
+    converged = False
+    for _ in range(3):
+        fine = ReparamGrid(
+            int(grid.n_theta_i * 1.5), int(grid.n_theta_o * 1.5), int(grid.n_phi * 1.5) + (grid.n_phi % 2)
+        )
+        fine_coeffs, fine_missing = _coefficients_on(brdf, fine, max_F, max_P)
+        fine_table = eps_table(fine_coeffs)
+        F2, P2, capped2 = choose_from_table(fine_table, eps)
+        same = abs(F2 - F) <= 1 and P2 == P and capped2 == capped
+        grid, coefficients, table, missing = fine, fine_coeffs, fine_table, fine_missing
+        F, P, capped = F2, P2, capped2
+        if same:
+            converged = True
+            break
+    if not converged:
+        notes.append("the order choice did not settle under quadrature refinement (table too coarse?)")
+    if missing:
+        notes.append(f"{missing} reparameterized samples had no measurement to interpolate (set to 0)")
+    return OrderChoice(
+        F=F,
+        P=P,
+        eps=float(table[F, P]),
+        tolerance=float(eps),
+        table=table,
+        capped=capped,
+        converged=converged,
+        message="; ".join(notes),
+        seconds=time.perf_counter() - t0,
+        grid=grid,
+        n_without_data=missing,
+        coefficients=coefficients,
+    )

@@ -1,0 +1,235 @@
+"""MERL BRDF database ``.binary`` format input/output.
+
+The format (Matusik et al. 2003; layout in ``data_specs/merl_binary.md``): a header of
+3 little-endian int32 dimensions (90, 90, 180), then 3 · 90·90·180 little-endian
+float64, all red, then all green, then all blue; each channel is indexed
+[θ_half][θ_diff][φ_diff] with φ_diff fastest. Sample (i, j, k) sits at
+θ_h = (i/90)² π/2, θ_d = j π/180, φ_d = k π/180 (the lower bin edges of the reference
+reader's floor lookup). Stored numbers are scaled: rho = stored · (1, 1.15, 1.66)/1500
+for (R, G, B). Negative numbers mark missing measurements.
+
+Public objects: :class:`MerlBRDF`, :func:`read_merl`, :func:`write_merl`,
+:func:`tabulate_merl`, :func:`merl_sample_angles`, :func:`merl_index_coordinates`.
+
+References
+----------
+W. Matusik, H. Pfister, M. Brand, L. McMillan, "A Data-Driven Reflectance Model",
+ACM Trans. Graph. 22(3), 2003, doi:10.1145/882262.882343; the database's reference
+reader ``BRDFRead.cpp`` (MERL, 2006).
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import IO
+
+import numpy as np
+
+from .brdf import BRDF, Kind
+from .errors import BadInputError
+from .halfdiff import directions_to_halfdiff, halfdiff_to_directions
+from .table import flatten_directions, MissingAwareGrid, atomic_write, eval_with_mask
+
+__all__ = [
+    "MERL_DIMS",
+    "MERL_SCALE",
+    "MerlBRDF",
+    "merl_index_coordinates",
+    "merl_sample_angles",
+    "read_merl",
+    "tabulate_merl",
+    "write_merl",
+]
+
+# (θ_half, θ_diff, φ_diff) resolution; BRDFRead.cpp: BRDF_SAMPLING_RES_THETA_H = 90,
+# BRDF_SAMPLING_RES_THETA_D = 90, BRDF_SAMPLING_RES_PHI_D / 2 = 180
+MERL_DIMS = (90, 90, 180)
+# rho = stored value * scale, per channel R, G, B (BRDFRead.cpp RED/GREEN/BLUE_SCALE)
+MERL_SCALE = np.array([1.0 / 1500.0, 1.15 / 1500.0, 1.66 / 1500.0])
+_N = MERL_DIMS[0] * MERL_DIMS[1] * MERL_DIMS[2]
+_HEADER = np.dtype("<i4")  # 3 little-endian int32 dims
+_SAMPLE = np.dtype("<f8")  # little-endian float64 samples
+_HEADER_BYTES = 3 * _HEADER.itemsize
+
+
+def merl_sample_angles() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(θ_h, θ_d, φ_d) of the table samples, 1-D arrays of 90, 90 and 180 radians.
+
+    θ_h = (i/90)² π/2 (square-root scale), θ_d = j π/180, φ_d = k π/180: the lower bin
+    edges of BRDFRead.cpp's floor lookup (data_specs/merl_binary.md).
+    """
+    i, j, k = (np.arange(n, dtype=np.float64) for n in MERL_DIMS)
+    return (i / MERL_DIMS[0]) ** 2 * (np.pi / 2), j * (np.pi / 2) / MERL_DIMS[1], k * np.pi / MERL_DIMS[2]
+
+
+def merl_index_coordinates(
+    theta_h: np.ndarray, theta_d: np.ndarray, phi_d: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Continuous table index coordinates of half/difference angles.
+
+    The inverse of :func:`merl_sample_angles`: u = 90 sqrt(θ_h/(π/2)), v = 90 θ_d/(π/2),
+    w = 180 (φ_d mod π)/π. ``floor`` of these is BRDFRead.cpp's lookup (before its
+    clamping to the table); φ_d is folded into [0, π) by reciprocity (φ_d ~ φ_d + π).
+    """
+    u = MERL_DIMS[0] * np.sqrt(np.maximum(theta_h, 0.0) / (np.pi / 2))
+    v = MERL_DIMS[1] * np.asarray(theta_d, dtype=np.float64) / (np.pi / 2)
+    w = MERL_DIMS[2] * np.mod(phi_d, np.pi) / np.pi
+    return u, v, w
+
+
+class MerlBRDF(BRDF):
+    """A MERL-format tabulated BRDF, interpolated in index space excluding missing samples.
+
+    Attributes
+    ----------
+    values
+        rho in 1/sr, shape (3, 90, 90, 180) (channel, θ_h, θ_d, φ_d index), NaN where missing.
+    n_missing
+        Number of table samples (of 90·90·180) with at least one channel missing.
+    name, source
+        The file stem and path (or a given name and ``None``).
+    """
+
+    kind: Kind = "tabulated"
+
+    def __init__(self, values: np.ndarray, *, name: str = "merl", source: str | None = None) -> None:
+        values = np.asarray(values, dtype=np.float64)
+        if values.shape != (3, *MERL_DIMS):
+            raise BadInputError(source or name, f"MERL values must have shape (3, 90, 90, 180), got {values.shape}")
+        self.values = values
+        grid = np.moveaxis(values, 0, -1)  # (θ_h, θ_d, φ_d, channel)
+        self.n_missing = int(np.any(np.isnan(grid), axis=-1).sum())
+        # φ_d periodic: φ_d and φ_d + π are one sample by reciprocity
+        self._interpolate = MissingAwareGrid(grid, periodic=(False, False, True))
+        self.name = name
+        self.source = source
+
+    def eval_masked(self, L: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """rho (..., 3) and a bool mask (...) of the points that had data.
+
+        Trilinear in the continuous indices of :func:`merl_index_coordinates`, periodic in
+        φ_d (sample 179 neighbours sample 0 = φ_d π), clamped in θ_h and θ_d; missing
+        samples are left out and the weights renormalized. Below-surface points are 0 and
+        count as having data.
+        """
+        L, V, shape = flatten_directions(L, V)
+        out = np.zeros((L.shape[0], 3))
+        has = np.ones(L.shape[0], dtype=bool)
+        above = (L[:, 2] > 0) & (V[:, 2] > 0)
+        coords = merl_index_coordinates(*directions_to_halfdiff(L[above], V[above]))
+        values, no_data = self._interpolate(coords)
+        out[above] = values
+        has[above] = ~no_data
+        return out.reshape(*shape, 3), has.reshape(shape)
+
+    def eval_counted(self, L: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, int]:
+        """rho and the number of above-surface query points with no present sample near."""
+        rho, has = self.eval_masked(L, V)
+        return rho, int(np.sum(~has))
+
+    def eval(self, L: np.ndarray, V: np.ndarray) -> np.ndarray:
+        """rho(L, V) in 1/sr, (..., 3); 0 below the surface and where no sample is present."""
+        return self.eval_masked(L, V)[0]
+
+
+def read_merl(path: str | os.PathLike[str]) -> MerlBRDF:
+    """Read a MERL ``.binary`` file (data_specs/merl_binary.md).
+
+    Raises
+    ------
+    BadInputError
+        Unreadable file, header dims other than (90, 90, 180), a length other than the
+        12 + 3·8·n bytes the header implies (truncated or trailing bytes), NaN or Inf.
+    """
+    path = Path(path)
+    try:
+        data = path.read_bytes()
+    except OSError as err:
+        raise BadInputError(path, f"cannot read MERL file ({err.strerror or err})") from None
+    if len(data) < _HEADER_BYTES:
+        raise BadInputError(path, f"{len(data)} bytes, shorter than the 12-byte MERL header")
+    dims = tuple(int(d) for d in np.frombuffer(data, dtype=_HEADER, count=3))
+    if min(dims) <= 0:
+        raise BadInputError(path, f"header dims {dims} are not positive: not a MERL .binary file")
+    # 3 channels of n float64 after the header
+    expected = _HEADER_BYTES + 3 * _SAMPLE.itemsize * dims[0] * dims[1] * dims[2]
+    if len(data) != expected:
+        raise BadInputError(
+            path,
+            f"{'truncated' if len(data) < expected else 'trailing bytes'}: header dims {dims} imply "
+            f"{expected} bytes (12 + 3*8*n), the file has {len(data)}",
+        )
+    if dims != MERL_DIMS:
+        raise BadInputError(path, f"header dims {dims}; only the MERL sampling {MERL_DIMS} is supported")
+    # channel-major planes (R, G, B), each [θ_h][θ_d][φ_d] with φ_d fastest (C order)
+    stored = np.frombuffer(data, dtype=_SAMPLE, offset=_HEADER_BYTES).reshape(3, *MERL_DIMS)
+    bad = ~np.isfinite(stored)
+    if np.any(bad):
+        c, i, j, k = (int(x[0]) for x in np.nonzero(bad))
+        raise BadInputError(
+            path, f"{int(bad.sum())} non-finite value(s), first {stored[c, i, j, k]!r} at channel {c}, "
+            f"index ({i}, {j}, {k})"
+        )
+    # negative = missing measurement; scale per channel R, G, B
+    values = np.where(stored < 0, np.nan, stored * MERL_SCALE[:, None, None, None])
+    return MerlBRDF(values, name=path.stem, source=str(path))
+
+
+def tabulate_merl(brdf: BRDF) -> np.ndarray:
+    """rho of ``brdf`` at the MERL sample positions, shape (3, 90, 90, 180), NaN missing.
+
+    Each sample (θ_h, θ_d, φ_d) of :func:`merl_sample_angles` is turned into (L, V) with
+    φ_h = 0 by :func:`~shrmkit.brdf_io.halfdiff.halfdiff_to_directions`. Samples with L or
+    V below the surface (tan θ_h tan θ_d |cos φ_d| ≥ 1), where rho is undefined, and
+    points where a tabulated source had no data are marked missing.
+
+    Raises
+    ------
+    BadInputError
+        The BRDF returned negative or non-finite values.
+    """
+    th, td, pd = merl_sample_angles()
+    L, V = halfdiff_to_directions(th[:, None, None], td[None, :, None], pd[None, None, :])
+    rho, has = eval_with_mask(brdf, L, V)
+    above = (L[..., 2] > 0) & (V[..., 2] > 0)
+    rho = np.where((has & above)[..., None], rho, np.nan)
+    if np.any(np.isinf(rho)) or np.any(rho < 0):
+        raise BadInputError(brdf.name, "the BRDF returned negative or infinite values at MERL sample positions")
+    return np.ascontiguousarray(np.moveaxis(rho, -1, 0))
+
+
+def write_merl(path: str | os.PathLike[str], brdf_or_values: BRDF | np.ndarray) -> Path:
+    """Write a MERL ``.binary`` file, atomically (temporary file + ``os.replace``).
+
+    Parameters
+    ----------
+    path
+        Output file.
+    brdf_or_values
+        A BRDF, tabulated with :func:`tabulate_merl`, or rho values of shape
+        (3, 90, 90, 180) in 1/sr with NaN for missing samples (written as −1).
+
+    Raises
+    ------
+    BadInputError
+        Wrong shape, negative or infinite values.
+    """
+    path = Path(path)
+    if isinstance(brdf_or_values, BRDF):
+        values = tabulate_merl(brdf_or_values)
+    else:
+        values = np.asarray(brdf_or_values, dtype=np.float64)
+        if values.shape != (3, *MERL_DIMS):
+            raise BadInputError(path, f"MERL values must have shape (3, 90, 90, 180), got {values.shape}")
+        if np.any(np.isinf(values)) or np.any(values < 0):
+            raise BadInputError(path, "MERL values must be finite and non-negative (NaN marks missing)")
+    # divide by the per-channel scale; missing -> -1 (any negative number means missing)
+    stored = np.where(np.isnan(values), -1.0, values / MERL_SCALE[:, None, None, None])
+
+    def write(f: IO[bytes]) -> None:
+        f.write(np.array(MERL_DIMS, dtype=_HEADER).tobytes())
+        # channel-major R, G, B planes, each C-ordered [θ_h][θ_d][φ_d], φ_d fastest
+        f.write(np.ascontiguousarray(stored, dtype=_SAMPLE).tobytes())
+
+    return atomic_write(path, write)

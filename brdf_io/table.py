@@ -1,0 +1,436 @@
+"""shrmkit BRDF table format (``.npz``) input/output, and the grid interpolation that
+tabulated BRDFs share.
+
+A table holds rho(θ_i, θ_o, φ_d) in 1/sr on a rectilinear grid of angles; the layout is
+specified in ``data_specs/brdf_table.md``. Public objects:
+
+- :class:`TableBRDF` — a tabulated isotropic BRDF, trilinear in angle, excluding missing
+  (NaN) samples;
+- :func:`read_table`, :func:`write_table` — the reader/writer pair;
+- :func:`tabulate_table` — evaluate any BRDF on a (θ_i, θ_o, φ_d) grid;
+- :func:`interpolate_excluding_missing` — trilinear interpolation on a regular index grid
+  that renormalizes the weights over the valid neighbours (used by the MERL reader too);
+- :func:`atomic_write` — write a file through a temporary file and ``os.replace``.
+
+References
+----------
+data_specs/brdf_table.md (format version 1).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+import zipfile
+from collections.abc import Callable
+from pathlib import Path
+from typing import IO, Any
+
+import numpy as np
+
+from .brdf import BRDF, Kind, as_directions
+from .errors import BadInputError
+from .halfdiff import spherical_angles
+
+__all__ = [
+    "TABLE_FORMAT",
+    "TABLE_FORMAT_VERSION",
+    "TableBRDF",
+    "atomic_write",
+    "eval_with_mask",
+    "flatten_directions",
+    "interpolate_excluding_missing",
+    "MissingAwareGrid",
+    "read_table",
+    "tabulate_table",
+    "write_table",
+]
+
+TABLE_FORMAT = "shrmkit-brdf-table"
+TABLE_FORMAT_VERSION = 1
+_KEYS = ("theta_i", "theta_o", "phi_d", "values", "metadata")
+
+
+# --------------------------------------------------------------------------------------
+# shared helpers
+# --------------------------------------------------------------------------------------
+
+
+def atomic_write(path: str | os.PathLike[str], write: Callable[[IO[bytes]], None]) -> Path:
+    """Call ``write(fileobj)`` on a temporary file beside ``path``, then ``os.replace`` it.
+
+    No partial output remains if ``write`` raises: the temporary file is removed and
+    ``path`` is left as it was.
+    """
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            write(f)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def _axis_corners(t: np.ndarray, n: int, periodic: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Lower/upper sample index and the fraction towards the upper one, for continuous
+    index coordinates ``t`` on an axis of ``n`` samples (clamped, or wrapped if periodic)."""
+    if periodic:
+        t = np.mod(t, n)
+        i0 = np.minimum(np.floor(t).astype(np.intp), n - 1)  # mod can round up to n
+        return i0, (i0 + 1) % n, t - i0
+    t = np.clip(t, 0.0, n - 1)
+    i0 = np.minimum(np.floor(t).astype(np.intp), max(n - 2, 0))
+    return i0, np.minimum(i0 + 1, n - 1), t - i0
+
+
+class MissingAwareGrid:
+    """Trilinear interpolation on an index grid that ignores missing (NaN) samples.
+
+    The value at continuous index coordinates (t0, t1, t2) is
+    Σ_c w_c v_c / Σ_c w_c over the 8 corners c of the enclosing cell whose sample is
+    present (w_c the trilinear weight), separately per channel; with all corners present
+    this is plain trilinear interpolation. Coordinates outside [0, n−1] are clamped to the
+    edge, or wrapped modulo n on a periodic axis (there sample n−1 neighbours sample 0).
+
+    Parameters
+    ----------
+    grid
+        Samples, shape (n0, n1, n2, C), NaN where missing.
+    periodic
+        Which axes wrap around.
+    """
+
+    def __init__(self, grid: np.ndarray, periodic: tuple[bool, bool, bool] = (False, False, False)) -> None:
+        grid = np.asarray(grid, dtype=np.float64)
+        if grid.ndim != 4:
+            raise ValueError(f"grid must have shape (n0, n1, n2, C), got {grid.shape}")
+        self.shape = grid.shape[:3]
+        self.n_channels = grid.shape[3]
+        self.periodic = tuple(bool(p) for p in periodic)
+        present = ~np.isnan(grid)
+        # one row per sample: C values (0 where missing), then C presence flags, so that a
+        # single gather per cell corner fetches both
+        self._packed = np.concatenate(
+            (np.where(present, grid, 0.0), present.astype(np.float64)), axis=-1
+        ).reshape(-1, 2 * self.n_channels)
+
+    def __call__(self, coords: tuple[np.ndarray, np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+        """Interpolate at continuous index coordinates (three finite arrays of shape (N,)).
+
+        Returns
+        -------
+        values, no_data
+            ``values`` (N, C), 0 where a channel had no present corner of positive weight;
+            ``no_data`` (N,) bool, true where some channel had none.
+        """
+        n0, n1, n2 = self.shape
+        axes = [
+            _axis_corners(np.asarray(t, dtype=np.float64).ravel(), n, p)
+            for t, n, p in zip(coords, self.shape, self.periodic, strict=True)
+        ]
+        (lo0, hi0, f0), (lo1, hi1, f1), (lo2, hi2, f2) = axes
+        row0 = (lo0 * n1, hi0 * n1)
+        w0 = (1.0 - f0, f0)
+        w1 = (1.0 - f1, f1)
+        w2 = (1.0 - f2, f2)
+        acc = np.zeros((f0.shape[0], 2 * self.n_channels))
+        for a in (0, 1):
+            for b in (0, 1):
+                base = (row0[a] + (lo1, hi1)[b]) * n2
+                wab = w0[a] * w1[b]
+                for c in (0, 1):
+                    corner = np.take(self._packed, base + (lo2, hi2)[c], axis=0)
+                    corner *= (wab * w2[c])[:, None]
+                    acc += corner
+        total, weight_sum = acc[:, : self.n_channels], acc[:, self.n_channels :]
+        has = weight_sum > 0
+        values = np.where(has, total / np.where(has, weight_sum, 1.0), 0.0)
+        return values, ~np.all(has, axis=1)
+
+
+def interpolate_excluding_missing(
+    grid: np.ndarray,
+    coords: tuple[np.ndarray, np.ndarray, np.ndarray],
+    periodic: tuple[bool, bool, bool] = (False, False, False),
+) -> tuple[np.ndarray, np.ndarray]:
+    """One-shot :class:`MissingAwareGrid` ``(grid, periodic)(coords)``."""
+    return MissingAwareGrid(grid, periodic)(coords)
+
+
+def eval_with_mask(brdf: BRDF, L: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """rho(L, V) and a bool mask of the points that had data (all true for models)."""
+    if hasattr(brdf, "eval_masked"):
+        return brdf.eval_masked(L, V)
+    rho = np.asarray(brdf.eval(L, V), dtype=np.float64)
+    return rho, np.ones(rho.shape[:-1], dtype=bool)
+
+
+def flatten_directions(L: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, np.ndarray, tuple[int, ...]]:
+    """Broadcast direction arrays and flatten them to (N, 3); also return the batch shape."""
+    L, V = as_directions(L, V)
+    shape = L.shape[:-1]
+    L, V = L.reshape(-1, 3), V.reshape(-1, 3)
+    if not (np.all(np.isfinite(L)) and np.all(np.isfinite(V))):
+        raise ValueError("directions must be finite")
+    return L, V, shape
+
+
+# --------------------------------------------------------------------------------------
+# validation
+# --------------------------------------------------------------------------------------
+
+
+def _check_axis(source: object, name: str, axis: Any, hi: float) -> np.ndarray:
+    try:
+        a = np.asarray(axis, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise BadInputError(source, f"grid {name} is not numeric") from None
+    if a.ndim != 1 or a.size < 1:
+        raise BadInputError(source, f"grid {name} must be a non-empty 1-D array, got shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise BadInputError(source, f"grid {name} has {int(np.sum(~np.isfinite(a)))} non-finite value(s)")
+    if np.any(np.diff(a) <= 0):
+        k = int(np.argmax(np.diff(a) <= 0))
+        raise BadInputError(
+            source, f"grid {name} is not strictly increasing ({name}[{k}]={a[k]!r}, {name}[{k + 1}]={a[k + 1]!r})"
+        )
+    if a[0] < 0 or a[-1] > hi + 1e-12:
+        raise BadInputError(source, f"grid {name} spans [{a[0]!r}, {a[-1]!r}], outside [0, {hi!r}] radians")
+    return a
+
+
+def _check_values(source: object, values: Any, shape: tuple[int, int, int]) -> np.ndarray:
+    v = np.asarray(values)
+    if v.dtype.kind not in "fiu":
+        raise BadInputError(source, f"values have dtype {v.dtype}, expected floating point")
+    v = v.astype(np.float64)
+    if v.shape not in (shape, (*shape, 3)):
+        raise BadInputError(
+            source, f"values have shape {v.shape}; the grid needs {shape} (scalar) or {(*shape, 3)} (RGB)"
+        )
+    if np.any(np.isinf(v)):
+        raise BadInputError(source, f"values contain {int(np.sum(np.isinf(v)))} infinite value(s)")
+    negative = v < 0  # NaN compares false: NaN is allowed (missing)
+    if np.any(negative):
+        raise BadInputError(
+            source,
+            f"values contain {int(negative.sum())} negative value(s) (min {v[negative].min()!r}); "
+            "mark missing samples with NaN",
+        )
+    return v
+
+
+# --------------------------------------------------------------------------------------
+# the tabulated BRDF
+# --------------------------------------------------------------------------------------
+
+
+class TableBRDF(BRDF):
+    """rho(θ_i, θ_o, φ_d) on a rectilinear grid, trilinear in angle (data_specs/brdf_table.md).
+
+    Attributes
+    ----------
+    theta_i, theta_o, phi_d
+        The grid (radians, strictly increasing).
+    values
+        Shape (n_ti, n_to, n_pd, 3) RGB or (n_ti, n_to, n_pd) scalar, rho in 1/sr, NaN missing.
+    n_missing
+        Number of grid points with at least one channel missing.
+    name, source, metadata
+        Name, the file it came from (or ``None``), the metadata dictionary.
+    """
+
+    kind: Kind = "tabulated"
+
+    def __init__(
+        self,
+        theta_i: np.ndarray,
+        theta_o: np.ndarray,
+        phi_d: np.ndarray,
+        values: np.ndarray,
+        *,
+        name: str = "table",
+        source: str | None = None,
+        metadata: dict[str, Any] | None = None,
+    ) -> None:
+        where = source if source is not None else name
+        self.theta_i = _check_axis(where, "theta_i", theta_i, np.pi / 2)
+        self.theta_o = _check_axis(where, "theta_o", theta_o, np.pi / 2)
+        self.phi_d = _check_axis(where, "phi_d", phi_d, np.pi)
+        shape = (self.theta_i.size, self.theta_o.size, self.phi_d.size)
+        self.values = _check_values(where, values, shape)
+        grid = self.values if self.values.ndim == 4 else self.values[..., None]
+        self.n_missing = int(np.any(np.isnan(grid), axis=-1).sum())
+        self._interpolate = MissingAwareGrid(grid)
+        self.name = name
+        self.source = source
+        self.metadata = dict(metadata or {})
+
+    def eval_masked(self, L: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """rho (..., 3) and a bool mask (...) of the points that had data.
+
+        Below-surface points are 0 and count as having data (rho is 0 there by definition).
+        φ_d = |φ_o − φ_i| folded into [0, π] (bilateral symmetry, data_specs/brdf_table.md).
+        """
+        L, V, shape = flatten_directions(L, V)
+        out = np.zeros((L.shape[0], 3))
+        has = np.ones(L.shape[0], dtype=bool)
+        above = (L[:, 2] > 0) & (V[:, 2] > 0)
+        theta_i, phi_i = spherical_angles(L[above])
+        theta_o, phi_o = spherical_angles(V[above])
+        phi = np.abs(np.mod(phi_o - phi_i + np.pi, 2.0 * np.pi) - np.pi)
+        coords = tuple(
+            np.interp(x, grid, np.arange(grid.size, dtype=np.float64))
+            for x, grid in ((theta_i, self.theta_i), (theta_o, self.theta_o), (phi, self.phi_d))
+        )
+        values, no_data = self._interpolate(coords)
+        out[above] = values  # a scalar table broadcasts to the three channels
+        has[above] = ~no_data
+        return out.reshape(*shape, 3), has.reshape(shape)
+
+    def eval_counted(self, L: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, int]:
+        """rho and the number of above-surface query points with no present sample near."""
+        rho, has = self.eval_masked(L, V)
+        return rho, int(np.sum(~has))
+
+    def eval(self, L: np.ndarray, V: np.ndarray) -> np.ndarray:
+        """rho(L, V) in 1/sr, (..., 3); 0 below the surface and where no sample is present."""
+        return self.eval_masked(L, V)[0]
+
+
+# --------------------------------------------------------------------------------------
+# reader / writer
+# --------------------------------------------------------------------------------------
+
+
+def tabulate_table(
+    brdf: BRDF, *, theta_i: np.ndarray, theta_o: np.ndarray, phi_d: np.ndarray
+) -> np.ndarray:
+    """rho of ``brdf`` at L = (θ_i, φ = 0), V = (θ_o, φ = φ_d) on the grid, shape (n_ti, n_to, n_pd, 3).
+
+    Points where a tabulated source had no data are NaN (missing).
+    """
+    ti, to, pd = np.meshgrid(theta_i, theta_o, phi_d, indexing="ij")
+    L = np.stack((np.sin(ti), np.zeros_like(ti), np.cos(ti)), axis=-1)
+    V = np.stack((np.sin(to) * np.cos(pd), np.sin(to) * np.sin(pd), np.cos(to)), axis=-1)
+    rho, has = eval_with_mask(brdf, L, V)
+    return np.where(has[..., None], rho, np.nan)
+
+
+def write_table(
+    path: str | os.PathLike[str],
+    brdf_or_values: BRDF | np.ndarray,
+    *,
+    theta_i: np.ndarray | None = None,
+    theta_o: np.ndarray | None = None,
+    phi_d: np.ndarray | None = None,
+    provenance: str | None = None,
+    name: str | None = None,
+) -> Path:
+    """Write a BRDF table (data_specs/brdf_table.md), atomically.
+
+    Parameters
+    ----------
+    path
+        Output ``.npz`` file.
+    brdf_or_values
+        A BRDF to tabulate on the grid (any kind that evaluates), or a values array of
+        shape (n_ti, n_to, n_pd[, 3]) in 1/sr with NaN for missing samples. A
+        :class:`TableBRDF` given without a grid is written on its own grid.
+    theta_i, theta_o, phi_d
+        The grid in radians, strictly increasing; θ in [0, π/2], φ_d in [0, π].
+    provenance, name
+        Free text stored in the metadata (defaults: the BRDF's name / the file stem).
+
+    Raises
+    ------
+    BadInputError
+        Missing or invalid grid, wrong shapes, negative or infinite values.
+    """
+    path = Path(path)
+    grids = (theta_i, theta_o, phi_d)
+    if isinstance(brdf_or_values, TableBRDF) and all(g is None for g in grids):
+        theta_i, theta_o, phi_d = brdf_or_values.theta_i, brdf_or_values.theta_o, brdf_or_values.phi_d
+        grids = (theta_i, theta_o, phi_d)
+    if any(g is None for g in grids):
+        raise BadInputError(path, "write_table needs the grid: theta_i, theta_o and phi_d (radians)")
+    theta_i = _check_axis(path, "theta_i", theta_i, np.pi / 2)
+    theta_o = _check_axis(path, "theta_o", theta_o, np.pi / 2)
+    phi_d = _check_axis(path, "phi_d", phi_d, np.pi)
+    if isinstance(brdf_or_values, BRDF):
+        source_name = brdf_or_values.name
+        values = tabulate_table(brdf_or_values, theta_i=theta_i, theta_o=theta_o, phi_d=phi_d)
+    else:
+        source_name = None
+        values = brdf_or_values
+    values = _check_values(path, values, (theta_i.size, theta_o.size, phi_d.size))
+    metadata = {
+        "format": TABLE_FORMAT,
+        "format_version": TABLE_FORMAT_VERSION,
+        "units": "1/sr",
+        "quantity": "rho, the BRDF without the cosine factor",
+        "grid": "rho(theta_i, theta_o, phi_d), radians; phi_d = |phi_o - phi_i| folded into [0, pi]",
+        "channels": "rgb" if values.ndim == 4 else "scalar",
+        "name": name or source_name or path.stem,
+        "provenance": provenance if provenance is not None else (
+            f"tabulated from {source_name}" if source_name else "values written by shrmkit"
+        ),
+    }
+
+    def write(f: IO[bytes]) -> None:
+        np.savez_compressed(
+            f, theta_i=theta_i, theta_o=theta_o, phi_d=phi_d, values=values,
+            metadata=np.array(json.dumps(metadata)),
+        )
+
+    return atomic_write(path, write)
+
+
+def read_table(path: str | os.PathLike[str]) -> TableBRDF:
+    """Read a BRDF table written by :func:`write_table` (data_specs/brdf_table.md).
+
+    Raises
+    ------
+    BadInputError
+        Unreadable file, missing keys, wrong format or version, invalid grid or values.
+    """
+    path = Path(path)
+    try:
+        with np.load(path, allow_pickle=False) as npz:
+            missing = [k for k in _KEYS if k not in npz.files]
+            if missing:
+                raise BadInputError(path, f"missing key(s) {', '.join(missing)}; a table has {', '.join(_KEYS)}")
+            arrays = {k: npz[k] for k in _KEYS}
+    except BadInputError:
+        raise
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as err:
+        raise BadInputError(path, f"not a readable .npz table ({err})") from None
+    meta_array = arrays["metadata"]
+    if meta_array.shape != () or meta_array.dtype.kind != "U":
+        raise BadInputError(path, "metadata must be a JSON string")
+    try:
+        metadata = json.loads(str(meta_array))
+    except json.JSONDecodeError as err:
+        raise BadInputError(path, f"metadata is not valid JSON ({err})") from None
+    if not isinstance(metadata, dict) or metadata.get("format") != TABLE_FORMAT:
+        raise BadInputError(path, f"metadata does not say format {TABLE_FORMAT!r}")
+    version = metadata.get("format_version")
+    if version != TABLE_FORMAT_VERSION:
+        raise BadInputError(
+            path, f"format_version {version!r} is not supported (this reader reads {TABLE_FORMAT_VERSION})"
+        )
+    if metadata.get("units") != "1/sr":
+        raise BadInputError(path, f"units {metadata.get('units')!r}; expected '1/sr'")
+    name = metadata.get("name")
+    return TableBRDF(
+        arrays["theta_i"], arrays["theta_o"], arrays["phi_d"], arrays["values"],
+        name=name if isinstance(name, str) and name else path.stem,
+        source=str(path),
+        metadata=metadata,
+    )

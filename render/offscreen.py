@@ -1,0 +1,135 @@
+"""Offscreen OpenGL contexts for VTK (EGL or OSMesa, Mesa llvmpipe or a GPU) with a float framebuffer.
+
+The VTK ≥ 9.4 wheels load their OpenGL back end at run time. On a machine without a display
+we create the window class directly instead of going through the object factory (which tries
+X first and prints a warning): ``vtkEGLRenderWindow`` first (Mesa's EGL gives llvmpipe on a
+CPU-only machine, the vendor's EGL uses the GPU), then ``vtkOSOpenGLRenderWindow`` (OSMesa).
+The environment variable ``VTK_DEFAULT_OPENGL_WINDOW`` (a VTK convention) overrides the
+choice; with a ``DISPLAY`` set and no override, the factory default is used.
+
+Float readback: VTK's render and display framebuffers are 8-bit RGBA by default. After the
+first render we re-populate both with 32-bit float colour attachments (``GL_RGBA32F``), so
+:func:`read_rgba_float` returns the fragment shader's linear output bit for bit. The format
+is checked after every readback set-up; anything else raises :class:`OffscreenError`.
+
+Debian packages needed (see ``.ci/apt-packages.txt``): libegl1, libegl-mesa0, libgl1,
+libgl1-mesa-dri, libglx-mesa0 (and libosmesa6 for the OSMesa fallback).
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import numpy as np
+
+__all__ = ["OffscreenError", "make_render_window", "read_rgba_float", "probe_offscreen", "window_classes"]
+
+#: GL_RGBA32F, the internal format of a float32 RGBA colour attachment.
+GL_RGBA32F = 0x8814
+
+
+class OffscreenError(RuntimeError):
+    """No offscreen OpenGL context with float colour buffers could be created."""
+
+
+def window_classes() -> list[str]:
+    """Names of the VTK render-window classes to try, in order (see module docstring)."""
+    override = os.environ.get("VTK_DEFAULT_OPENGL_WINDOW")
+    if override:
+        return [override]
+    if os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"):
+        return ["vtkRenderWindow"]
+    return ["vtkEGLRenderWindow", "vtkOSOpenGLRenderWindow"]
+
+
+def _new_window(name: str):  # -> vtkRenderWindow
+    import vtkmodules.vtkRenderingCore as core
+    import vtkmodules.vtkRenderingOpenGL2 as gl2  # registers the OpenGL factory overrides
+
+    if name == "vtkRenderWindow":
+        return core.vtkRenderWindow()
+    cls = getattr(gl2, name, None)
+    if cls is None:
+        raise OffscreenError(f"this VTK build has no {name}")
+    return cls()
+
+
+def make_render_window(width: int, height: int):  # -> vtkRenderWindow
+    """An offscreen VTK render window of ``width`` × ``height`` pixels with float32 colour buffers.
+
+    Multisampling is off (one sample at each pixel centre), so the image is a point sampling
+    of the shaded surface. Raises :class:`OffscreenError` when no back end works.
+    """
+    if width < 1 or height < 1:
+        raise ValueError(f"image size must be positive, got {width}x{height}")
+    problems = []
+    for name in window_classes():
+        try:
+            window = _new_window(name)
+        except OffscreenError as err:
+            problems.append(str(err))
+            continue
+        window.SetOffScreenRendering(1)
+        window.SetMultiSamples(0)
+        window.SetAlphaBitPlanes(1)
+        window.SetSize(int(width), int(height))
+        window.Render()  # creates the context and the default (8-bit) framebuffers
+        if not window.SupportsOpenGL():
+            problems.append(f"{name}: no OpenGL 3.2 context")
+            window.Finalize()
+            continue
+        for fbo in (window.GetRenderFramebuffer(), window.GetDisplayFramebuffer()):
+            if fbo is None:
+                break
+            fbo.Bind()
+            # (width, height, use textures, 1 colour attachment, float data, depth, 32-bit
+            # depth, no multisampling, no stencil)
+            fbo.PopulateFramebuffer(int(width), int(height), True, 1, 11, True, 32, 0, False)  # 11 = VTK_FLOAT
+        fmt = window.GetColorBufferInternalFormat(0)
+        if fmt != GL_RGBA32F:
+            problems.append(f"{name}: colour buffer format 0x{fmt:x} is not GL_RGBA32F")
+            window.Finalize()
+            continue
+        return window
+    raise OffscreenError("no offscreen OpenGL context: " + "; ".join(problems))
+
+
+def read_rgba_float(window) -> np.ndarray:
+    """The window's colour buffer as float32 (H, W, 4), row 0 at the top of the image."""
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+    from vtkmodules.vtkCommonCore import vtkFloatArray
+
+    width, height = window.GetSize()
+    arr = vtkFloatArray()
+    window.GetRGBAPixelData(0, 0, width - 1, height - 1, 0, arr, 0)
+    # OpenGL rows run bottom to top; flip so that row 0 is the top of the image
+    return vtk_to_numpy(arr).reshape(height, width, 4)[::-1].copy()
+
+
+_PROBE = """
+import numpy as np
+from shrmkit.render.offscreen import make_render_window, read_rgba_float
+w = make_render_window(8, 8)
+img = read_rgba_float(w)
+assert img.shape == (8, 8, 4)
+print(w.GetClassName())
+"""
+
+
+def probe_offscreen(timeout: float = 120.0) -> tuple[bool, str]:
+    """Try to create an offscreen float context in a subprocess (a broken driver cannot crash us).
+
+    Returns ``(ok, message)``: the window class used, or why it failed.
+    """
+    try:
+        proc = subprocess.run(
+            [sys.executable, "-c", _PROBE], capture_output=True, text=True, timeout=timeout, check=False
+        )
+    except (OSError, subprocess.TimeoutExpired) as err:
+        return False, f"offscreen probe failed: {err}"
+    if proc.returncode == 0:
+        return True, proc.stdout.strip().splitlines()[-1] if proc.stdout.strip() else "ok"
+    tail = (proc.stderr or proc.stdout).strip().splitlines()[-3:]
+    return False, "no offscreen OpenGL context: " + " | ".join(tail)
