@@ -11,15 +11,24 @@ with the real basis of ``analysis.sh`` at flat index p² + p + q.
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
+import ducc0
 import numpy as np
 
-from .latlong import bilinear_lookup
-from .sh import real_sph_harm
+from ..brdf_io.errors import BadInputError
+from .brdf_coeffs import BRDFCoefficients
+from .latlong import bilinear_lookup, pixel_angles
+from .lighting import LightingCoefficients, alm_index, lighting_coefficients
+from .orders import DEFAULT_MAX_F, DEFAULT_MAX_P, choose_orders
+from .scene import reflected_error, residual_bound, scene_orders
+from .sh import Lambda, real_index, real_sph_harm
+from .wigner import rotation_D, wigner_d_tilde
 
-__all__ = ["SHRM"]
+__all__ = ["SHRM", "prefilter", "local_shrm_fast", "local_shrm_direct", "global_from_local", "default_size"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -84,3 +93,232 @@ class SHRM:
         """
         basis = real_sph_harm(self.P, np.asarray(view, dtype=np.float64).reshape(3)).astype(np.float32)
         return np.tensordot(basis, self.coeffs, axes=(0, 0))
+
+
+# ----------------------------------------------------------------------------------------
+# Prefiltering: local SHRM by spin-weighted SHT, rotation to the global SHRM (DESIGN §5–6)
+# ----------------------------------------------------------------------------------------
+
+
+def _full_m_lighting(lighting: LightingCoefficients, l: int) -> np.ndarray:
+    """L_lm for m = −l..l (complex (3, 2l+1)) from the m >= 0 layout."""
+    m = np.arange(0, l + 1)
+    pos = lighting.alm[:, alm_index(l, m, lighting.lmax)]
+    neg = ((-1.0) ** m)[None, :] * np.conj(pos)
+    return np.concatenate([neg[:, :0:-1], pos], axis=1)
+
+
+def local_shrm_fast(
+    lighting: LightingCoefficients,
+    coefficients: BRDFCoefficients,
+    F: int,
+    P: int,
+    height: int,
+    width: int,
+    *,
+    nthreads: int = 1,
+) -> np.ndarray:
+    """Local SHRM B_pq(α, β) on a lat-long grid by spin-weighted SHT (DESIGN §6).
+
+    With 𝒟^l_{m,−s}(α, β) = (−1)^s Λ_l ₛY_lm(α, β) for ducc0's spin-s harmonics (fed
+    E_lm = −a_lm, B_lm = 0 for a real-symmetric set; checked against the explicit sum),
+    B_{p,−s} = Σ_lm (−1)^s Λ_l L_lm ρ̂_lps ₛY_lm is one spin-s synthesis (GRAD_ONLY), and
+    B_{p,s} = (−1)^s conj(B_{p,−s}).
+
+    Returns
+    -------
+    complex128 (P+1, 2P+1, H, W, 3), indexed [p, q+P]; zero where |q| > p.
+    """
+    lmax = min(F, lighting.lmax, coefficients.F0)
+    if P > coefficients.P0:
+        raise ValueError(f"P={P} exceeds the computed P0={coefficients.P0}")
+    out = np.zeros((P + 1, 2 * P + 1, height, width, 3), dtype=np.complex128)
+    ls, ms = np.meshgrid(np.arange(lmax + 1), np.arange(lmax + 1), indexing="ij")
+    valid = ms <= ls
+    idx_l = ls[valid]
+    idx = alm_index(idx_l, ms[valid], lmax)
+    lam = Lambda(np.arange(lmax + 1))
+    alm_light = np.zeros((3, (lmax + 1) * (lmax + 2) // 2), dtype=np.complex128)
+    alm_light[:, idx] = lighting.alm[:, alm_index(idx_l, ms[valid], lighting.lmax)]
+    alm_light *= lam[np.concatenate([np.arange(m, lmax + 1) for m in range(lmax + 1)])][None, :]
+    l_of_index = np.concatenate([np.arange(m, lmax + 1) for m in range(lmax + 1)])
+    phi0 = np.pi / width
+    for p in range(P + 1):
+        for s in range(p + 1):
+            rho = coefficients.coeffs[l_of_index, p, s, :].T  # (3, n_alm)
+            rho = np.where(l_of_index[None, :] >= s, rho, 0.0)
+            for c in range(3):
+                alm = alm_light[c] * rho[c]
+                if s == 0:
+                    field = ducc0.sht.experimental.synthesis_2d(
+                        alm=alm[None, :], spin=0, lmax=lmax, geometry="F1",
+                        ntheta=height, nphi=width, phi0=phi0, nthreads=nthreads,
+                    )[0]
+                    out[p, P, :, :, c] = field
+                else:
+                    qu = ducc0.sht.experimental.synthesis_2d(
+                        alm=(-((-1.0) ** s) * alm)[None, :], spin=s, lmax=lmax, geometry="F1",
+                        ntheta=height, nphi=width, phi0=phi0, nthreads=nthreads, mode="GRAD_ONLY",
+                    )
+                    neg = qu[0] + 1j * qu[1]
+                    out[p, P - s, :, :, c] = neg
+                    out[p, P + s, :, :, c] = ((-1.0) ** s) * np.conj(neg)
+    return out
+
+
+def local_shrm_direct(
+    lighting: LightingCoefficients,
+    coefficients: BRDFCoefficients,
+    F: int,
+    P: int,
+    alpha: np.ndarray,
+    beta: np.ndarray,
+) -> np.ndarray:
+    """Local SHRM B_pq(α, β) = Σ_lm L_lm ρ̂_lpq 𝒟^l_mq(α, β) by explicit Wigner-d sums.
+
+    Slow reference path (RH02 eqs. 5–7); returns complex (n, P+1, 2P+1, 3).
+    """
+    alpha = np.atleast_1d(np.asarray(alpha, float))
+    beta = np.atleast_1d(np.asarray(beta, float))
+    lmax = min(F, lighting.lmax, coefficients.F0)
+    out = np.zeros((alpha.size, P + 1, 2 * P + 1, 3), dtype=np.complex128)
+    for l in range(lmax + 1):
+        D = rotation_D(l, alpha, beta)  # (n, 2l+1, 2l+1) [m+l, q+l]
+        Lm = _full_m_lighting(lighting, l)  # (3, 2l+1)
+        for p in range(P + 1):
+            for q in range(-min(l, p), min(l, p) + 1):
+                rho = coefficients.coeffs[l, p, abs(q), :]  # (3,)
+                out[:, p, q + P, :] += np.einsum("nm,cm->nc", D[:, :, q + l], Lm) * rho
+    return out
+
+
+def global_from_local(local: np.ndarray, alpha: np.ndarray, beta: np.ndarray) -> np.ndarray:
+    """Global SHRM from the local one (RH02 eq. 8, DESIGN §5).
+
+    B̃_ps(α, β) = Σ_q B_pq(α, β) conj(𝒟^p_sq(α, β)) = e^{−isβ} Σ_q B_pq d̃^p_sq(α), from
+    Y_pq(R⁻¹V) = Σ_s conj(𝒟^p_sq) Y_ps(V) (unitarity of 𝒟). Returned in the real basis.
+
+    Parameters
+    ----------
+    local
+        complex (P+1, 2P+1, *grid, 3) with ``alpha``/``beta`` broadcastable to ``grid``.
+    """
+    P = local.shape[0] - 1
+    grid_shape = local.shape[2:-1]
+    a = np.broadcast_to(alpha, grid_shape)
+    b = np.broadcast_to(beta, grid_shape)
+    real = np.zeros(((P + 1) ** 2,) + grid_shape + (3,))
+    root2 = np.sqrt(2.0)
+    for p in range(P + 1):
+        d = wigner_d_tilde(p, a)  # (*grid, 2p+1, 2p+1) [s+p, q+p]
+        blk = local[p, P - p : P + p + 1]  # (2p+1 over q, *grid, 3)
+        tilde = np.einsum("...sq,q...c->s...c", d, blk)  # (2p+1 over s, *grid, 3)
+        for s in range(0, p + 1):
+            value = np.exp(-1j * s * b)[..., None] * tilde[s + p]
+            if s == 0:
+                real[real_index(p, 0)] = value.real
+            else:
+                sign = -1.0 if s % 2 else 1.0
+                real[real_index(p, s)] = root2 * sign * value.real
+                real[real_index(p, -s)] = -root2 * sign * value.imag
+    return real
+
+
+def default_size(F: int) -> int:
+    """S_B from the rule S ≈ 10F (RH02 §5.2), clamped to [32, 1024]."""
+    return int(np.clip(10 * F, 32, 1024))
+
+
+def prefilter(
+    env: Any,
+    brdf: Any,
+    eps: float = 0.03,
+    *,
+    size: int | None = None,
+    F: int | None = None,
+    P: int | None = None,
+    max_F: int = DEFAULT_MAX_F,
+    max_P: int = DEFAULT_MAX_P,
+    nthreads: int = 1,
+    progress: Any = None,
+) -> SHRM:
+    """Prefilter an environment into a global SHRM (RH02 §4–5, Appendix C).
+
+    Parameters
+    ----------
+    env
+        An :class:`~shrmkit.brdf_io.envmap.EnvironmentMap`, or a spec/path for ``load_env``.
+    brdf
+        A BRDF, or a spec/path for ``load_brdf``.
+    eps
+        Tolerance: orders come from :func:`~shrmkit.analysis.orders.choose_orders` and
+        F_B = min(F_ρ, F_L), P_B = P_ρ (:func:`~shrmkit.analysis.scene.scene_orders`).
+    size
+        Rows S_B of the S_B × 2S_B output (default :func:`default_size` of F_B).
+    F, P
+        Force the orders instead of choosing them.
+    progress
+        Optional callable ``progress(stage: str)`` told when each stage starts.
+
+    Returns
+    -------
+    SHRM
+        float32 global SHRM with orders, achieved errors, timings in ``meta``.
+    """
+    from .._version import __version__
+    from ..brdf_io.envmap import EnvironmentMap, load_env
+    from ..brdf_io.specs import load_brdf
+
+    def stage(name: str) -> None:
+        if progress is not None:
+            progress(name)
+
+    timings: dict[str, float] = {}
+    t = time.perf_counter()
+    if not isinstance(env, EnvironmentMap):
+        env = load_env(env)
+    if isinstance(brdf, str | Path):
+        brdf = load_brdf(brdf)
+    stage("orders")
+    t0 = time.perf_counter()
+    orders = choose_orders(brdf, eps, max_F=max_F, max_P=max_P)
+    timings["orders"] = time.perf_counter() - t0
+    stage("lighting")
+    t0 = time.perf_counter()
+    height = env.radiance.shape[0]
+    # lighting beyond F_ρ too, so the achieved error and the bound see the residual energy
+    lmax_light = int(min(max(2 * orders.F, orders.F + 16, F or 0), height - 1, orders.coefficients.F0))
+    lighting = lighting_coefficients(env.radiance, lmax_light, name=env.name, nthreads=nthreads)
+    scene = scene_orders(orders, lighting)
+    timings["lighting"] = time.perf_counter() - t0
+    F_B = scene.F_B if F is None else int(min(F, lmax_light))
+    P_B = scene.P_B if P is None else int(min(P, orders.coefficients.P0))
+    S = default_size(F_B) if size is None else int(size)
+    if S < 2 or S > 8192:
+        raise BadInputError(None, f"SHRM size must be in [2, 8192] rows, got {S}")
+    stage("synthesis")
+    t0 = time.perf_counter()
+    local = local_shrm_fast(lighting, orders.coefficients, F_B, P_B, S, 2 * S, nthreads=nthreads)
+    theta, phi = pixel_angles(S, 2 * S)
+    coeffs = global_from_local(local, theta[:, None], phi[None, :]).astype(np.float32)
+    timings["synthesis"] = time.perf_counter() - t0
+    timings["total"] = time.perf_counter() - t
+    eps_info = {
+        "brdf": float(orders.table[min(F_B, orders.F0), P_B]),
+        "lighting": float(lighting.eps()[min(F_B, lighting.lmax)]),
+        "reflected": reflected_error(lighting, orders.coefficients, F_B, P_B),
+        "bound": residual_bound(lighting, orders.coefficients, F_B, P_B),
+    }
+    meta = {
+        "brdf": brdf.name,
+        "environment": env.name,
+        "environment_source": getattr(env, "source", ""),
+        "F_rho": orders.F,
+        "P_rho": orders.P,
+        "F_L": scene.F_L,
+        "orders_message": orders.message,
+        "timings": timings,
+        "shrmkit_version": __version__,
+        "frame": "z-up; lat-long pixel centres theta=(i+1/2)pi/H, phi=2pi(j+1/2)/W",
+    }
+    return SHRM(F=F_B, P=P_B, coeffs=coeffs, tolerance=float(eps), eps=eps_info, meta=meta)

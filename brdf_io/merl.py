@@ -29,7 +29,7 @@ import numpy as np
 from .brdf import BRDF, Kind
 from .errors import BadInputError
 from .halfdiff import directions_to_halfdiff, halfdiff_to_directions
-from .table import flatten_directions, MissingAwareGrid, atomic_write, eval_with_mask
+from .table import EVAL_BLOCK, MissingAwareGrid, atomic_write, eval_with_mask, flatten_directions
 
 __all__ = [
     "MERL_DIMS",
@@ -116,11 +116,13 @@ class MerlBRDF(BRDF):
         L, V, shape = flatten_directions(L, V)
         out = np.zeros((L.shape[0], 3))
         has = np.ones(L.shape[0], dtype=bool)
-        above = (L[:, 2] > 0) & (V[:, 2] > 0)
-        coords = merl_index_coordinates(*directions_to_halfdiff(L[above], V[above]))
-        values, no_data = self._interpolate(coords)
-        out[above] = values
-        has[above] = ~no_data
+        above = np.flatnonzero((L[:, 2] > 0) & (V[:, 2] > 0))
+        for start in range(0, above.size, EVAL_BLOCK):
+            sel = above[start : start + EVAL_BLOCK]
+            coords = merl_index_coordinates(*directions_to_halfdiff(L[sel], V[sel]))
+            values, no_data = self._interpolate(coords)
+            out[sel] = values
+            has[sel] = ~no_data
         return out.reshape(*shape, 3), has.reshape(shape)
 
     def eval_counted(self, L: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, int]:

@@ -107,7 +107,7 @@ CUBE_FACE_AXES: dict[str, tuple[tuple[int, int, int], tuple[int, int, int], tupl
 # left-handed as seen from inside, so the map is a reflection (det = -1); it keeps the
 # faces unmirrored: looking along cube +z_c with y_c up, +x_c is on the right, and
 # looking along project -X with Z up, -Y is on the right.
-CUBE_TO_PROJECT = np.array([[0.0, 0.0, -1.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+CUBE_TO_PROJECT = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 
 # project = PROBE_TO_PROJECT @ probe: X = x_p, Y = -z_p, Z = y_p (a rotation, det = +1):
 # the probe's up axis y_p becomes the zenith.

@@ -36,6 +36,7 @@ from .halfdiff import spherical_angles
 __all__ = [
     "TABLE_FORMAT",
     "TABLE_FORMAT_VERSION",
+    "EVAL_BLOCK",
     "TableBRDF",
     "atomic_write",
     "eval_with_mask",
@@ -49,6 +50,7 @@ __all__ = [
 
 TABLE_FORMAT = "shrmkit-brdf-table"
 TABLE_FORMAT_VERSION = 1
+EVAL_BLOCK = 1 << 15  # query points per block: the temporaries stay in cache
 _KEYS = ("theta_i", "theta_o", "phi_d", "values", "metadata")
 
 
@@ -113,12 +115,13 @@ class MissingAwareGrid:
         self.shape = grid.shape[:3]
         self.n_channels = grid.shape[3]
         self.periodic = tuple(bool(p) for p in periodic)
-        present = ~np.isnan(grid)
-        # one row per sample: C values (0 where missing), then C presence flags, so that a
-        # single gather per cell corner fetches both
-        self._packed = np.concatenate(
-            (np.where(present, grid, 0.0), present.astype(np.float64)), axis=-1
-        ).reshape(-1, 2 * self.n_channels)
+        n2 = self.shape[2]
+        k = np.arange(n2)
+        upper = (k + 1) % n2 if self.periodic[2] else np.minimum(k + 1, n2 - 1)
+        # one row per sample: its C values and those of its upper neighbour on the last
+        # axis (the neighbour _axis_corners pairs it with), so that one gather fetches both
+        # corners of a cell edge; NaN marks a missing sample
+        self._pairs = np.concatenate((grid, grid[:, :, upper]), axis=-1).reshape(-1, 2 * self.n_channels)
 
     def __call__(self, coords: tuple[np.ndarray, np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
         """Interpolate at continuous index coordinates (three finite arrays of shape (N,)).
@@ -129,26 +132,43 @@ class MissingAwareGrid:
             ``values`` (N, C), 0 where a channel had no present corner of positive weight;
             ``no_data`` (N,) bool, true where some channel had none.
         """
+        flat = [np.asarray(t, dtype=np.float64).ravel() for t in coords]
+        count = flat[0].shape[0]
+        values = np.empty((count, self.n_channels))
+        no_data = np.empty(count, dtype=bool)
+        # blocks small enough for the temporaries to stay in cache
+        for start in range(0, count, EVAL_BLOCK):
+            block = slice(start, start + EVAL_BLOCK)
+            values[block], no_data[block] = self._interpolate_block([t[block] for t in flat])
+        return values, no_data
+
+    def _interpolate_block(self, coords: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
         n0, n1, n2 = self.shape
-        axes = [
-            _axis_corners(np.asarray(t, dtype=np.float64).ravel(), n, p)
-            for t, n, p in zip(coords, self.shape, self.periodic, strict=True)
-        ]
-        (lo0, hi0, f0), (lo1, hi1, f1), (lo2, hi2, f2) = axes
-        row0 = (lo0 * n1, hi0 * n1)
+        axes = [_axis_corners(t, n, p) for t, n, p in zip(coords, self.shape, self.periodic, strict=True)]
+        (lo0, hi0, f0), (lo1, hi1, f1), (lo2, _, f2) = axes
+        rows0 = (lo0 * n1, hi0 * n1)
         w0 = (1.0 - f0, f0)
         w1 = (1.0 - f1, f1)
-        w2 = (1.0 - f2, f2)
-        acc = np.zeros((f0.shape[0], 2 * self.n_channels))
+        n_ch = self.n_channels
+        count = f0.shape[0]
+        total = np.zeros((count, 2 * n_ch))
+        weight_sum = np.zeros((count, 2 * n_ch))
+        weight = np.empty((count, 2 * n_ch))
         for a in (0, 1):
             for b in (0, 1):
-                base = (row0[a] + (lo1, hi1)[b]) * n2
+                # columns: the C channels at lo2, then the C channels at its upper neighbour
+                pair = np.take(self._pairs, (rows0[a] + (lo1, hi1)[b]) * n2 + lo2, axis=0)
                 wab = w0[a] * w1[b]
-                for c in (0, 1):
-                    corner = np.take(self._packed, base + (lo2, hi2)[c], axis=0)
-                    corner *= (wab * w2[c])[:, None]
-                    acc += corner
-        total, weight_sum = acc[:, : self.n_channels], acc[:, self.n_channels :]
+                weight[:, :n_ch] = (wab * (1.0 - f2))[:, None]
+                weight[:, n_ch:] = (wab * f2)[:, None]
+                missing = np.isnan(pair)
+                np.copyto(weight, 0.0, where=missing)
+                np.copyto(pair, 0.0, where=missing)
+                weight_sum += weight
+                pair *= weight
+                total += pair
+        total = total[:, :n_ch] + total[:, n_ch:]
+        weight_sum = weight_sum[:, :n_ch] + weight_sum[:, n_ch:]
         has = weight_sum > 0
         values = np.where(has, total / np.where(has, weight_sum, 1.0), 0.0)
         return values, ~np.all(has, axis=1)
@@ -281,17 +301,21 @@ class TableBRDF(BRDF):
         L, V, shape = flatten_directions(L, V)
         out = np.zeros((L.shape[0], 3))
         has = np.ones(L.shape[0], dtype=bool)
-        above = (L[:, 2] > 0) & (V[:, 2] > 0)
-        theta_i, phi_i = spherical_angles(L[above])
-        theta_o, phi_o = spherical_angles(V[above])
-        phi = np.abs(np.mod(phi_o - phi_i + np.pi, 2.0 * np.pi) - np.pi)
-        coords = tuple(
-            np.interp(x, grid, np.arange(grid.size, dtype=np.float64))
-            for x, grid in ((theta_i, self.theta_i), (theta_o, self.theta_o), (phi, self.phi_d))
-        )
-        values, no_data = self._interpolate(coords)
-        out[above] = values  # a scalar table broadcasts to the three channels
-        has[above] = ~no_data
+        above = np.flatnonzero((L[:, 2] > 0) & (V[:, 2] > 0))
+        ramps = [np.arange(g.size, dtype=np.float64) for g in (self.theta_i, self.theta_o, self.phi_d)]
+        for start in range(0, above.size, EVAL_BLOCK):
+            sel = above[start : start + EVAL_BLOCK]
+            theta_i, phi_i = spherical_angles(L[sel])
+            theta_o, phi_o = spherical_angles(V[sel])
+            phi = np.abs(np.mod(phi_o - phi_i + np.pi, 2.0 * np.pi) - np.pi)
+            coords = (
+                np.interp(theta_i, self.theta_i, ramps[0]),
+                np.interp(theta_o, self.theta_o, ramps[1]),
+                np.interp(phi, self.phi_d, ramps[2]),
+            )
+            values, no_data = self._interpolate(coords)
+            out[sel] = values  # a scalar table broadcasts to the three channels
+            has[sel] = ~no_data
         return out.reshape(*shape, 3), has.reshape(shape)
 
     def eval_counted(self, L: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, int]:

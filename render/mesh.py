@@ -166,11 +166,22 @@ def _tube(curve: np.ndarray, tangent: np.ndarray, r: float, sides: int) -> tuple
     """A closed tube of radius r around a closed curve (segments, 3) with exact normals."""
     seg = len(curve)
     t = tangent / np.linalg.norm(tangent, axis=1, keepdims=True)
-    # parallel-transport-free frame: project a fixed axis, fall back where parallel
-    ref = np.where(np.abs(t[:, 2:3]) < 0.9, np.array([0.0, 0.0, 1.0]), np.array([1.0, 0.0, 0.0]))
-    n1 = np.cross(t, ref)
-    n1 /= np.linalg.norm(n1, axis=1, keepdims=True)
+    # parallel transport of a normal along the closed curve, then the closure twist spread
+    # evenly over the segments, so the tube has no sudden twist
+    ref = np.array([0.0, 0.0, 1.0]) if abs(t[0, 2]) < 0.9 else np.array([1.0, 0.0, 0.0])
+    n1 = np.empty_like(t)
+    cur = np.cross(t[0], ref)
+    for k in range(seg):
+        cur = cur - np.dot(cur, t[k]) * t[k]
+        cur /= np.linalg.norm(cur)
+        n1[k] = cur
+    end = n1[-1] - np.dot(n1[-1], t[0]) * t[0]
+    end /= np.linalg.norm(end)
+    twist = np.arctan2(np.dot(np.cross(n1[0], end), t[0]), np.dot(n1[0], end))
     n2 = np.cross(t, n1)
+    # rotate frame k by -twist * k / seg so that frame seg coincides with frame 0
+    a = -twist * np.arange(seg) / seg
+    n1, n2 = np.cos(a)[:, None] * n1 + np.sin(a)[:, None] * n2, -np.sin(a)[:, None] * n1 + np.cos(a)[:, None] * n2
     ang = 2.0 * np.pi * np.arange(sides) / sides
     normals = np.cos(ang)[None, :, None] * n1[:, None, :] + np.sin(ang)[None, :, None] * n2[:, None, :]
     verts = curve[:, None, :] + r * normals
@@ -180,7 +191,7 @@ def _tube(curve: np.ndarray, tangent: np.ndarray, r: float, sides: int) -> tuple
     b = ((i + 1) % seg) * sides + j
     c = ((i + 1) % seg) * sides + (j + 1) % sides
     d = i * sides + (j + 1) % sides
-    faces = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3), np.stack([a, c, d], -1).reshape(-1, 3)])
+    faces = np.concatenate([np.stack([a, c, b], -1).reshape(-1, 3), np.stack([a, d, c], -1).reshape(-1, 3)])
     return verts.reshape(-1, 3), faces, normals.reshape(-1, 3)
 
 

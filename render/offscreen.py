@@ -24,13 +24,17 @@ import sys
 
 import numpy as np
 
+from ..brdf_io.errors import ShrmError
+
 __all__ = ["OffscreenError", "make_render_window", "read_rgba_float", "probe_offscreen", "window_classes"]
 
 #: GL_RGBA32F, the internal format of a float32 RGBA colour attachment.
 GL_RGBA32F = 0x8814
+#: vtkType.h VTK_FLOAT
+VTK_FLOAT = 10
 
 
-class OffscreenError(RuntimeError):
+class OffscreenError(ShrmError, RuntimeError):
     """No offscreen OpenGL context with float colour buffers could be created."""
 
 
@@ -60,8 +64,12 @@ def make_render_window(width: int, height: int):  # -> vtkRenderWindow
     """An offscreen VTK render window of ``width`` × ``height`` pixels with float32 colour buffers.
 
     Multisampling is off (one sample at each pixel centre), so the image is a point sampling
-    of the shaded surface. Raises :class:`OffscreenError` when no back end works.
+    of the shaded surface. The window holds one vtkRenderer
+    (``window.GetRenderers().GetFirstRenderer()``). Raises :class:`OffscreenError` when no
+    back end works.
     """
+    import vtkmodules.vtkRenderingCore as core
+
     if width < 1 or height < 1:
         raise ValueError(f"image size must be positive, got {width}x{height}")
     problems = []
@@ -75,6 +83,8 @@ def make_render_window(width: int, height: int):  # -> vtkRenderWindow
         window.SetMultiSamples(0)
         window.SetAlphaBitPlanes(1)
         window.SetSize(int(width), int(height))
+        # the window creates its framebuffers on the first render that has a renderer
+        window.AddRenderer(core.vtkRenderer())
         window.Render()  # creates the context and the default (8-bit) framebuffers
         if not window.SupportsOpenGL():
             problems.append(f"{name}: no OpenGL 3.2 context")
@@ -86,7 +96,9 @@ def make_render_window(width: int, height: int):  # -> vtkRenderWindow
             fbo.Bind()
             # (width, height, use textures, 1 colour attachment, float data, depth, 32-bit
             # depth, no multisampling, no stencil)
-            fbo.PopulateFramebuffer(int(width), int(height), True, 1, 11, True, 32, 0, False)  # 11 = VTK_FLOAT
+            fbo.PopulateFramebuffer(int(width), int(height), True, 1, VTK_FLOAT, True, 32, 0, False)
+        window.Render()
+        read_rgba_float(window)  # binds the display framebuffer for reading
         fmt = window.GetColorBufferInternalFormat(0)
         if fmt != GL_RGBA32F:
             problems.append(f"{name}: colour buffer format 0x{fmt:x} is not GL_RGBA32F")

@@ -8,7 +8,12 @@ builds that set:
   θ_h = (π/2) u₀² (the square-root scale of MERL's θ_h axis: dense near the specular
   peak, so even lobes with exponents ~10⁴ get thousands of samples), θ_d = (π/2) u₁,
   φ_d = π u₂ (φ_d and φ_d + π are the same pair by reciprocity). The BRDF is evaluated
-  with ``eval_counted``; points without data (non-finite values) are dropped.
+  with its data mask (``eval_masked`` where it has one, else ``eval``); points without
+  data (missing measurements, non-finite values) are dropped.
+* **MERL tables**: the same samples are snapped to the nearest table node (θ_h, θ_d, φ_d
+  of ``merl_sample_angles``), so the fit compares the model with the stored measurements
+  rather than with trilinear interpolations between them (which flatten sharp peaks).
+  The Sobol points are uniform in MERL index space, so every node is equally likely.
 * **scattered BRDFs** (Cornell measurements) contribute their own (L, V, rgb) samples.
 
 Weighting
@@ -42,6 +47,7 @@ from scipy.stats import qmc
 from ...brdf_io.brdf import BRDF
 from ...brdf_io.errors import BadInputError
 from ...brdf_io.halfdiff import halfdiff_to_directions
+from ...brdf_io.table import eval_with_mask
 
 __all__ = ["FitSamples", "sample_halfdiff", "collect_samples"]
 
@@ -83,8 +89,23 @@ class FitSamples:
         return len(self.weight)
 
 
+def _snap_to_merl_nodes(
+    theta_h: np.ndarray, theta_d: np.ndarray, phi_d: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    from ...brdf_io.merl import MERL_DIMS, merl_index_coordinates, merl_sample_angles
+
+    nodes = merl_sample_angles()
+    index = merl_index_coordinates(theta_h, theta_d, phi_d)
+    snapped = []
+    for axis, (u, n) in enumerate(zip(index, MERL_DIMS, strict=True)):
+        k = np.rint(u).astype(np.int64)
+        k = np.mod(k, n) if axis == 2 else np.clip(k, 0, n - 1)  # φ_d wraps (reciprocity)
+        snapped.append(nodes[axis][k])
+    return snapped[0], snapped[1], snapped[2]
+
+
 def sample_halfdiff(
-    n: int, *, seed: int = 0, max_theta_deg: float = 80.0
+    n: int, *, seed: int = 0, max_theta_deg: float = 80.0, merl_nodes: bool = False
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Sobol direction pairs in half/difference angles, kept where θ_i, θ_o <= max_theta_deg.
 
@@ -97,6 +118,9 @@ def sample_halfdiff(
         Seed of the Sobol scrambling: the same seed gives the same pairs.
     max_theta_deg
         Largest θ_i and θ_o kept, in degrees (0, 90].
+    merl_nodes
+        Snap the directions to the nearest MERL table node (the weights stay those of
+        the drawn points: each node stands for its cell, a midpoint rule).
 
     Returns
     -------
@@ -117,6 +141,8 @@ def sample_halfdiff(
     pdf = (2.0 * np.pi * theta_h) ** -0.5 * (2.0 / np.pi) * (1.0 / np.pi)
     jac = 4.0 * np.cos(theta_d) * np.sin(theta_h) * np.sin(theta_d)
     weight = 2.0 * np.pi * 2.0 * jac / pdf / len(u)
+    if merl_nodes:
+        theta_h, theta_d, phi_d = _snap_to_merl_nodes(theta_h, theta_d, phi_d)
     L, V = halfdiff_to_directions(theta_h, theta_d, phi_d)
     cos_max = np.cos(np.radians(max_theta_deg))
     keep = (L[:, 2] >= cos_max - 1e-12) & (V[:, 2] >= cos_max - 1e-12) & (L[:, 2] > 0) & (V[:, 2] > 0)
@@ -146,10 +172,11 @@ def collect_samples(
         L, V, rho = L[keep], V[keep], rho[keep]
         weight = np.ones(len(L))
     else:
-        L, V, weight = sample_halfdiff(n_samples, seed=seed, max_theta_deg=max_theta_deg)
-        rho, _ = brdf.eval_counted(L, V)
+        merl = getattr(getattr(brdf, "values", None), "shape", None) == (3, 90, 90, 180)
+        L, V, weight = sample_halfdiff(n_samples, seed=seed, max_theta_deg=max_theta_deg, merl_nodes=merl)
+        rho, has = eval_with_mask(brdf, L, V)
         rho = np.asarray(rho, dtype=np.float64)
-        finite = np.all(np.isfinite(rho), axis=1)
+        finite = has & np.all(np.isfinite(rho), axis=1)
         n_dropped = int(np.count_nonzero(~finite))
         L, V, rho, weight = L[finite], V[finite], rho[finite], weight[finite]
     if len(L) < 64:

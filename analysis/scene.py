@@ -1,0 +1,110 @@
+"""Scene orders and the residual error bound (RH02 §5.1 and Appendix B, re-derived).
+
+The reflected light field has coefficients B_lmpq = L_lm ρ̂_lpq on the orthogonal
+functions 𝒟^l_mq(α, β) Y_pq(ω_o'), and ∫|𝒟^l_mq|² dΩ = Λ_l² = 4π/(2l+1). Hence
+
+    ‖B‖² = Σ_l Λ_l² a_l r_l,   a_l = Σ_m |L_lm|²,   r_l = Σ_{p,q} ρ̂_lpq² (q ≠ 0 twice),
+
+and truncating to l <= F, p <= P leaves the error energy
+
+    E_err = Σ_{l>F} Λ_l² a_l r_l + Σ_{l<=F} Λ_l² a_l r_l^{(p>P)}.
+
+Residual bound (using only residual energies): for non-negative terms
+Σ_{l>F} x_l y_l <= (Σ_{l>F} x_l)(Σ_{l>F} y_l), and Λ_l is decreasing, so
+
+    E_err <= U = Λ_{F+1}² (E_L ε_L(F)) (E_ρ ε_ρ^l(F)) + max_{l<=F}(Λ_l² a_l) E_ρ ε_ρ^p(F, P),
+
+with ε_ρ^l(F) the fraction of ρ̂'s energy at l > F and ε_ρ^p(F, P) the fraction at
+l <= F, p > P. With C the captured energy (known exactly), the relative error obeys
+ε_B = E_err/(C + E_err) <= U/(C + U). (RH02 Appendix B states a bound of this kind; its
+Λ power is fixed here by the normalization ∫|𝒟|² = Λ².) Per RGB channel; the worst
+channel is reported.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .brdf_coeffs import BRDFCoefficients
+from .lighting import LightingCoefficients
+from .orders import OrderChoice
+from .sh import Lambda
+
+__all__ = ["SceneOrders", "scene_orders", "reflected_error", "residual_bound"]
+
+
+@dataclass(frozen=True)
+class SceneOrders:
+    """Orders a scene needs: F_B = min(F_ρ, F_L), P_B = P_ρ (RH02 §5.1)."""
+
+    F_rho: int
+    P_rho: int
+    F_L: int
+    F_B: int
+    P_B: int
+    eps_L: float
+    lighting_capped: bool
+    bound: float
+    tolerance: float
+
+
+def _brdf_band_energies(coefficients: BRDFCoefficients, P: int) -> tuple[np.ndarray, np.ndarray]:
+    """r_l within p <= P and beyond p > P, per channel: two arrays (F0+1, 3)."""
+    terms = coefficients.parseval_terms().sum(axis=2)  # (F0+1, P0+1, 3)
+    return terms[:, : P + 1].sum(axis=1), terms[:, P + 1 :].sum(axis=1)
+
+
+def reflected_error(lighting: LightingCoefficients, coefficients: BRDFCoefficients, F: int, P: int) -> float:
+    """Relative energy error ε_B of truncating B to l <= F, p <= P, against all the
+    coefficients available (l <= min(F0, lmax), p <= P0); worst channel."""
+    a = lighting.band_energy()
+    r_in, r_out = _brdf_band_energies(coefficients, P)
+    n = min(a.shape[0], r_in.shape[0])
+    lam2 = Lambda(np.arange(n))[:, None] ** 2
+    full = lam2 * a[:n] * (r_in[:n] + r_out[:n])
+    kept = lam2[: F + 1] * a[: F + 1] * r_in[: F + 1]
+    total = full.sum(axis=0)
+    live = total > 1e-300
+    return float((1.0 - kept.sum(axis=0)[live] / total[live]).max())
+
+
+def residual_bound(lighting: LightingCoefficients, coefficients: BRDFCoefficients, F: int, P: int) -> float:
+    """Conservative upper bound U/(C + U) on ε_B from residual energies (module docs)."""
+    a = lighting.band_energy()
+    r_in, r_out = _brdf_band_energies(coefficients, P)
+    E_L = lighting.energy
+    E_rho = coefficients.energy
+    lam = Lambda(np.arange(F + 2))
+    beyond_L = np.clip(E_L - a[: F + 1].sum(axis=0), 0.0, None)  # E_L ε_L(F)
+    beyond_rho_l = np.clip(E_rho - (r_in[: F + 1] + r_out[: F + 1]).sum(axis=0), 0.0, None)
+    beyond_rho_p = r_out[: F + 1].sum(axis=0)
+    kept = (lam[: F + 1, None] ** 2 * a[: F + 1] * r_in[: F + 1]).sum(axis=0)
+    peak = (lam[: F + 1, None] ** 2 * a[: F + 1]).max(axis=0)
+    U = lam[F + 1] ** 2 * beyond_L * beyond_rho_l + peak * beyond_rho_p
+    live = (kept + U) > 1e-300
+    return float((U[live] / (kept[live] + U[live])).max())
+
+
+def scene_orders(orders: OrderChoice, lighting: LightingCoefficients) -> SceneOrders:
+    """F_L, F_B = min(F_ρ, F_L), P_B = P_ρ and the residual bound at (F_B, P_B)."""
+    tol = orders.tolerance
+    eps_L = lighting.eps()
+    ok = np.nonzero(eps_L <= tol)[0]
+    capped = ok.size == 0
+    F_L = int(ok[0]) if ok.size else lighting.lmax
+    F_B = min(orders.F, F_L)
+    P_B = orders.P
+    bound = residual_bound(lighting, orders.coefficients, F_B, P_B)
+    return SceneOrders(
+        F_rho=orders.F,
+        P_rho=orders.P,
+        F_L=F_L,
+        F_B=F_B,
+        P_B=P_B,
+        eps_L=float(eps_L[F_L]),
+        lighting_capped=capped,
+        bound=bound,
+        tolerance=tol,
+    )

@@ -1,0 +1,357 @@
+"""Environment maps: the :class:`EnvironmentMap` container, :func:`load_env` and :func:`save_env`.
+
+An environment map is linear radiance on an equirectangular (lat-long) grid in the
+project frame (right-handed, z up; DESIGN §2): pixel (i, j) of an H × W map is centred
+at θ = (i + ½)π/H, φ = 2π(j + ½)/W (φ from +x toward +y), direction
+ω = (sin θ cos φ, sin θ sin φ, cos θ).
+
+:func:`load_env` reads OpenEXR, Radiance .hdr and PFM lat-long maps, Debevec angular
+probes, Direct3D cube maps (a folder of six faces) and procedural ``builtin:`` specs,
+and maps each file's own orientation convention into the project frame; the rules are
+written down in data_specs/environment_maps.md.
+
+Public objects: :class:`EnvironmentMap`, :func:`load_env`, :func:`save_env`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .builtin_env import BUILTIN_PREFIX, builtin_radiance
+from .errors import BadInputError
+from .hdr_codecs import IMAGE_SUFFIXES, read_image, write_image
+from .probe import (
+    CUBE_FACES,
+    cube_to_latlong,
+    latlong_directions,
+    latlong_solid_angles,
+    probe_to_latlong,
+)
+
+__all__ = ["EnvironmentMap", "load_env", "save_env"]
+
+
+def _check_radiance(source: object, radiance: np.ndarray) -> None:
+    """Refuse non-finite or negative radiance, counting the offending pixels."""
+    problems = []
+    nan = np.isnan(radiance).any(axis=-1)
+    if nan.any():
+        problems.append(f"{int(nan.sum())} pixel(s) with NaN radiance")
+    inf = np.isinf(radiance).any(axis=-1)
+    if inf.any():
+        problems.append(f"{int(inf.sum())} pixel(s) with infinite radiance")
+    negative = (radiance < 0).any(axis=-1)
+    if negative.any():
+        problems.append(f"{int(negative.sum())} pixel(s) with negative radiance (min {np.nanmin(radiance):g})")
+    if problems:
+        raise BadInputError(source, "; ".join(problems) + " (refused, not clamped)")
+
+
+def _interval_overlap(edges_out: np.ndarray, edges_in: np.ndarray) -> np.ndarray:
+    """Overlap lengths of increasing intervals: (len(edges_out) - 1, len(edges_in) - 1)."""
+    lo = np.maximum(edges_out[:-1, None], edges_in[None, :-1])
+    hi = np.minimum(edges_out[1:, None], edges_in[None, 1:])
+    return np.maximum(hi - lo, 0.0)
+
+
+@dataclass(frozen=True)
+class EnvironmentMap:
+    """Linear radiance on a lat-long grid in the project frame (DESIGN §2).
+
+    Parameters
+    ----------
+    radiance
+        ``(H, W, 3)`` float32 or float64, finite and non-negative; row 0 is the zenith
+        (+z). Stored read-only.
+    name
+        Short name (file stem or built-in name).
+    source
+        Provenance: the file or spec and the orientation options it was read with.
+    """
+
+    radiance: np.ndarray
+    name: str = ""
+    source: str = ""
+
+    def __post_init__(self) -> None:
+        radiance = np.asarray(self.radiance)
+        where = self.source or self.name or None
+        if radiance.ndim != 3 or radiance.shape[2] != 3 or radiance.shape[0] < 1 or radiance.shape[1] < 1:
+            raise BadInputError(where, f"radiance must have shape (H, W, 3) with H, W >= 1, got {radiance.shape}")
+        if radiance.dtype not in (np.float32, np.float64):
+            raise BadInputError(where, f"radiance must be float32 or float64, got {radiance.dtype}")
+        _check_radiance(where, radiance)
+        if radiance.flags.writeable:
+            radiance = radiance.copy()
+            radiance.flags.writeable = False
+        object.__setattr__(self, "radiance", radiance)
+
+    @property
+    def height(self) -> int:
+        """Number of rows H."""
+        return int(self.radiance.shape[0])
+
+    @property
+    def width(self) -> int:
+        """Number of columns W."""
+        return int(self.radiance.shape[1])
+
+    def directions(self) -> np.ndarray:
+        """Pixel-centre unit vectors, ``(H, W, 3)`` float64."""
+        return latlong_directions(self.height, self.width)
+
+    def solid_angles(self) -> np.ndarray:
+        """Exact per-row pixel solid angle (2π/W)(cos θ_top − cos θ_bottom), ``(H,)`` float64."""
+        return latlong_solid_angles(self.height, self.width)
+
+    def integral(self) -> np.ndarray:
+        """∫ L dω per channel, ``(3,)`` float64: Σ_ij L_ij Ω_i (exact for the piecewise-constant map)."""
+        rows = self.radiance.sum(axis=1, dtype=np.float64)
+        return self.solid_angles() @ rows
+
+    def lookup(self, dirs: np.ndarray) -> np.ndarray:
+        """Bilinear radiance at directions, ``(..., 3)`` -> ``(..., 3)`` float64.
+
+        The directions need not be unit length (zero vectors are refused). Interpolation
+        is between pixel centres, periodic in φ, and clamped to the first/last row
+        beyond the outermost row centres (within π/2H of the poles).
+        """
+        d = np.asarray(dirs, dtype=np.float64)
+        if d.shape[-1:] != (3,):
+            raise BadInputError(None, f"lookup directions must have shape (..., 3), got {d.shape}")
+        norm = np.linalg.norm(d, axis=-1)
+        if not np.all(norm > 0) or not np.all(np.isfinite(norm)):
+            raise BadInputError(None, "lookup directions must be finite and non-zero")
+        h, w = self.height, self.width
+        theta = np.arccos(np.clip(d[..., 2] / norm, -1.0, 1.0))
+        phi = np.arctan2(d[..., 1], d[..., 0])
+        u = np.clip(theta * h / np.pi - 0.5, 0.0, h - 1.0)
+        v = phi * w / (2.0 * np.pi) - 0.5
+        i0 = np.minimum(np.floor(u).astype(np.int64), h - 1)
+        fu = (u - i0)[..., None]
+        i1 = np.minimum(i0 + 1, h - 1)
+        j0f = np.floor(v)
+        fv = (v - j0f)[..., None]
+        j0 = j0f.astype(np.int64) % w
+        j1 = (j0 + 1) % w
+        img = self.radiance
+        top = img[i0, j0] * (1.0 - fv) + img[i0, j1] * fv
+        bottom = img[i1, j0] * (1.0 - fv) + img[i1, j1] * fv
+        return top * (1.0 - fu) + bottom * fu
+
+    def resized(self, height: int, width: int | None = None) -> EnvironmentMap:
+        """Area-weighted resampling to ``height`` rows (``width`` defaults to W·height/H).
+
+        Output pixel = Σ over input pixels of (overlap solid angle / output pixel solid
+        angle) × input radiance, with overlaps measured exactly in cos θ and φ (the grid is
+        separable in those). Each input pixel's solid angle is fully distributed, so
+        ∫ L dω is preserved exactly; a constant map stays constant. Integer downsampling
+        is the solid-angle-weighted block mean.
+        """
+        if width is None:
+            width = max(1, round(self.width * height / self.height))
+        if height < 1 or width < 1:
+            raise BadInputError(self.source or None, f"resized size must be positive, got {height} x {width}")
+        if (height, width) == (self.height, self.width):
+            return self
+        # rows: measure in μ = -cos θ (increasing with the row index)
+        mu_in = -np.cos(np.arange(self.height + 1) * np.pi / self.height)
+        mu_out = -np.cos(np.arange(height + 1) * np.pi / height)
+        rows = _interval_overlap(mu_out, mu_in)
+        rows /= rows.sum(axis=1, keepdims=True)
+        cols = _interval_overlap(np.linspace(0.0, 1.0, width + 1), np.linspace(0.0, 1.0, self.width + 1))
+        cols /= cols.sum(axis=1, keepdims=True)
+        out = np.einsum("ai,ijc,bj->abc", rows, self.radiance.astype(np.float64), cols, optimize=True)
+        out = np.maximum(out, 0.0).astype(self.radiance.dtype)  # tiny negative round-off only
+        return EnvironmentMap(out, self.name, f"{self.source} [resized to {height}x{width}]")
+
+    def rotated_z(self, angle: float) -> EnvironmentMap:
+        """Rotate the environment by ``angle`` radians about +z: L'(ω) = L(R_z(−angle) ω).
+
+        A feature at azimuth φ moves to φ + angle (counterclockwise seen from above). A
+        whole number of columns is an exact roll; otherwise linear interpolation along φ,
+        which keeps Σ L exactly (so ∫ L dω too).
+        """
+        shift = angle * self.width / (2.0 * np.pi)
+        whole = int(np.floor(shift))
+        frac = shift - whole
+        img = np.roll(self.radiance, whole, axis=1)
+        if frac > 1e-12:
+            img = (1.0 - frac) * img + frac * np.roll(img, 1, axis=1)
+        img = img.astype(self.radiance.dtype)
+        return EnvironmentMap(img, self.name, f"{self.source} [rotated_z {np.degrees(angle):g} deg]")
+
+
+# --------------------------------------------------------------------------------------
+# loading
+# --------------------------------------------------------------------------------------
+def _y_up_to_project(image: np.ndarray) -> np.ndarray:
+    """Re-index a y-up lat-long file (data_specs: up='y') into the project frame.
+
+    The file column j looks at ψ = 2π(j + ½)/W − π in the file frame, i.e. the file's
+    direction (sin θ cos ψ, cos θ, sin θ sin ψ) = (x_f, y_f, z_f); project (X, Y, Z) =
+    (x_f, −z_f, y_f), so φ = −ψ and project column j' = (W/2 − 1 − j) mod W. A pure
+    permutation of columns (exact); W must be even.
+    """
+    w = image.shape[1]
+    j = (w // 2 - 1 - np.arange(w)) % w
+    return image[:, j]
+
+
+def _cube_faces(source: Path, folder: Path) -> dict[str, np.ndarray]:
+    faces: dict[str, np.ndarray] = {}
+    missing = []
+    for face in CUBE_FACES:
+        found = [folder / f"{face}{s}" for s in IMAGE_SUFFIXES if (folder / f"{face}{s}").is_file()]
+        if not found:
+            missing.append(face)
+        elif len(found) > 1:
+            raise BadInputError(source, f"cube face {face} exists in several formats: {[p.name for p in found]}")
+        else:
+            faces[face] = read_image(found[0])
+    if missing:
+        raise BadInputError(
+            source, f"cube map needs six faces {', '.join(CUBE_FACES)}; missing {', '.join(missing)} in {folder}"
+        )
+    shapes = {f: im.shape[:2] for f, im in faces.items()}
+    n = shapes["px"][0]
+    if any(s != (n, n) for s in shapes.values()):
+        raise BadInputError(source, f"cube faces must be square and of equal size; sizes {shapes}")
+    for face, image in faces.items():
+        _check_radiance(folder / face, image)
+    return faces
+
+
+def _options_text(up: str, flip: bool, azimuth: float, kind: str) -> str:
+    parts = [kind, f"up={up}"]
+    if flip:
+        parts.append("flip")
+    if azimuth:
+        parts.append(f"azimuth={azimuth:g}")
+    return " [" + ", ".join(parts) + "]"
+
+
+def load_env(
+    spec_or_path: str | Path,
+    up: str | None = None,
+    azimuth: float = 0.0,
+    flip: bool = False,
+    probe: bool | None = None,
+    height: int | None = None,
+) -> EnvironmentMap:
+    """Load an environment map into the project frame (data_specs/environment_maps.md).
+
+    Parameters
+    ----------
+    spec_or_path
+        ``builtin:NAME[,key=value...]``; a lat-long or angular-probe image (``.exr``,
+        ``.hdr``, ``.pfm``); a cube-map folder holding ``px, nx, py, ny, pz, nz`` faces,
+        or the path of one of those faces.
+    up
+        Lat-long file convention: ``"z"`` (default) reads the file literally in the
+        DESIGN §2 pixel convention (top row +z, φ growing with the column); ``"y"`` reads
+        a y-up file (top row +y_f, image centre looking along +x_f, columns to the right
+        turning clockwise seen from above; project (X, Y, Z) = (x_f, −z_f, y_f)). Cube maps
+        and probes have their own fixed y-up conventions: ``up`` must be None or ``"y"``.
+    azimuth
+        Degrees; the loaded map is rotated about the project +z axis so that a feature
+        at φ moves to φ + azimuth (applied last).
+    flip
+        Lat-long only: reverse the row order first (files stored bottom row first).
+    probe
+        True: the image is a Debevec angular map; False: it is lat-long; None: a square
+        image whose file name contains "probe" (any case) is a probe, others lat-long.
+    height
+        Output rows (width 2·height), by area-weighted resampling; default: the file's
+        rows (lat-long), 2N for N × N cube faces, D/2 for a D × D probe.
+
+    Returns
+    -------
+    EnvironmentMap
+
+    Raises
+    ------
+    BadInputError
+        Missing, unreadable or corrupt file; zero-size image; NaN, infinite or negative
+        radiance (the pixels are counted, never clamped); a lat-long image that is not
+        2:1; a non-square probe; missing, duplicate or unequal cube faces; bad options.
+    """
+    text = str(spec_or_path)
+    if up not in (None, "z", "y"):
+        raise BadInputError(text, f"up={up!r}: choose 'z' or 'y'")
+    if not np.isfinite(azimuth):
+        raise BadInputError(text, f"azimuth={azimuth!r} is not finite")
+    if height is not None and (int(height) != height or height < 1):
+        raise BadInputError(text, f"height={height!r} must be a positive integer")
+
+    if text.strip().startswith(BUILTIN_PREFIX):
+        if up is not None or flip or probe:
+            raise BadInputError(text, "up, flip and probe do not apply to built-in environments")
+        name, radiance = builtin_radiance(text)
+        env = EnvironmentMap(radiance, name, text.strip())
+    else:
+        env = _load_file(Path(text), up, flip, probe, azimuth)
+    if azimuth:
+        env = env.rotated_z(np.radians(azimuth))
+    if height is not None and height != env.height:
+        env = env.resized(int(height), 2 * int(height))
+    return env
+
+
+def _load_file(path: Path, up: str | None, flip: bool, probe: bool | None, azimuth: float) -> EnvironmentMap:
+    is_face = path.stem.lower() in CUBE_FACES and path.suffix.lower() in IMAGE_SUFFIXES
+    if path.is_dir() or is_face:
+        if flip or probe:
+            raise BadInputError(path, "flip and probe do not apply to cube maps")
+        if up == "z":
+            raise BadInputError(path, "cube maps are y-up (Direct3D convention); up='z' does not apply")
+        folder = path if path.is_dir() else path.parent
+        if not folder.is_dir():
+            raise BadInputError(path, "no such cube-map folder")
+        faces = _cube_faces(path, folder)
+        n = faces["px"].shape[0]
+        radiance = cube_to_latlong(faces, 2 * n).astype(np.float32)
+        return EnvironmentMap(radiance, folder.name, f"{folder}" + _options_text("y", False, azimuth, "cube"))
+    if not path.exists():
+        raise BadInputError(path, "no such file")
+    image = read_image(path)
+    h, w = image.shape[:2]
+    if h == 0 or w == 0:
+        raise BadInputError(path, f"zero-size image ({w} x {h})")
+    _check_radiance(path, image)
+    is_probe = probe if probe is not None else (h == w and "probe" in path.name.lower())
+    if is_probe:
+        if flip:
+            raise BadInputError(path, "flip does not apply to angular probes")
+        if up == "z":
+            raise BadInputError(path, "angular probes are y-up (Debevec convention); up='z' does not apply")
+        if h != w:
+            raise BadInputError(path, f"an angular probe must be square, got {w} x {h}")
+        radiance = probe_to_latlong(image, max(1, h // 2)).astype(np.float32)
+        return EnvironmentMap(radiance, path.stem, f"{path}" + _options_text("y", False, azimuth, "probe"))
+    if w != 2 * h:
+        raise BadInputError(
+            path, f"a lat-long map must be 2:1 (width = 2 x height), got {w} x {h}; pass probe=True for angular maps"
+        )
+    if flip:
+        image = image[::-1]
+    up = up or "z"
+    if up == "y":
+        image = _y_up_to_project(image)
+    return EnvironmentMap(
+        np.ascontiguousarray(image), path.stem, f"{path}" + _options_text(up, flip, azimuth, "latlong")
+    )
+
+
+def save_env(path: str | Path, env: EnvironmentMap, half: bool = False) -> None:
+    """Write ``env`` as stored (project frame, top row +z, read back with the defaults).
+
+    ``.exr`` (float32, or half floats with ``half=True``), ``.hdr`` (RGBE, run-length
+    encoded) or ``.pfm``; the write is atomic (temporary file + ``os.replace``).
+    """
+    if not isinstance(env, EnvironmentMap):
+        raise BadInputError(path, f"save_env needs an EnvironmentMap, got {type(env).__name__}")
+    write_image(Path(path), env.radiance, half=half)

@@ -1,0 +1,114 @@
+"""CPU reference renderer (numpy): the same camera rays as the shader, shading from any B(R, V).
+
+Per pixel centre (``camera.Camera.rays``) we find the surface point, the unit normal N, the
+view direction V = −ray direction and R = 2(N·V)N − V, then evaluate a radiance function
+``radiance(R, V) -> (n, 3)``: :meth:`SHRM.radiance` to check the shader, or the
+angular-domain reference of ``analysis.reference`` to check the whole pipeline.
+
+Intersections: analytic ray–sphere for a sphere (:func:`sphere_geometry`), or brute-force
+Möller–Trumbore over all triangles with barycentric interpolation of vertex normals
+(:func:`mesh_geometry`; O(pixels × triangles), meant for small test images and meshes).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from .camera import Camera
+from .mesh import Mesh
+
+__all__ = ["Geometry", "sphere_geometry", "mesh_geometry", "shade"]
+
+
+@dataclass(frozen=True, eq=False)
+class Geometry:
+    """Per-pixel surface geometry, arrays (H, W, ...); N, V, R are zero where ``hit`` is False."""
+
+    hit: np.ndarray
+    position: np.ndarray
+    N: np.ndarray
+    V: np.ndarray
+    R: np.ndarray
+
+
+def _finish(hit: np.ndarray, pos: np.ndarray, normal: np.ndarray, dirs: np.ndarray) -> Geometry:
+    V = -dirs
+    N = normal / np.maximum(np.linalg.norm(normal, axis=-1, keepdims=True), 1e-300)
+    R = 2.0 * np.sum(N * V, axis=-1, keepdims=True) * N - V
+    R /= np.maximum(np.linalg.norm(R, axis=-1, keepdims=True), 1e-300)
+    z = ~hit[..., None]
+    return Geometry(hit, np.where(z, 0.0, pos), np.where(z, 0.0, N), np.where(z, 0.0, V), np.where(z, 0.0, R))
+
+
+def sphere_geometry(
+    camera: Camera, width: int, height: int, center: np.ndarray = (0.0, 0.0, 0.0), radius: float = 1.0
+) -> Geometry:
+    """Analytic ray–sphere intersection (nearest root), N = (P − c)/r."""
+    origins, dirs = camera.rays(width, height)
+    oc = origins - np.asarray(center, dtype=np.float64)
+    b = np.sum(oc * dirs, axis=-1)
+    c = np.sum(oc * oc, axis=-1) - radius * radius
+    disc = b * b - c
+    hit = disc > 0.0
+    t = -b - np.sqrt(np.maximum(disc, 0.0))
+    hit &= t > 0.0
+    pos = origins + t[..., None] * dirs
+    return _finish(hit, pos, pos - np.asarray(center, dtype=np.float64), dirs)
+
+
+def mesh_geometry(camera: Camera, width: int, height: int, mesh: Mesh, *, chunk: int = 2048) -> Geometry:
+    """Brute-force Möller–Trumbore ray casting with barycentric vertex-normal interpolation.
+
+    The normal is flipped toward the viewer on back faces, as the shader does (gl_FrontFacing).
+    """
+    origins, dirs = camera.rays(width, height)
+    o = origins.reshape(-1, 3)
+    d = dirs.reshape(-1, 3)
+    v0 = mesh.vertices[mesh.faces[:, 0]]
+    e1 = mesh.vertices[mesh.faces[:, 1]] - v0
+    e2 = mesh.vertices[mesh.faces[:, 2]] - v0
+    n_rays = len(o)
+    best_t = np.full(n_rays, np.inf)
+    best_f = np.full(n_rays, -1, dtype=np.int64)
+    best_uv = np.zeros((n_rays, 2))
+    for s in range(0, n_rays, chunk):
+        oo, dd = o[s:s + chunk], d[s:s + chunk]
+        pvec = np.cross(dd[:, None, :], e2[None, :, :])
+        det = np.einsum("fk,rfk->rf", e1, pvec)
+        ok = np.abs(det) > 1e-14
+        inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
+        tvec = oo[:, None, :] - v0[None, :, :]
+        u = np.einsum("rfk,rfk->rf", tvec, pvec) * inv
+        qvec = np.cross(tvec, e1[None, :, :])
+        v = np.einsum("rk,rfk->rf", dd, qvec) * inv
+        t = np.einsum("fk,rfk->rf", e2, qvec) * inv
+        valid = ok & (u >= 0.0) & (v >= 0.0) & (u + v <= 1.0) & (t > 0.0)
+        t = np.where(valid, t, np.inf)
+        idx = np.argmin(t, axis=1)
+        rows = np.arange(len(oo))
+        best_t[s:s + chunk] = t[rows, idx]
+        best_f[s:s + chunk] = np.where(np.isfinite(t[rows, idx]), idx, -1)
+        best_uv[s:s + chunk, 0] = u[rows, idx]
+        best_uv[s:s + chunk, 1] = v[rows, idx]
+    hit = best_f >= 0
+    f = mesh.faces[np.where(hit, best_f, 0)]
+    w1, w2 = best_uv[:, 0:1], best_uv[:, 1:2]
+    normal = (1.0 - w1 - w2) * mesh.normals[f[:, 0]] + w1 * mesh.normals[f[:, 1]] + w2 * mesh.normals[f[:, 2]]
+    face_n = np.cross(e1, e2)[np.where(hit, best_f, 0)]
+    back = np.sum(face_n * d, axis=-1) > 0.0
+    normal[back] *= -1.0
+    pos = o + np.where(hit, best_t, 0.0)[:, None] * d
+    shape = (height, width)
+    return _finish(hit.reshape(shape), pos.reshape(shape + (3,)), normal.reshape(shape + (3,)), dirs)
+
+
+def shade(geometry: Geometry, radiance: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> np.ndarray:
+    """Radiance image (H, W, 3) float64: ``radiance(R, V)`` at hit pixels, 0 elsewhere."""
+    out = np.zeros(geometry.hit.shape + (3,))
+    m = geometry.hit
+    if m.any():
+        out[m] = radiance(geometry.R[m], geometry.V[m])
+    return out

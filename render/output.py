@@ -1,0 +1,171 @@
+"""Rendered-image output: EXR (linear radiance), PNG (exposure + tone mapping), turntable GIF.
+
+Pipeline (data_specs/render_outputs.md):
+
+1. ``composite``: linear radiance of the objects over a background — the environment seen
+   directly along each camera ray (HDR background), a constant, or nothing (alpha 0);
+2. EXR: the linear composite as float32 channels R, G, B plus coverage A — before any
+   exposure or tone mapping;
+3. PNG: scale by 2^exposure, tone map (``srgb``: clip to [0, 1]; ``filmic``: the ACES
+   fitted curve of Narkowicz 2015, x(2.51x + 0.03) / (x(2.43x + 0.59) + 0.14)), encode with
+   the sRGB transfer function (IEC 61966-2-1), quantize to 8 bits; RGBA when the
+   background is transparent (alpha = coverage).
+
+All writers are atomic (temporary file in the target folder, then ``os.replace``).
+
+References
+----------
+K. Narkowicz, "ACES Filmic Tone Mapping Curve", 2015,
+https://knarkowicz.wordpress.com/2016/01/06/aces-filmic-tone-mapping-curve/
+IEC 61966-2-1:1999, sRGB transfer function.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from pathlib import Path
+
+import numpy as np
+
+from ..analysis.latlong import bilinear_lookup
+from .camera import Camera
+
+__all__ = [
+    "TONE_MAPS",
+    "environment_background",
+    "composite",
+    "tone_map",
+    "srgb_encode",
+    "to_8bit",
+    "write_exr",
+    "write_png",
+    "write_gif",
+    "turntable_paths",
+]
+
+TONE_MAPS = ("srgb", "filmic")
+
+
+@contextmanager
+def _atomic(path: Path) -> Iterator[Path]:
+    """Yield a temporary path next to ``path``; move it over ``path`` on success, delete on error."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
+    os.close(fd)
+    try:
+        yield Path(tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def environment_background(env_radiance: np.ndarray, camera: Camera, width: int, height: int) -> np.ndarray:
+    """The environment seen along each camera ray: bilinear lat-long lookup, float32 (H, W, 3).
+
+    ``env_radiance`` is an (h, w, 3) lat-long map in the z-up frame (DESIGN §2).
+    """
+    _, dirs = camera.rays(width, height)
+    return bilinear_lookup(np.asarray(env_radiance, dtype=np.float64), dirs).astype(np.float32)
+
+
+def composite(radiance: np.ndarray, alpha: np.ndarray, background: np.ndarray | Sequence[float] | None) -> np.ndarray:
+    """radiance·α + background·(1 − α); ``None`` keeps the radiance (transparent background)."""
+    if background is None:
+        return np.asarray(radiance, dtype=np.float32)
+    a = np.asarray(alpha, dtype=np.float32)[..., None]
+    bg = np.broadcast_to(np.asarray(background, dtype=np.float32), radiance.shape)
+    return (radiance * a + bg * (1.0 - a)).astype(np.float32)
+
+
+def tone_map(linear: np.ndarray, *, exposure: float = 0.0, curve: str = "filmic") -> np.ndarray:
+    """Display-referred values in [0, 1] (before sRGB encoding) from linear radiance.
+
+    Parameters
+    ----------
+    exposure
+        Stops: values are multiplied by 2**exposure first.
+    curve
+        ``"srgb"`` (clip) or ``"filmic"`` (ACES fit, Narkowicz 2015).
+    """
+    if curve not in TONE_MAPS:
+        raise ValueError(f"tone map must be one of {TONE_MAPS}, got {curve!r}")
+    x = np.maximum(np.asarray(linear, dtype=np.float64) * 2.0 ** float(exposure), 0.0)
+    x = np.nan_to_num(x, nan=0.0, posinf=1e30)
+    if curve == "filmic":
+        x = x * (2.51 * x + 0.03) / (x * (2.43 * x + 0.59) + 0.14)
+    return np.clip(x, 0.0, 1.0)
+
+
+def srgb_encode(x: np.ndarray) -> np.ndarray:
+    """sRGB transfer function (IEC 61966-2-1) of values in [0, 1]."""
+    x = np.clip(np.asarray(x, dtype=np.float64), 0.0, 1.0)
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1.0 / 2.4) - 0.055)
+
+
+def to_8bit(
+    linear: np.ndarray, alpha: np.ndarray | None = None, *, exposure: float = 0.0, curve: str = "filmic"
+) -> np.ndarray:
+    """uint8 (H, W, 3) or, with ``alpha``, (H, W, 4) display image."""
+    rgb = np.round(srgb_encode(tone_map(linear, exposure=exposure, curve=curve)) * 255.0).astype(np.uint8)
+    if alpha is None:
+        return rgb
+    a = np.round(np.clip(np.asarray(alpha, dtype=np.float64), 0.0, 1.0) * 255.0).astype(np.uint8)
+    return np.concatenate([rgb, a[..., None]], axis=-1)
+
+
+def write_exr(path: str | Path, radiance: np.ndarray, alpha: np.ndarray | None = None) -> None:
+    """Write linear float32 radiance (H, W, 3) [and coverage A] to OpenEXR, atomically.
+
+    Channels R, G, B (and A), 32-bit float, ZIP compression (lossless).
+    """
+    import OpenEXR
+
+    rgb = np.asarray(radiance, dtype=np.float32)
+    if rgb.ndim != 3 or rgb.shape[2] != 3:
+        raise ValueError(f"radiance must be (H, W, 3), got {rgb.shape}")
+    channels = {name: np.ascontiguousarray(rgb[..., k]) for k, name in enumerate("RGB")}
+    if alpha is not None:
+        channels["A"] = np.ascontiguousarray(np.asarray(alpha, dtype=np.float32))
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    with _atomic(Path(path)) as tmp:
+        with OpenEXR.File(header, channels) as exr:
+            exr.write(str(tmp))
+
+
+def write_png(path: str | Path, image8: np.ndarray) -> None:
+    """Write a uint8 RGB or RGBA image to PNG, atomically."""
+    from PIL import Image
+
+    with _atomic(Path(path)) as tmp:
+        Image.fromarray(np.asarray(image8, dtype=np.uint8)).save(tmp, format="PNG")
+
+
+def write_gif(path: str | Path, frames: Sequence[np.ndarray], *, fps: float = 20.0) -> None:
+    """Write uint8 RGB frames as a looping animated GIF (Pillow), atomically."""
+    from PIL import Image
+
+    if not frames:
+        raise ValueError("no frames")
+    images = [Image.fromarray(np.asarray(f, dtype=np.uint8)[..., :3]) for f in frames]
+    with _atomic(Path(path)) as tmp:
+        images[0].save(
+            tmp,
+            format="GIF",
+            save_all=True,
+            append_images=images[1:],
+            duration=max(int(round(1000.0 / fps)), 10),
+            loop=0,
+        )
+
+
+def turntable_paths(output: str | Path, n_frames: int) -> tuple[list[Path], Path]:
+    """Frame paths ``<stem>_0000<suffix>`` … and the GIF path ``<stem>.gif`` for ``output``."""
+    out = Path(output)
+    digits = max(4, len(str(n_frames - 1)))
+    frames = [out.with_name(f"{out.stem}_{k:0{digits}d}{out.suffix}") for k in range(n_frames)]
+    return frames, out.with_suffix(".gif")
