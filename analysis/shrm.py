@@ -86,6 +86,12 @@ class SHRM:
         basis = real_sph_harm(self.P, V)  # (n, n_coef)
         return np.einsum("nc,nck->nk", basis, at_r)
 
+    def save(self, path: str | Path) -> Path:
+        """Write the SHRM to a ``.shrm.npz`` file (atomic; see ``data_specs/shrm_file.md``)."""
+        from .shrm_file import save_shrm
+
+        return save_shrm(path, self)
+
     def view_map(self, view: np.ndarray) -> np.ndarray:
         """Distant-viewer map Σ B̃_pq(α, β) Y^r_pq(V) for one view direction (RH02 eq. 12).
 
@@ -205,14 +211,15 @@ def global_from_local(local: np.ndarray, alpha: np.ndarray, beta: np.ndarray) ->
     """
     P = local.shape[0] - 1
     grid_shape = local.shape[2:-1]
-    a = np.broadcast_to(alpha, grid_shape)
-    b = np.broadcast_to(beta, grid_shape)
+    # d̃ depends on α only: keep α's own (broadcastable) shape, e.g. one value per row
+    a = np.asarray(alpha, dtype=np.float64)
+    b = np.asarray(beta, dtype=np.float64)
     real = np.zeros(((P + 1) ** 2,) + grid_shape + (3,))
     root2 = np.sqrt(2.0)
     for p in range(P + 1):
         d = wigner_d_tilde(p, a)  # (*grid, 2p+1, 2p+1) [s+p, q+p]
         blk = local[p, P - p : P + p + 1]  # (2p+1 over q, *grid, 3)
-        tilde = np.einsum("...sq,q...c->s...c", d, blk)  # (2p+1 over s, *grid, 3)
+        tilde = np.einsum("...sq,q...c->s...c", d, blk, optimize=True)  # (2p+1 over s, *grid, 3)
         for s in range(0, p + 1):
             value = np.exp(-1j * s * b)[..., None] * tilde[s + p]
             if s == 0:

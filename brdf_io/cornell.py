@@ -50,7 +50,12 @@ class ScatteredBRDF(BRDF):
         L is the file's incident direction (θ_i, φ_i), V its scattered one (θ_s, φ_s).
         By reciprocity rho(L, V) = rho(V, L), so the choice does not change rho.
     rgb
-        (n, 3) linear sRGB rho in 1/sr (brdf_io/colour.py: D65, white-balanced).
+        (n, 3) linear sRGB rho in 1/sr (brdf_io/colour.py: D65, white-balanced), with
+        components outside the sRGB gamut (negative; saturated blues and reds) clipped to 0,
+        since a BRDF cannot be negative.
+    n_clipped
+        How many components of ``rgb`` were clipped (``spectral_to_linear_srgb(spectral)``
+        gives the unclipped values).
     spectral
         (n, n_wavelengths) spectral rho in 1/sr.
     wavelengths
@@ -71,10 +76,12 @@ class ScatteredBRDF(BRDF):
         wavelengths: np.ndarray | None = None,
         name: str = "scattered",
         source: str | None = None,
+        n_clipped: int = 0,
     ) -> None:
         self.L = np.asarray(L, dtype=np.float64)
         self.V = np.asarray(V, dtype=np.float64)
         self.rgb = np.asarray(rgb, dtype=np.float64)
+        self.n_clipped = n_clipped
         self.spectral = spectral
         self.wavelengths = wavelengths
         self.name = name
@@ -111,7 +118,7 @@ def read_cornell(path: str | os.PathLike[str]) -> ScatteredBRDF:
     -------
     ScatteredBRDF
         With ``L`` the incident and ``V`` the scattered directions, ``spectral`` the
-        file's values, ``rgb`` their linear sRGB (brdf_io/colour.py).
+        file's values, ``rgb`` their linear sRGB (brdf_io/colour.py), clipped at 0.
 
     Raises
     ------
@@ -181,10 +188,12 @@ def read_cornell(path: str | os.PathLike[str]) -> ScatteredBRDF:
     if np.any(bad):
         k = int(np.argmax(bad))
         raise BadInputError(path, f"line {row_lines[k]}: negative BRDF value {spectral[k].min()!r}")
+    rgb = spectral_to_linear_srgb(spectral)
     return ScatteredBRDF(
         L=_direction(theta_i, phi_i),  # incident direction = light
         V=_direction(theta_s, phi_s),  # scattered direction = view; mirror of L at phi_s = phi_i + pi
-        rgb=spectral_to_linear_srgb(spectral),
+        rgb=np.maximum(rgb, 0.0),
+        n_clipped=int(np.sum(rgb < 0)),
         spectral=spectral,
         wavelengths=np.array(wavelengths),
         name=path.stem,

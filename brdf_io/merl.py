@@ -22,14 +22,14 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import IO
 
 import numpy as np
 
+from .atomic import atomic_path
 from .brdf import BRDF, Kind
 from .errors import BadInputError
 from .halfdiff import directions_to_halfdiff, halfdiff_to_directions
-from .table import EVAL_BLOCK, MissingAwareGrid, atomic_write, eval_with_mask, flatten_directions
+from .table import EVAL_BLOCK, MissingAwareGrid, eval_with_mask, flatten_directions
 
 __all__ = [
     "MERL_DIMS",
@@ -229,9 +229,8 @@ def write_merl(path: str | os.PathLike[str], brdf_or_values: BRDF | np.ndarray) 
     # divide by the per-channel scale; missing -> -1 (any negative number means missing)
     stored = np.where(np.isnan(values), -1.0, values / MERL_SCALE[:, None, None, None])
 
-    def write(f: IO[bytes]) -> None:
+    with atomic_path(path) as tmp, tmp.open("wb") as f:
         f.write(np.array(MERL_DIMS, dtype=_HEADER).tobytes())
         # channel-major R, G, B planes, each C-ordered [θ_h][θ_d][φ_d], φ_d fastest
         f.write(np.ascontiguousarray(stored, dtype=_SAMPLE).tobytes())
-
-    return atomic_write(path, write)
+    return path

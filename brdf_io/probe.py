@@ -20,12 +20,12 @@ Both file frames are mapped into the project frame by fixed orthogonal matrices,
 cube map and the shared Grace lat-long files agree, data_specs/environment_maps.md).
 
 Resampling (:func:`cube_to_latlong`, :func:`probe_to_latlong`) gathers s × s
-equal-area sub-samples per lat-long pixel (uniform in cos θ and φ), assigns each to the
-source texel containing it, and balances the sample weights (Sinkhorn scaling) so that
-every lat-long pixel's weights sum to its exact solid angle and every texel's weights
-sum to the texel's exact solid angle. A lat-long pixel is the weighted mean of its
-texels, so a constant map stays exactly constant, and the flux of each texel (thus
-∫ L dω) is preserved to the balancing tolerance.
+equal-area sub-samples per lat-long pixel (uniform in cos θ and in φ, so each carries
+Ω_pixel/s²), takes the texel containing each (the texel value is the texel's mean
+radiance), and averages: an estimate of the pixel's mean radiance ∫_pixel L dω / Ω_pixel.
+A constant map stays exactly constant, and ∫ L dω is preserved up to the sub-sampling
+error (measured: 2e-5 for a smooth closed form, < 1e-3 on the real cube maps; the flux
+of one isolated texel is kept only to about ±20 %: increase ``samples`` for such maps).
 
 Public objects: :func:`latlong_directions`, :func:`latlong_solid_angles`,
 :data:`CUBE_FACES`, :data:`CUBE_FACE_AXES`, :data:`CUBE_TO_PROJECT`,
@@ -38,7 +38,6 @@ References
   (angular map formula).
 - Microsoft, "Cubic Environment Mapping (Direct3D 9)"; OpenGL 4.6 specification
   §8.13, Table 8.19 (cube-map face selection and (s, t) per face).
-- M. Cuturi, "Sinkhorn Distances", NeurIPS 2013 (matrix balancing iteration).
 """
 
 from __future__ import annotations
@@ -200,12 +199,10 @@ def _probe_pixel_index(dirs: np.ndarray, size: int) -> np.ndarray:
 # --------------------------------------------------------------------------------------
 def _gather_latlong(
     values: np.ndarray,
-    texel_solid_angles: np.ndarray,
     texel_of: Callable[[np.ndarray], np.ndarray],
     to_source: np.ndarray,
     height: int,
     samples: int,
-    iterations: int,
 ) -> np.ndarray:
     """Resample flat source texels ``values`` (T, 3) to a (height, 2·height, 3) lat-long map.
 
@@ -232,28 +229,14 @@ def _gather_latlong(
         texel[r0:r1] = texel_of(d @ to_source.T)
     # sample index (i·s + a, j·s + b) -> pixel (i, j); reorder so each pixel's s² samples are contiguous
     texel = texel.reshape(height, s, width, s).transpose(0, 2, 1, 3).reshape(height * width, s * s)
-    pixel_omega = np.repeat(latlong_solid_angles(height, width), width)
-    n_texels = texel_solid_angles.size
-    flat_texel = texel.reshape(-1)
-    weight = np.broadcast_to((pixel_omega / (s * s))[:, None], texel.shape).copy()
-    texel_omega = texel_solid_angles.reshape(-1)
-    hit = np.bincount(flat_texel, minlength=n_texels) > 0
-    for _ in range(iterations):
-        got = np.bincount(flat_texel, weights=weight.reshape(-1), minlength=n_texels)
-        col_scale = np.where(hit, texel_omega / np.where(hit, got, 1.0), 1.0)
-        weight *= col_scale[texel]
-        weight *= (pixel_omega / weight.sum(axis=1))[:, None]
-    weight /= weight.sum(axis=1, keepdims=True)
-    out = np.empty((height * width, 3), dtype=np.float64)
-    for ch in range(3):
-        out[:, ch] = np.einsum("pk,pk->p", weight, values[texel, ch])
+    # every sub-sample carries the same solid angle Ω_i/s² within its pixel, so the pixel
+    # value is the plain mean of the texels under its sub-samples
+    out = values[texel].mean(axis=1)
     return out.reshape(height, width, 3)
 
 
-def cube_to_latlong(
-    faces: dict[str, np.ndarray], height: int, samples: int = 3, iterations: int = 20
-) -> np.ndarray:
-    """Resample a cube map to a lat-long map in the project frame, conserving flux.
+def cube_to_latlong(faces: dict[str, np.ndarray], height: int, samples: int = 2) -> np.ndarray:
+    """Resample a cube map to a lat-long map in the project frame.
 
     Parameters
     ----------
@@ -262,32 +245,26 @@ def cube_to_latlong(
     height
         Output rows H (width 2H); 2N keeps the face resolution everywhere.
     samples
-        Sub-samples per pixel along θ and along φ (s² in all).
-    iterations
-        Sinkhorn balancing sweeps (0: plain equal-area supersampling).
+        Equal-area sub-samples per pixel along θ and along φ (s² in all).
 
     Returns
     -------
     numpy.ndarray
-        ``(H, 2H, 3)`` float64 radiance.
+        ``(H, 2H, 3)`` float64 radiance; each pixel is the mean of the texels under its
+        equal-area sub-samples, an estimate of ∫_pixel L dω / Ω_pixel for the
+        piecewise-constant cube map.
     """
     n = faces["px"].shape[0]
     values = np.concatenate([np.asarray(faces[f], dtype=np.float64).reshape(-1, 3) for f in CUBE_FACES])
-    omega = np.tile(cube_texel_solid_angles(n).T.reshape(-1), 6)  # (face, row = v, col = u)
-    return _gather_latlong(
-        values, omega, lambda d: _cube_texel_index(d, n), CUBE_TO_PROJECT.T, height, samples, iterations
-    )
+    return _gather_latlong(values, lambda d: _cube_texel_index(d, n), CUBE_TO_PROJECT.T, height, samples)
 
 
-def probe_to_latlong(image: np.ndarray, height: int, samples: int = 3, iterations: int = 20) -> np.ndarray:
-    """Resample a Debevec angular-map probe (D × D × 3) to a lat-long map, conserving flux.
+def probe_to_latlong(image: np.ndarray, height: int, samples: int = 2) -> np.ndarray:
+    """Resample a Debevec angular-map probe (D × D × 3) to a lat-long map in the project frame.
 
-    Pixels outside the unit disc are ignored. See :func:`cube_to_latlong` for the
+    Pixels outside the unit disc are never sampled. See :func:`cube_to_latlong` for the
     parameters; D/2 rows keep the probe's resolution at its centre.
     """
     size = image.shape[0]
-    _, omega = probe_pixel_directions(size)
     values = np.asarray(image, dtype=np.float64).reshape(-1, 3)
-    return _gather_latlong(
-        values, omega, lambda d: _probe_pixel_index(d, size), PROBE_TO_PROJECT.T, height, samples, iterations
-    )
+    return _gather_latlong(values, lambda d: _probe_pixel_index(d, size), PROBE_TO_PROJECT.T, height, samples)

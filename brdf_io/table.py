@@ -10,7 +10,6 @@ specified in ``data_specs/brdf_table.md``. Public objects:
 - :func:`tabulate_table` — evaluate any BRDF on a (θ_i, θ_o, φ_d) grid;
 - :func:`interpolate_excluding_missing` — trilinear interpolation on a regular index grid
   that renormalizes the weights over the valid neighbours (used by the MERL reader too);
-- :func:`atomic_write` — write a file through a temporary file and ``os.replace``.
 
 References
 ----------
@@ -21,14 +20,13 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 import zipfile
-from collections.abc import Callable
 from pathlib import Path
-from typing import IO, Any
+from typing import Any
 
 import numpy as np
 
+from .atomic import atomic_path
 from .brdf import BRDF, Kind, as_directions
 from .errors import BadInputError
 from .halfdiff import spherical_angles
@@ -38,7 +36,6 @@ __all__ = [
     "TABLE_FORMAT_VERSION",
     "EVAL_BLOCK",
     "TableBRDF",
-    "atomic_write",
     "eval_with_mask",
     "flatten_directions",
     "interpolate_excluding_missing",
@@ -57,26 +54,6 @@ _KEYS = ("theta_i", "theta_o", "phi_d", "values", "metadata")
 # --------------------------------------------------------------------------------------
 # shared helpers
 # --------------------------------------------------------------------------------------
-
-
-def atomic_write(path: str | os.PathLike[str], write: Callable[[IO[bytes]], None]) -> Path:
-    """Call ``write(fileobj)`` on a temporary file beside ``path``, then ``os.replace`` it.
-
-    No partial output remains if ``write`` raises: the temporary file is removed and
-    ``path`` is left as it was.
-    """
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            write(f)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
 
 
 def _axis_corners(t: np.ndarray, n: int, periodic: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -380,8 +357,14 @@ def write_table(
     path = Path(path)
     grids = (theta_i, theta_o, phi_d)
     if isinstance(brdf_or_values, TableBRDF) and all(g is None for g in grids):
-        theta_i, theta_o, phi_d = brdf_or_values.theta_i, brdf_or_values.theta_o, brdf_or_values.phi_d
+        # a table on its own grid: copy its samples (missing ones included) unchanged
+        table = brdf_or_values
+        theta_i, theta_o, phi_d = table.theta_i, table.theta_o, table.phi_d
         grids = (theta_i, theta_o, phi_d)
+        name = name or table.name
+        if provenance is None:
+            provenance = table.metadata.get("provenance", f"copied from {table.source or table.name}")
+        brdf_or_values = table.values
     if any(g is None for g in grids):
         raise BadInputError(path, "write_table needs the grid: theta_i, theta_o and phi_d (radians)")
     theta_i = _check_axis(path, "theta_i", theta_i, np.pi / 2)
@@ -407,13 +390,12 @@ def write_table(
         ),
     }
 
-    def write(f: IO[bytes]) -> None:
+    with atomic_path(path) as tmp, tmp.open("wb") as f:
         np.savez_compressed(
             f, theta_i=theta_i, theta_o=theta_o, phi_d=phi_d, values=values,
             metadata=np.array(json.dumps(metadata)),
         )
-
-    return atomic_write(path, write)
+    return path
 
 
 def read_table(path: str | os.PathLike[str]) -> TableBRDF:
@@ -426,10 +408,13 @@ def read_table(path: str | os.PathLike[str]) -> TableBRDF:
     """
     path = Path(path)
     try:
-        with np.load(path, allow_pickle=False) as npz:
+        # open the file ourselves: np.load leaks its handle when the zip is corrupt
+        with path.open("rb") as f, np.load(f, allow_pickle=False) as npz:
             missing = [k for k in _KEYS if k not in npz.files]
             if missing:
-                raise BadInputError(path, f"missing key(s) {', '.join(missing)}; a table has {', '.join(_KEYS)}")
+                raise BadInputError(
+                    path, f"missing key(s) {', '.join(missing)}; a table has {', '.join(_KEYS)}"
+                )
             arrays = {k: npz[k] for k in _KEYS}
     except BadInputError:
         raise

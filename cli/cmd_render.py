@@ -25,7 +25,9 @@ def _vector(text: str, option: str) -> np.ndarray:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("mesh", metavar="MESH", help="mesh file (obj, ply, stl, off, glb, gltf) or builtin:sphere|torus|torus-knot")
+    p.add_argument(
+        "mesh", metavar="MESH", help="mesh file (obj, ply, stl, off, glb, gltf) or builtin:sphere|torus|torus-knot"
+    )
     p.add_argument("--env", default="builtin:sky", help="environment map spec or file (default builtin:sky)")
     p.add_argument("--brdf", default="microfacet:sigma=0.2", help="BRDF spec or file (default microfacet:sigma=0.2)")
     p.add_argument("--eps", type=float, default=0.03, help="SHRM tolerance epsilon (default 0.03)")

@@ -207,7 +207,7 @@ class SHRMRenderer:
             np.matmul(basis, obj.flat_coeffs, out=obj.buffer.reshape(-1))
             obj.image.Modified()
 
-    def _setup(self, camera: Camera) -> None:
+    def _setup(self, camera: Camera, update_maps: bool = True) -> None:
         if not self._objects:
             raise ValueError("nothing to render: add an object first")
         centers = np.array([o.center for o in self._objects])
@@ -222,11 +222,16 @@ class SHRMRenderer:
             uni.SetUniform3f("shrmEye", camera.eye.tolist())
             uni.SetUniform3f("shrmViewDir", (-camera.forward).tolist())
             uni.SetUniformi("shrmOrtho", ortho)
-        self.update_view_maps(camera)
+        if update_maps:
+            self.update_view_maps(camera)
 
-    def draw(self, camera: Camera) -> None:
-        """Render one frame into the offscreen framebuffer (no readback; for timing)."""
-        self._setup(camera)
+    def draw(self, camera: Camera, *, update_maps: bool = True) -> None:
+        """Render one frame into the offscreen framebuffer (no readback; for timing).
+
+        ``update_maps=False`` keeps the distant-mode maps of the previous frame (only for
+        measuring the cost of the per-frame map update).
+        """
+        self._setup(camera, update_maps)
         self._window.Render()
 
     def finish(self) -> None:

@@ -21,12 +21,13 @@ import itertools
 
 import numpy as np
 
-from .metrics import lsq_weights
+from .metrics import METRICS, log_epsilon, lsq_weights
 from .models_param import Geometry, ModelParam
 from .sampling import FitSamples
 
 __all__ = ["solve_bounded_lsq", "ProjectedObjective"]
 
+_LOG_IRLS = 4  # reweighting passes of the log metric
 _LOG_TINY = -700.0  # columns whose true scale is below e^-700 cannot carry a weight
 
 
@@ -86,16 +87,24 @@ def solve_bounded_lsq(G: np.ndarray, b: np.ndarray, a: np.ndarray | None = None)
     c = sol[..., :m]
     cmax = np.maximum(np.max(np.abs(c), axis=-1, keepdims=True), 1e-300)
     ok = np.all(c >= -1e-10 * cmax, axis=-1) & np.all(np.isfinite(c), axis=-1)
-    if a is not None:
-        ok &= c @ a <= 1.0 + 1e-9
-    q = np.einsum("kfi,kij,kfj->kf", c, G, c) - 2.0 * np.einsum("kfi,ki->kf", c, b)
-    q = np.where(ok, q, np.inf)
+    c = np.where(np.isfinite(c), np.maximum(c, 0.0), 0.0)
+    with np.errstate(over="ignore", invalid="ignore"):
+        if a is not None:
+            ok &= c @ a <= 1.0 + 1e-9
+        q = np.einsum("kfi,kij,kfj->kf", c, G, c) - 2.0 * np.einsum("kfi,ki->kf", c, b)
+    q = np.where(ok & np.isfinite(q), q, np.inf)
     best = np.argmin(q, axis=1)
-    return np.maximum(c[np.arange(k), best], 0.0)
+    return c[np.arange(k), best]
 
 
 class ProjectedObjective:
     """φ(x) of the module docstring, with evaluation counting and best-point tracking.
+
+    For the ``rel`` metric φ is exactly rel_rms² at the optimal weights. For ``log`` the
+    weights come from iteratively reweighted least squares with secant weights
+    W = w (ln(ε+m) − ln(ε+y))² / (m − y)² (so that the weighted squared residual equals
+    the log residual at the current model m; ``_LOG_IRLS`` passes, starting from the
+    ``rel`` weights), and φ is the true log_rms² at the best pass.
 
     Parameters
     ----------
@@ -104,18 +113,24 @@ class ProjectedObjective:
     samples
         Fit samples.
     metric
-        ``"rel"`` or ``"log"`` (``metrics.lsq_weights``).
+        ``"rel"`` or ``"log"`` (``metrics.py``).
     energy_conserving
         Impose Σ a_j c_j <= 1 (``models_param`` docstring); otherwise only c >= 0.
     """
 
     def __init__(self, param: ModelParam, samples: FitSamples, metric: str, energy_conserving: bool) -> None:
+        if metric not in METRICS:
+            raise ValueError(f"unknown metric {metric!r}; choose one of {METRICS}")
         self.param = param
+        self.metric = metric
         self.geo = Geometry.of(samples)
-        self.W = lsq_weights(samples, metric)
-        self.same_weights = bool(np.all(self.W == self.W[:, :1]))
+        self.W_rel = lsq_weights(samples, "rel")
+        self.w_log = samples.weight[:, None] / (3.0 * np.sum(samples.weight))
+        self.eps = log_epsilon(samples)
         self.cos_i = samples.cos_i
         self.target = samples.rho * samples.cos_i[:, None]
+        self.log_target = np.log(self.eps + self.target)
+        self.peak = float(np.max(samples.rho))
         self.energy_conserving = energy_conserving
         self.evaluations = 0
         self.best_f = np.inf
@@ -125,26 +140,44 @@ class ProjectedObjective:
         """(φ(x), true colour weights c (m, 3)) — c multiplies the unscaled basis."""
         B, log_scale = self.param.basis(x, self.geo)
         usable = log_scale > _LOG_TINY
-        A = np.where(usable, B, 0.0) * self.cos_i[:, None]
-        G, b = self._normal_equations(A)
         a = None
         if self.energy_conserving:
             with np.errstate(over="ignore"):
-                a = np.where(usable, self.param.energy(x) * np.exp(-log_scale), np.inf)
-            a = np.where(np.isfinite(a), a, 1e300)
-        c_scaled = solve_bounded_lsq(G, b, a)  # (3, m)
-        residual = A @ c_scaled.T - self.target
-        f = float(np.sum(self.W * residual**2))
-        c_true = np.where(usable, c_scaled * np.exp(-np.where(usable, log_scale, 0.0)), 0.0)
-        return f, c_true.T
+                a = self.param.energy(x) * np.exp(-np.where(usable, log_scale, 0.0))
+            # a column whose largest allowed weight 1/a_j is below 1e-9 of the data's peak
+            # cannot contribute: drop it rather than let a huge a_j ruin the KKT systems
+            usable &= a * self.peak < 1e9
+            a = np.where(usable, a, 1.0)
+        A = np.where(usable, B, 0.0) * self.cos_i[:, None]
+        W, same = self.W_rel, True
+        best_f, best_c = np.inf, np.zeros((3, A.shape[1]))
+        for _ in range(1 if self.metric == "rel" else _LOG_IRLS):
+            G, b = self._normal_equations(A, W, same)
+            c_scaled = np.where(usable, solve_bounded_lsq(G, b, a), 0.0)  # (3, m)
+            model = A @ c_scaled.T
+            with np.errstate(over="ignore", invalid="ignore"):
+                if self.metric == "rel":
+                    f = float(np.sum(W * (model - self.target) ** 2))
+                else:
+                    r_log = np.log(self.eps + np.maximum(model, 0.0)) - self.log_target
+                    f = float(np.sum(self.w_log * r_log**2))
+                    d = model - self.target
+                    tiny = np.abs(d) <= 1e-9 * (self.eps + self.target)
+                    W = self.w_log * np.where(tiny, 1.0 / (self.eps + self.target) ** 2,
+                                              (r_log / np.where(tiny, 1.0, d)) ** 2)
+                    same = False
+            if f < best_f:
+                best_f, best_c = f, c_scaled
+        c_true = np.where(usable, best_c * np.exp(-np.where(usable, log_scale, 0.0)), 0.0)
+        return best_f, c_true.T
 
-    def _normal_equations(self, A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _normal_equations(self, A: np.ndarray, W: np.ndarray, same: bool) -> tuple[np.ndarray, np.ndarray]:
         """Gram matrices Aᵀ W_c A (3, m, m) and Aᵀ W_c y_c (3, m), by BLAS products."""
-        if self.same_weights:  # the "rel" metric: one weight per sample for all channels
-            AW = A * self.W[:, :1]
+        if same:  # one weight per sample for all channels
+            AW = A * W[:, :1]
             G = np.broadcast_to(AW.T @ A, (3, A.shape[1], A.shape[1])).copy()
             return G, (AW.T @ self.target).T
-        AW = [A * self.W[:, ch : ch + 1] for ch in range(3)]
+        AW = [A * W[:, ch : ch + 1] for ch in range(3)]
         G = np.stack([aw.T @ A for aw in AW])
         b = np.stack([aw.T @ self.target[:, ch] for ch, aw in enumerate(AW)])
         return G, b

@@ -120,7 +120,8 @@ def _check_options(model: str, lobes: int, metric: str, distribution: str, start
 
 
 def _global_candidates(param: ModelParam, seed: int, n_sobol: int) -> np.ndarray:
-    u = qmc.Sobol(d=param.dim, scramble=True, seed=seed).random(n_sobol)
+    m = int(np.ceil(np.log2(max(n_sobol, 2))))
+    u = qmc.Sobol(d=param.dim, scramble=True, seed=seed).random_base2(m)
     sobol = param.lower + u * (param.upper - param.lower)
     starts = np.clip(param.starts(), param.lower, param.upper)
     return np.concatenate([starts, sobol])

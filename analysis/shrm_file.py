@@ -1,0 +1,88 @@
+"""SHRM files (``.shrm.npz``): save and load a global SHRM exactly.
+
+Layout (see ``data_specs/shrm_file.md``): a NumPy ``.npz`` archive with
+
+- ``coeffs``: float32 ((P+1)², H, W, 3), the global SHRM B̃_pq(α, β), real basis, flat
+  index p² + p + q, lat-long pixel centres, z-up frame;
+- ``header``: a JSON string with ``format`` ("shrmkit-shrm"), ``version`` (1), ``F``,
+  ``P``, ``tolerance``, ``eps`` (dict), ``grid`` ("latlong"), ``orientation`` and
+  ``meta`` (provenance, timings).
+"""
+
+from __future__ import annotations
+
+import json
+import zipfile
+from pathlib import Path
+
+import numpy as np
+
+from ..brdf_io.atomic import atomic_path
+from ..brdf_io.errors import BadInputError
+from .shrm import SHRM
+
+__all__ = ["save_shrm", "load_shrm", "FORMAT", "VERSION"]
+
+FORMAT = "shrmkit-shrm"
+VERSION = 1
+ORIENTATION = "z-up; row i at theta=(i+1/2)pi/H, column j at phi=2pi(j+1/2)/W from +x toward +y"
+
+
+def _json_safe(value: object) -> object:
+    if isinstance(value, dict):
+        return {str(k): _json_safe(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_json_safe(v) for v in value]
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def save_shrm(path: str | Path, shrm: SHRM) -> Path:
+    """Write ``shrm`` to ``path`` (``.shrm.npz``) atomically; returns the path."""
+    path = Path(path)
+    header = {
+        "format": FORMAT,
+        "version": VERSION,
+        "F": int(shrm.F),
+        "P": int(shrm.P),
+        "tolerance": float(shrm.tolerance),
+        "eps": _json_safe(shrm.eps),
+        "grid": "latlong",
+        "orientation": ORIENTATION,
+        "meta": _json_safe(shrm.meta),
+    }
+    with atomic_path(path, suffix=".npz") as tmp:
+        with open(tmp, "wb") as handle:
+            np.savez_compressed(handle, coeffs=np.asarray(shrm.coeffs, dtype=np.float32), header=json.dumps(header))
+    return path
+
+
+def load_shrm(path: str | Path) -> SHRM:
+    """Read an SHRM written by :func:`save_shrm`.
+
+    Raises
+    ------
+    BadInputError
+        Missing or unreadable file, wrong format or version, inconsistent shapes,
+        non-finite coefficients.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise BadInputError(path, "no such SHRM file")
+    try:
+        with np.load(path, allow_pickle=False) as archive:
+            coeffs = archive["coeffs"]
+            header = json.loads(str(archive["header"]))
+    except (OSError, ValueError, KeyError, zipfile.BadZipFile, json.JSONDecodeError, EOFError) as err:
+        raise BadInputError(path, f"not a readable .shrm.npz file ({type(err).__name__}: {err})") from None
+    if not isinstance(header, dict) or header.get("format") != FORMAT:
+        raise BadInputError(path, f"not a shrmkit SHRM file (format {header.get('format')!r})")
+    if header.get("version") != VERSION:
+        raise BadInputError(path, f"unsupported SHRM format version {header.get('version')!r} (expected {VERSION})")
+    F, P = int(header["F"]), int(header["P"])
+    if coeffs.dtype != np.float32 or coeffs.ndim != 4 or coeffs.shape[0] != (P + 1) ** 2 or coeffs.shape[3] != 3:
+        raise BadInputError(path, f"coefficient array {coeffs.dtype} {coeffs.shape} does not match P={P}")
+    if not np.all(np.isfinite(coeffs)):
+        raise BadInputError(path, f"{int(np.count_nonzero(~np.isfinite(coeffs)))} non-finite coefficients")
+    return SHRM(F=F, P=P, coeffs=coeffs, tolerance=float(header["tolerance"]), eps=header["eps"], meta=header["meta"])

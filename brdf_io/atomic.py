@@ -1,0 +1,41 @@
+"""Atomic file writing: write to a temporary file beside the target, then ``os.replace``.
+
+A failed or interrupted write leaves no partial output and never clobbers an existing
+file with half-written data.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path
+
+__all__ = ["atomic_path"]
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike[str], suffix: str | None = None) -> Iterator[Path]:
+    """Yield a temporary path in the target's folder; move it onto ``path`` on success.
+
+    Parameters
+    ----------
+    path
+        Final file path.
+    suffix
+        Suffix of the temporary file (default: the target's own suffixes, so libraries
+        that pick a format by extension still work).
+    """
+    target = Path(path)
+    folder = target.parent if str(target.parent) else Path(".")
+    folder.mkdir(parents=True, exist_ok=True)
+    fd, tmp_name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=suffix or "".join(target.suffixes), dir=folder)
+    os.close(fd)
+    tmp = Path(tmp_name)
+    try:
+        yield tmp
+        os.replace(tmp, target)
+    finally:
+        if tmp.exists():
+            tmp.unlink()

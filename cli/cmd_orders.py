@@ -1,0 +1,103 @@
+"""``shrm orders``: how many coefficients a BRDF needs (RH02 §5.1)."""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+from rich.table import Table
+
+from ..analysis.orders import DEFAULT_MAX_F, DEFAULT_MAX_P, choose_orders
+from ..brdf_io.specs import load_brdf
+from .common import print_json, stderr, stdout, tolerance
+
+HELP = "choose the SH orders (F, P) a BRDF needs at a tolerance eps (RH02 §5.1)"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("brdf", help="BRDF spec (e.g. microfacet:sigma=0.2) or file (.binary, .npz, .json)")
+    parser.add_argument("--eps", type=tolerance, default=0.03, help="tolerance on uncaptured energy (default 0.03)")
+    parser.add_argument("--max-F", type=int, default=DEFAULT_MAX_F, help=f"cap on F (default {DEFAULT_MAX_F})")
+    parser.add_argument("--max-P", type=int, default=DEFAULT_MAX_P, help=f"cap on P (default {DEFAULT_MAX_P})")
+    parser.add_argument("--env", help="environment (builtin:sky or a map file): also report F_L, F_B and the bound")
+    parser.add_argument("--json", action="store_true", help="print one JSON object instead of tables")
+
+
+def run(args: argparse.Namespace) -> int:
+    brdf = load_brdf(args.brdf)
+    with stderr.status(f"choosing orders for {brdf.name} ...", spinner="dots") if not args.json else _null():
+        orders = choose_orders(brdf, args.eps, max_F=args.max_F, max_P=args.max_P)
+    doc = {
+        "brdf": brdf.name,
+        "F": orders.F,
+        "P": orders.P,
+        "eps": orders.eps,
+        "tolerance": orders.tolerance,
+        "capped": orders.capped,
+        "converged": orders.converged,
+        "message": orders.message,
+        "seconds": orders.seconds,
+        "table": orders.table,
+    }
+    if args.env:
+        from ..analysis.lighting import lighting_coefficients
+        from ..analysis.scene import scene_orders
+        from ..brdf_io.envmap import load_env
+
+        env = load_env(args.env)
+        lmax = int(min(max(2 * orders.F, orders.F + 16), env.radiance.shape[0] - 1, orders.coefficients.F0))
+        scene = scene_orders(orders, lighting_coefficients(env.radiance, lmax, name=env.name))
+        doc.update(
+            environment=env.name, F_L=scene.F_L, F_B=scene.F_B, P_B=scene.P_B, eps_L=scene.eps_L,
+            lighting_capped=scene.lighting_capped, bound=scene.bound,
+        )
+    if args.json:
+        print_json(doc)
+        return 0
+    _print_tables(doc, orders.table)
+    return 0
+
+
+class _null:
+    def __enter__(self) -> None:
+        return None
+
+    def __exit__(self, *exc: object) -> None:
+        return None
+
+
+def _print_tables(doc: dict, table: np.ndarray) -> None:
+    summary = Table(title=f"orders for {doc['brdf']} at eps = {doc['tolerance']:g}")
+    for key in ("F", "P", "eps", "capped", "converged", "seconds"):
+        summary.add_column(key, justify="right")
+    summary.add_row(
+        str(doc["F"]), str(doc["P"]), f"{doc['eps']:.4g}", str(doc["capped"]), str(doc["converged"]),
+        f"{doc['seconds']:.2f}",
+    )
+    stdout.print(summary)
+    if "F_B" in doc:
+        scene = Table(title=f"scene orders with {doc['environment']}")
+        for key in ("F_L", "F_B", "P_B", "eps_L(F_L)", "residual bound"):
+            scene.add_column(key, justify="right")
+        # a capped F_L means ε_L > tol up to the largest order computed: F_L is at least that
+        scene.add_row(
+            f">= {doc['F_L']}" if doc["lighting_capped"] else str(doc["F_L"]), str(doc["F_B"]), str(doc["P_B"]), f"{doc['eps_L']:.3g}",
+            f"{doc['bound']:.3g}",
+        )
+        stdout.print(scene)
+    if doc["message"]:
+        stdout.print(f"[yellow]note:[/yellow] {doc['message']}")
+    F, P = doc["F"], doc["P"]
+    rows = sorted(set(np.unique(np.linspace(0, min(table.shape[0] - 1, max(2 * F, 8)), 9).astype(int))) | {F})
+    cols = range(min(table.shape[1], max(P + 3, 5)))
+    eps_tab = Table(title="eps(F, P): uncaptured energy fraction (worst channel)")
+    eps_tab.add_column("F \\ P", justify="right")
+    for p in cols:
+        eps_tab.add_column(str(p), justify="right")
+    for f in rows:
+        cells = []
+        for p in cols:
+            text = f"{table[f, p]:.3g}"
+            cells.append(f"[bold green]{text}[/bold green]" if (f, p) == (F, P) else text)
+        eps_tab.add_row(str(f), *cells)
+    stdout.print(eps_tab)

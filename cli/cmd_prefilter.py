@@ -1,0 +1,60 @@
+"""``shrm prefilter``: environment + BRDF -> global SHRM file (RH02 §4–5)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+from rich.table import Table
+
+from ..analysis.orders import DEFAULT_MAX_F, DEFAULT_MAX_P
+from ..analysis.shrm import prefilter
+from ..brdf_io.envmap import load_env
+from ..brdf_io.errors import BadInputError
+from ..brdf_io.specs import load_brdf
+from .common import stderr, stdout, tolerance
+
+HELP = "prefilter an environment map with a BRDF into a global SHRM file (.shrm.npz)"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--env", required=True, help="environment: builtin:sky, builtin:studio, or a map file")
+    parser.add_argument("--brdf", required=True, help="BRDF spec or file")
+    parser.add_argument("--eps", type=tolerance, default=0.03, help="tolerance (default 0.03)")
+    parser.add_argument("--size", type=int, help="SHRM rows S (S x 2S lat-long); default 10 F, clamped to [32, 1024]")
+    parser.add_argument("--max-F", type=int, default=DEFAULT_MAX_F)
+    parser.add_argument("--max-P", type=int, default=DEFAULT_MAX_P)
+    parser.add_argument("--cube", action="store_true", help="(not yet supported) cube-map output")
+    parser.add_argument("-o", "--output", required=True, help="output path, e.g. sky.shrm.npz")
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.cube:
+        raise BadInputError(None, "--cube output is not implemented yet; the lat-long SHRM is seam- and pole-free")
+    out = Path(args.output)
+    if not out.name.endswith(".npz"):
+        raise BadInputError(out, "the SHRM output must end in .shrm.npz (or .npz)")
+    env = load_env(args.env)
+    brdf = load_brdf(args.brdf)
+    with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=stderr) as bar:
+        task = bar.add_task("prefiltering", total=None)
+        shrm = prefilter(
+            env, brdf, args.eps, size=args.size, max_F=args.max_F, max_P=args.max_P,
+            progress=lambda stage: bar.update(task, description=f"prefiltering: {stage}"),
+        )
+    shrm.save(out)
+    table = Table(title=f"SHRM {brdf.name} x {env.name}")
+    for key in ("F", "P", "map", "eps brdf", "eps reflected", "bound", "orders s", "lighting s", "synthesis s", "MB"):
+        table.add_column(key, justify="right")
+    t = shrm.meta["timings"]
+    table.add_row(
+        str(shrm.F), str(shrm.P), f"{shrm.height}x{shrm.width}", f"{shrm.eps['brdf']:.3g}",
+        f"{shrm.eps['reflected']:.3g}", f"{shrm.eps['bound']:.3g}", f"{t['orders']:.3f}", f"{t['lighting']:.3f}",
+        f"{t['synthesis']:.3f}", f"{out.stat().st_size / 1e6:.2f}",
+    )
+    stdout.print(table)
+    if shrm.meta.get("orders_message"):
+        stdout.print(f"[yellow]note:[/yellow] {shrm.meta['orders_message']}")
+    stdout.print(f"wrote {out}")
+    return 0

@@ -1,0 +1,99 @@
+"""``shrm render``: outputs, timings, turntable naming and bad input (exit 2, no output left).
+
+References: the EXR is compared with the CPU reference of the same SHRM (analytic sphere
+geometry + SHRM.radiance), built independently of the shader.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import OpenEXR
+import pytest
+from PIL import Image
+
+from shrmkit.cli.main import main
+from shrmkit.render.offscreen import probe_offscreen
+
+_PROBE: list[tuple[bool, str]] = []
+
+
+@pytest.fixture(scope="module")
+def offscreen() -> str:
+    if not _PROBE:
+        _PROBE.append(probe_offscreen())
+    ok, message = _PROBE[0]
+    if not ok:
+        pytest.skip(message)
+    return message
+
+
+def _read_exr(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    with OpenEXR.File(str(path), separate_channels=True) as f:
+        ch = {k: np.asarray(v.pixels) for k, v in f.channels().items()}
+    return np.stack([ch["R"], ch["G"], ch["B"]], axis=-1), ch["A"]
+
+
+@pytest.mark.render
+def test_render_sphere_png_exr_and_timings(offscreen, tmp_path: Path, capsys) -> None:
+    """Ortho sphere in distant mode: EXR = CPU reference of the same prefiltered SHRM inside the disc,
+    environment behind it; PNG written; timings printed."""
+    import shrmkit
+    from shrmkit.render.camera import Camera
+    from shrmkit.render.cpu_reference import shade, sphere_geometry
+
+    png, exr = tmp_path / "s.png", tmp_path / "s.exr"
+    rc = main(["render", "builtin:sphere:subdivisions=5", "--env", "builtin:studio", "--brdf", "phong:s=8",
+               "--size", "48", "--camera", "ortho", "--view", "0,1,0.5", "--fps-frames", "2",
+               "-o", str(png), "--exr", str(exr)])
+    assert rc == 0
+    out = capsys.readouterr().out
+    for word in ("prefilter:", "first frame:", "frames per second:"):
+        assert word in out
+    assert np.asarray(Image.open(png)).shape == (48, 48, 3)
+    rad, alpha = _read_exr(exr)
+    shrm = shrmkit.prefilter("builtin:studio", "phong:s=8", eps=0.03)
+    cam = Camera.looking_at(view=(0, 1, 0.5), projection="ortho")
+    geom = sphere_geometry(cam, 48, 48)
+    inside = geom.hit & (alpha > 0.5) & (np.sum(geom.N * geom.V, -1) > 0.2)
+    ref = shade(geom, shrm.radiance)[inside]
+    rel = np.sqrt(np.mean((rad[inside] - ref) ** 2)) / np.sqrt(np.mean(ref**2))
+    assert rel < 5e-3
+    assert np.all(rad[alpha == 0] >= 0) and rad[alpha == 0].max() > 0  # the environment behind
+
+
+@pytest.mark.render
+def test_turntable_transparent(offscreen, tmp_path: Path) -> None:
+    png = tmp_path / "spin.png"
+    rc = main(["render", "builtin:torus:segments=48,sides=12", "--size", "24", "--turntable", "3",
+               "--background", "transparent", "--fps-frames", "0", "--mode", "perpixel", "-o", str(png)])
+    assert rc == 0
+    names = sorted(p.name for p in tmp_path.iterdir())
+    assert names == ["spin.gif", "spin_0000.png", "spin_0001.png", "spin_0002.png"]
+    rgba = np.asarray(Image.open(tmp_path / "spin_0001.png"))
+    assert rgba.shape == (24, 24, 4) and rgba[0, 0, 3] == 0 and rgba[12, 6:18, 3].max() == 255
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["nan.obj"], "not finite"),
+        (["missing.obj"], "no such file"),
+        (["empty.obj"], "empty.obj"),
+        (["builtin:sphere", "--view", "1,0"], "--view"),
+        (["builtin:sphere", "--view", "0,0,1"], "parallel"),
+        (["builtin:sphere", "--size", "4"], "--size"),
+        (["builtin:sphere", "--eps", "2"], "--eps"),
+    ],
+)
+def test_bad_input_exits_2_without_output(tmp_path: Path, capsys, monkeypatch, args, message) -> None:
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "nan.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n")
+    (tmp_path / "empty.obj").write_text("")
+    before = set(tmp_path.iterdir())
+    rc = main(["render", *args, "-o", "out.png", "--exr", "out.exr"])
+    assert rc == 2
+    err = capsys.readouterr().err
+    assert err.startswith("shrm render: error:") and message in err
+    assert set(tmp_path.iterdir()) == before
