@@ -293,7 +293,7 @@ def load_env(
         name, radiance = builtin_radiance(text)
         env = EnvironmentMap(radiance, name, text.strip())
     else:
-        env = _load_file(Path(text), up, flip, probe, azimuth)
+        env = _load_file(Path(text), up, flip, probe, azimuth, height)
     if azimuth:
         env = env.rotated_z(np.radians(azimuth))
     if height is not None and height != env.height:
@@ -301,7 +301,9 @@ def load_env(
     return env
 
 
-def _load_file(path: Path, up: str | None, flip: bool, probe: bool | None, azimuth: float) -> EnvironmentMap:
+def _load_file(
+    path: Path, up: str | None, flip: bool, probe: bool | None, azimuth: float, height: int | None
+) -> EnvironmentMap:
     is_face = path.stem.lower() in CUBE_FACES and path.suffix.lower() in IMAGE_SUFFIXES
     if path.is_dir() or is_face:
         if flip or probe:
@@ -313,7 +315,7 @@ def _load_file(path: Path, up: str | None, flip: bool, probe: bool | None, azimu
             raise BadInputError(path, "no such cube-map folder")
         faces = _cube_faces(path, folder)
         n = faces["px"].shape[0]
-        radiance = cube_to_latlong(faces, 2 * n).astype(np.float32)
+        radiance = cube_to_latlong(faces, int(height or 2 * n)).astype(np.float32)
         return EnvironmentMap(radiance, folder.name, f"{folder}" + _options_text("y", False, azimuth, "cube"))
     if not path.exists():
         raise BadInputError(path, "no such file")
@@ -330,7 +332,7 @@ def _load_file(path: Path, up: str | None, flip: bool, probe: bool | None, azimu
             raise BadInputError(path, "angular probes are y-up (Debevec convention); up='z' does not apply")
         if h != w:
             raise BadInputError(path, f"an angular probe must be square, got {w} x {h}")
-        radiance = probe_to_latlong(image, max(1, h // 2)).astype(np.float32)
+        radiance = probe_to_latlong(image, int(height or max(1, h // 2))).astype(np.float32)
         return EnvironmentMap(radiance, path.stem, f"{path}" + _options_text("y", False, azimuth, "probe"))
     if w != 2 * h:
         raise BadInputError(

@@ -207,8 +207,8 @@ def _smith_g1(cos_t: np.ndarray, alpha: float, distribution: str) -> np.ndarray:
     tan2 = (1.0 - cos_t**2) / cos_t**2
     if distribution == "ggx":
         return 2.0 / (1.0 + np.sqrt(1.0 + alpha**2 * tan2))
-    with np.errstate(divide="ignore"):
-        a = 1.0 / (alpha * np.sqrt(tan2))
+    # a = 1/(α tan θ); a >= 1.6 (including normal incidence, tan θ = 0) means G1 = 1
+    a = np.minimum(1.6, 1.0 / (alpha * np.maximum(np.sqrt(tan2), 1e-300)))
     return np.where(a < 1.6, (3.535 * a + 2.181 * a**2) / (1.0 + 2.276 * a + 2.577 * a**2), 1.0)
 
 

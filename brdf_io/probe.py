@@ -138,19 +138,23 @@ def cube_texel_solid_angles(n: int) -> np.ndarray:
     return f[1:, 1:] - f[:-1, 1:] - f[1:, :-1] + f[:-1, :-1]
 
 
-def _cube_texel_index(dirs: np.ndarray, n: int) -> np.ndarray:
-    """Flat index face·N² + row·N + col of the texel containing each cube-frame direction."""
-    ax = np.abs(dirs)
-    axis = np.argmax(ax, axis=-1)
-    sign_negative = np.take_along_axis(dirs, axis[..., None], axis=-1)[..., 0] < 0
-    face = 2 * axis + sign_negative  # matches CUBE_FACES order px, nx, py, ny, pz, nz
-    major = np.take_along_axis(ax, axis[..., None], axis=-1)[..., 0]
-    u_axes = np.array([CUBE_FACE_AXES[f][1] for f in CUBE_FACES], dtype=float)
-    v_axes = np.array([CUBE_FACE_AXES[f][2] for f in CUBE_FACES], dtype=float)
-    u = np.einsum("...k,...k->...", dirs, u_axes[face]) / major
-    v = np.einsum("...k,...k->...", dirs, v_axes[face]) / major
-    col = np.clip(((u + 1.0) * 0.5 * n).astype(np.int64), 0, n - 1)
-    row = np.clip(((v + 1.0) * 0.5 * n).astype(np.int64), 0, n - 1)
+def _cube_texel_index(x: np.ndarray, y: np.ndarray, z: np.ndarray, n: int) -> np.ndarray:
+    """Flat index face·N² + row·N + col of the texel containing each cube-frame direction.
+
+    The face is the axis of largest |component| and its sign (order px, nx, py, ny, pz,
+    nz); (u, v) follow :data:`CUBE_FACE_AXES` (OpenGL Table 8.19), divided by |major|.
+    """
+    ax, ay, az = np.abs(x), np.abs(y), np.abs(z)
+    on_x = (ax >= ay) & (ax >= az)
+    on_y = ~on_x & (ay >= az)
+    on_z = ~on_x & ~on_y
+    major = np.where(on_x, ax, np.where(on_y, ay, az))
+    # u, v numerators per face: px (-z, -y), nx (z, -y), py (x, z), ny (x, -z), pz (x, -y), nz (-x, -y)
+    u = np.where(on_x, np.where(x > 0, -z, z), np.where(on_y, x, np.where(z > 0, x, -x)))
+    v = np.where(on_x, -y, np.where(on_y, np.where(y > 0, z, -z), -y))
+    face = np.where(on_x, 0, np.where(on_y, 2, 4)) + np.where(on_x, x < 0, np.where(on_y, y < 0, z < 0))
+    col = np.clip(((u / major + 1.0) * (0.5 * n)).astype(np.int64), 0, n - 1)
+    row = np.clip(((v / major + 1.0) * (0.5 * n)).astype(np.int64), 0, n - 1)
     return (face * n + row) * n + col
 
 
@@ -181,14 +185,14 @@ def probe_pixel_directions(size: int) -> tuple[np.ndarray, np.ndarray]:
     return dirs, solid
 
 
-def _probe_pixel_index(dirs: np.ndarray, size: int) -> np.ndarray:
+def _probe_pixel_index(x: np.ndarray, y: np.ndarray, z: np.ndarray, size: int) -> np.ndarray:
     """Flat index row·D + col of the angular-map pixel that shows each probe-frame direction."""
-    r_xy = np.hypot(dirs[..., 0], dirs[..., 1])
-    alpha = np.arccos(np.clip(dirs[..., 2], -1.0, 1.0))
+    r_xy = np.hypot(x, y)
+    alpha = np.arccos(np.clip(z, -1.0, 1.0))
     with np.errstate(invalid="ignore", divide="ignore"):
         scale = np.where(r_xy > 1e-300, alpha / (np.pi * r_xy), 0.0)
-    u = dirs[..., 0] * scale
-    v = dirs[..., 1] * scale
+    u = x * scale
+    v = y * scale
     col = np.clip(((u + 1.0) * 0.5 * size).astype(np.int64), 0, size - 1)
     row = np.clip(((1.0 - v) * 0.5 * size).astype(np.int64), 0, size - 1)
     return row * size + col
@@ -199,16 +203,18 @@ def _probe_pixel_index(dirs: np.ndarray, size: int) -> np.ndarray:
 # --------------------------------------------------------------------------------------
 def _gather_latlong(
     values: np.ndarray,
-    texel_of: Callable[[np.ndarray], np.ndarray],
+    texel_of: Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray],
     to_source: np.ndarray,
     height: int,
     samples: int,
 ) -> np.ndarray:
     """Resample flat source texels ``values`` (T, 3) to a (height, 2·height, 3) lat-long map.
 
-    ``texel_of`` maps source-frame directions to flat texel indices; ``to_source`` maps
-    project-frame vectors to the source frame. Sub-sample (a, b) of pixel (i, j) sits at
-    cos θ = cos θ_i⁻ − (a + ½)/s · (cos θ_i⁻ − cos θ_i⁺), φ = 2π(j + (b + ½)/s)/W.
+    ``texel_of(x, y, z)`` maps source-frame direction components to flat texel indices;
+    ``to_source`` maps project-frame vectors to the source frame. Sub-sample (a, b) of
+    pixel (i, j) sits at cos θ = cos θ_i⁻ − (a + ½)/s · (cos θ_i⁻ − cos θ_i⁺),
+    φ = 2π(j + (b + ½)/s)/W: each carries Ω_i/s², so the pixel value is the plain mean
+    of the texels under its sub-samples.
     """
     width = 2 * height
     s = samples
@@ -217,25 +223,27 @@ def _gather_latlong(
     cos_t = (edges[:-1, None] - frac[None, :] * (edges[:-1] - edges[1:])[:, None]).reshape(-1)
     sin_t = np.sqrt(np.maximum(0.0, 1.0 - cos_t * cos_t))
     phi = 2.0 * np.pi * (np.arange(width)[:, None] + frac[None, :]).reshape(-1) / width
-    # project-frame sub-sample directions, mapped to the source frame: d_src = M d
     cp, sp = np.cos(phi), np.sin(phi)
     texel = np.empty((height * s, width * s), dtype=np.int64)
-    block = max(1, 2_000_000 // (width * s))
+    block = max(1, 1_000_000 // (width * s))
     for r0 in range(0, height * s, block):
-        r1 = min(height * s, r0 + block)
-        d = np.stack(
-            np.broadcast_arrays(sin_t[r0:r1, None] * cp, sin_t[r0:r1, None] * sp, cos_t[r0:r1, None]), axis=-1
-        )
-        texel[r0:r1] = texel_of(d @ to_source.T)
-    # sample index (i·s + a, j·s + b) -> pixel (i, j); reorder so each pixel's s² samples are contiguous
-    texel = texel.reshape(height, s, width, s).transpose(0, 2, 1, 3).reshape(height * width, s * s)
-    # every sub-sample carries the same solid angle Ω_i/s² within its pixel, so the pixel
-    # value is the plain mean of the texels under its sub-samples
-    out = values[texel].mean(axis=1)
-    return out.reshape(height, width, 3)
+        st, ct = sin_t[r0 : r0 + block, None], cos_t[r0 : r0 + block, None]
+        big_x, big_y = st * cp, st * sp
+        big_z = np.broadcast_to(ct, big_x.shape)
+        # source-frame components: row k of to_source dotted with (X, Y, Z)
+        comps = [m[0] * big_x + m[1] * big_y + m[2] * big_z for m in to_source]
+        texel[r0 : r0 + block] = texel_of(*comps)
+    # sample (i·s + a, j·s + b) -> pixel (i, j): mean over a and b
+    picked = values[texel.reshape(height, s, width, s)]
+    return picked.mean(axis=(1, 3))
 
 
-def cube_to_latlong(faces: dict[str, np.ndarray], height: int, samples: int = 2) -> np.ndarray:
+def _default_samples(height: int, source_rows: int) -> int:
+    """Sub-samples per axis: at least 2, enough for ~2 per source texel and ≥ 256 sample rows, ≤ 16."""
+    return int(np.clip(np.ceil(max(2 * source_rows, 256) / height), 2, 16))
+
+
+def cube_to_latlong(faces: dict[str, np.ndarray], height: int, samples: int | None = None) -> np.ndarray:
     """Resample a cube map to a lat-long map in the project frame.
 
     Parameters
@@ -245,7 +253,8 @@ def cube_to_latlong(faces: dict[str, np.ndarray], height: int, samples: int = 2)
     height
         Output rows H (width 2H); 2N keeps the face resolution everywhere.
     samples
-        Equal-area sub-samples per pixel along θ and along φ (s² in all).
+        Equal-area sub-samples per pixel along θ and along φ (s² in all); default
+        clip(ceil(max(4N, 256)/H), 2, 16), about two per texel width along θ.
 
     Returns
     -------
@@ -256,15 +265,18 @@ def cube_to_latlong(faces: dict[str, np.ndarray], height: int, samples: int = 2)
     """
     n = faces["px"].shape[0]
     values = np.concatenate([np.asarray(faces[f], dtype=np.float64).reshape(-1, 3) for f in CUBE_FACES])
-    return _gather_latlong(values, lambda d: _cube_texel_index(d, n), CUBE_TO_PROJECT.T, height, samples)
+    s = samples or _default_samples(height, 2 * n)
+    return _gather_latlong(values, lambda x, y, z: _cube_texel_index(x, y, z, n), CUBE_TO_PROJECT.T, height, s)
 
 
-def probe_to_latlong(image: np.ndarray, height: int, samples: int = 2) -> np.ndarray:
+def probe_to_latlong(image: np.ndarray, height: int, samples: int | None = None) -> np.ndarray:
     """Resample a Debevec angular-map probe (D × D × 3) to a lat-long map in the project frame.
 
     Pixels outside the unit disc are never sampled. See :func:`cube_to_latlong` for the
-    parameters; D/2 rows keep the probe's resolution at its centre.
+    parameters (default samples clip(ceil(max(2D, 256)/H), 2, 16)); D/2 rows keep the
+    probe's resolution at its centre.
     """
     size = image.shape[0]
     values = np.asarray(image, dtype=np.float64).reshape(-1, 3)
-    return _gather_latlong(values, lambda d: _probe_pixel_index(d, size), PROBE_TO_PROJECT.T, height, samples)
+    s = samples or _default_samples(height, size)
+    return _gather_latlong(values, lambda x, y, z: _probe_pixel_index(x, y, z, size), PROBE_TO_PROJECT.T, height, s)

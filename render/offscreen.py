@@ -143,5 +143,5 @@ def probe_offscreen(timeout: float = 120.0) -> tuple[bool, str]:
         return False, f"offscreen probe failed: {err}"
     if proc.returncode == 0:
         return True, proc.stdout.strip().splitlines()[-1] if proc.stdout.strip() else "ok"
-    tail = (proc.stderr or proc.stdout).strip().splitlines()[-3:]
-    return False, "no offscreen OpenGL context: " + " | ".join(tail)
+    lines = (proc.stderr or proc.stdout or "no output").strip().splitlines()
+    return False, lines[-1] if lines else f"offscreen probe exited with {proc.returncode}"

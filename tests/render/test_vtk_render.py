@@ -10,7 +10,6 @@ from __future__ import annotations
 import numpy as np
 import OpenEXR
 import pytest
-
 from shrmkit.analysis.latlong import pixel_directions
 from shrmkit.analysis.sh import real_sph_harm
 from shrmkit.analysis.shrm import SHRM

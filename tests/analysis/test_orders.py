@@ -1,0 +1,103 @@
+"""ρ̂_lpq and the order choice against closed forms and RH02 Table 5."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import shrmkit
+from shrmkit.analysis.brdf_coeffs import rho_lpq, rho_lpq_direct
+from shrmkit.analysis.sh import legendre_f
+from shrmkit.brdf_io.errors import BadInputError
+from shrmkit.brdf_io.reparam import ReparamBRDF, ReparamGrid, reparameterize
+
+
+def test_fast_three_pass_matches_direct_sum():
+    """Slow direct triple sum (reference) vs the three-pass transform."""
+    r = reparameterize(shrmkit.load_brdf("cook-torrance:alpha=0.4,kd=0.3,dist=ggx"), ReparamGrid(14, 7, 10))
+    c = rho_lpq(r, 6, 3)
+    for l, p, q in [(0, 0, 0), (3, 2, 1), (5, 3, 3), (6, 1, 0), (4, 3, 2)]:
+        np.testing.assert_allclose(c.coeffs[l, p, q], rho_lpq_direct(r, l, p, q), rtol=1e-10, atol=1e-14)
+
+
+def test_recovers_known_band_limited_coefficients():
+    """A table built from chosen coefficients (closed form) is transformed back exactly,
+    and Parseval holds: Σ ρ̂² (q ≥ 1 twice) = quadrature energy."""
+    grid = ReparamGrid(12, 8, 12)
+    xi, _ = grid.theta_i()
+    xo, _ = grid.theta_o()
+    phi = grid.phi()
+    known = {(0, 0, 0): 0.7, (2, 1, 1): -0.3, (3, 3, 2): 0.2, (5, 2, 0): 0.1}
+    fi, fo = legendre_f(6, 3, xi), legendre_f(6, 3, xo)
+    values = np.zeros((12, 8, 12))
+    for (l, p, q), c in known.items():
+        mult = 1.0 if q == 0 else 2.0  # ρ̂_lpq for ±q
+        values += c * mult * fi[l, q][:, None, None] * fo[p, q][None, :, None] * np.cos(q * phi)
+    r = ReparamBRDF(values=np.repeat(values[..., None], 3, -1), grid=grid, name="synthetic")
+    c = rho_lpq(r, 6, 3)
+    for (l, p, q), v in known.items():
+        assert c.coeffs[l, p, q, 0] == pytest.approx(v, abs=1e-12)
+    assert c.parseval_terms()[..., 0].sum() == pytest.approx(c.energy[0], rel=1e-12)
+
+
+@pytest.mark.parametrize("s", [8, 16, 32, 64, 128, 256, 512])
+def test_phong_order_closed_form(s):
+    """RH02 Appendix D: F ≈ sqrt(−s ln ε) (±1) and P = 0 exactly for a radially symmetric lobe."""
+    o = shrmkit.choose_orders(shrmkit.load_brdf(f"phong:s={s}"), eps=0.01)
+    assert abs(o.F - np.sqrt(-s * np.log(0.01))) <= 1
+    assert o.P == 0
+    assert o.eps <= 0.01 and not o.capped and o.converged
+
+
+@pytest.mark.parametrize("sigma, F, P", [(0.1, 24, 3), (0.2, 12, 2), (0.3, 7, 2), (0.4, 5, 2), (0.5, 5, 2)])
+def test_microfacet_matches_rh02_table5(sigma, F, P):
+    """RH02 Table 5 (simplified microfacet, ε < 0.03): (F, P) within ±1."""
+    o = shrmkit.choose_orders(shrmkit.load_brdf(f"microfacet:sigma={sigma}"), eps=0.03)
+    assert abs(o.F - F) <= 1 and abs(o.P - P) <= 1
+
+
+def test_eps_table_monotone_and_rule():
+    o = shrmkit.choose_orders(shrmkit.load_brdf("microfacet:sigma=0.3"), eps=0.05)
+    t = o.table
+    assert np.all(np.diff(t, axis=0) <= 1e-12) and np.all(np.diff(t, axis=1) <= 1e-12)
+    assert np.all(t >= -1e-12)
+    assert t[o.F, o.P] <= 0.05 and (o.F == 0 or t[o.F - 1, o.P] > 0.05) and (o.P == 0 or t[-1, o.P - 1] > 0.05)
+
+
+def test_caps_are_reported_not_looped():
+    o = shrmkit.choose_orders(shrmkit.load_brdf("phong:s=2000"), eps=0.01, max_F=20, max_P=2)
+    assert o.capped and (o.F, o.P) == (20, 2) and "not met" in o.message
+    assert o.eps > 0.01
+
+
+def test_zero_brdf_is_a_clear_error():
+    with pytest.raises(BadInputError, match="zero everywhere"):
+        shrmkit.choose_orders(shrmkit.load_brdf("lambert:albedo=0"), eps=0.03)
+
+
+@pytest.mark.parametrize("eps", [0.0, 1.0, -0.1, 2.0])
+def test_bad_tolerance(eps):
+    with pytest.raises(BadInputError, match="eps"):
+        shrmkit.choose_orders(shrmkit.load_brdf("phong:s=8"), eps=eps)
+
+
+@pytest.mark.slow
+def test_hard_cases_sharp_lobes():
+    """DESIGN §7: Phong s = 10⁴ (F ≈ 215 at ε = 0.01) and σ = 0.02 without NaN/overflow."""
+    o = shrmkit.choose_orders(shrmkit.load_brdf("phong:s=10000"), eps=0.01)
+    assert abs(o.F - np.sqrt(-1e4 * np.log(0.01))) <= 2 and o.P == 0
+    assert np.all(np.isfinite(o.table))
+    o = shrmkit.choose_orders(shrmkit.load_brdf("microfacet:sigma=0.02"), eps=0.03)
+    assert np.all(np.isfinite(o.table)) and 100 <= o.F <= 130 and o.P <= 3
+
+
+def test_missing_merl_data_counted(tmp_path):
+    """Missing measurements are excluded and counted, never NaN (DESIGN §7)."""
+    from shrmkit.brdf_io.merl import tabulate_merl, write_merl
+
+    values = tabulate_merl(shrmkit.load_brdf("microfacet:sigma=0.3"))
+    values[:, 60:, :, :] = np.nan  # θ_h beyond index 60 unmeasured
+    path = write_merl(tmp_path / "holes.binary", values)
+    o = shrmkit.choose_orders(shrmkit.load_brdf(path), eps=0.1, max_F=24, max_P=3)
+    assert np.all(np.isfinite(o.table))
+    assert o.n_without_data > 0 and "no measurement" in o.message
