@@ -24,7 +24,6 @@ from pathlib import Path
 import numpy as np
 from rich.console import Console
 from rich.table import Table
-
 from shrmkit.analysis.brdf_coeffs import rho_lpq
 from shrmkit.analysis.lighting import lighting_coefficients
 from shrmkit.analysis.orders import eps_table
@@ -57,6 +56,11 @@ def random_pairs(n: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarr
     perp /= np.linalg.norm(perp, axis=1, keepdims=True)
     angle = 2.0 * np.arccos(rng.uniform(np.cos(MAX_THETA_V), 1.0, size=n))
     return R, np.cos(angle)[:, None] * R + np.sin(angle)[:, None] * perp
+
+
+def fmt(x: float) -> str:
+    """4 decimals, or 3 significant digits below 1e-3."""
+    return f"{x:.4f}" if x >= 1e-3 or x == 0 else f"{x:.2e}"
 
 
 def environment(height: int) -> EnvironmentMap:
@@ -110,17 +114,38 @@ def main(argv: list[str] | None = None) -> int:
         f"high-order expansion lmax = F0 = {lmax}; measured on {n_pairs} random (R, V) pairs",
         box=None,
     )
-    for col in ("F", "ε_L(F)", "ε_ρ(F)", "min(ε_L, ε_ρ)", "ε_B(F)", "1 − ε_B", "bound", "bound >= ε_B",
-                "√ε_B", "rel RMS measured", "S (SHRM rows)", "prefilter's ε_B"):
+    for col in (
+        "F",
+        "ε_L(F)",
+        "ε_ρ(F)",
+        "min(ε_L, ε_ρ)",
+        "ε_B(F)",
+        "1 − ε_B",
+        "bound",
+        "bound >= ε_B",
+        "√ε_B",
+        "rel RMS measured",
+        "S (SHRM rows)",
+        "prefilter's ε_B",
+    ):
         table.add_column(col, justify="right")
     for F in range(args.max_F + 1):
         e_b = reflected_error(lighting, coefficients, F, 0)
         bound = residual_bound(lighting, coefficients, F, 0)
         m = measured.get(F)
         table.add_row(
-            str(F), f"{eps_L[F]:.4f}", f"{eps_rho[F]:.4f}", f"{min(eps_L[F], eps_rho[F]):.4f}", f"{e_b:.4f}",
-            f"{1 - e_b:.4f}", f"{bound:.4f}", "yes" if bound >= e_b else "NO", f"{np.sqrt(e_b):.4f}",
-            f"{m[0]:.4f}" if m else "", str(m[1]) if m else "", f"{m[2]:.4f}" if m else "",
+            str(F),
+            fmt(eps_L[F]),
+            fmt(eps_rho[F]),
+            fmt(min(eps_L[F], eps_rho[F])),
+            fmt(e_b),
+            f"{1 - e_b:.4f}",
+            fmt(bound),
+            "yes" if bound >= e_b else "NO",
+            fmt(np.sqrt(e_b)),
+            fmt(m[0]) if m else "",
+            str(m[1]) if m else "",
+            fmt(m[2]) if m else "",
         )
     console.print(table)
     console.print(
@@ -128,8 +153,8 @@ def main(argv: list[str] | None = None) -> int:
         f"{t_ref:.2f} s; total {time.perf_counter() - t_start:.1f} s"
     )
     console.print(
-        "prefilter's ε_B uses its own, lower-order lighting and ρ̂ expansions (l <= max(2F_ρ, F_ρ+16)), so it can"
-        " read lower than the high-order ε_B(F)."
+        "prefilter's ε_B: the same quantity computed inside prefilter() from its own, lower-order expansions"
+        " (l <= max(2F_ρ, F_ρ+16)); it can read lower than the high-order ε_B(F)."
     )
     return 0
 

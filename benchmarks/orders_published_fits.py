@@ -28,7 +28,6 @@ from pathlib import Path
 import numpy as np
 from rich.console import Console
 from rich.table import Table
-
 from shrmkit.analysis.orders import DEFAULT_MAX_F, DEFAULT_MAX_P, choose_orders
 from shrmkit.brdf_io.models import Lafortune, LafortuneLobe, rgb
 
@@ -152,9 +151,16 @@ def print_rows(rows: list[Row], eps: float) -> None:
     for r in rows:
         note = r.error or r.message
         table.add_row(
-            r.material.source, r.material.name, f"{r.material.max_n:.4g}",
-            str(r.F) if r.F >= 0 else "-", str(r.P) if r.P >= 0 else "-", f"{r.eps:.4f}",
-            "CAPPED" if r.capped else "no", "yes" if r.converged else "NO", f"{r.seconds:.2f}", note[:90],
+            r.material.source,
+            r.material.name,
+            f"{r.material.max_n:.4g}",
+            str(r.F) if r.F >= 0 else "-",
+            str(r.P) if r.P >= 0 else "-",
+            f"{r.eps:.4f}",
+            "CAPPED" if r.capped else "no",
+            "yes" if r.converged else "NO",
+            f"{r.seconds:.2f}",
+            note[:90],
         )
     console.print(table)
 
@@ -175,7 +181,9 @@ def print_summary(rows: list[Row], eps: float) -> None:
         console.print(hist)
         q = np.quantile(Fs, [0.0, 0.1, 0.25, 0.5, 0.75, 0.9, 1.0])
         console.print(
-            "F quantiles: min {:.0f}, 10% {:.0f}, 25% {:.0f}, median {:.0f}, 75% {:.0f}, 90% {:.0f}, max {:.0f}".format(*q)
+            "F quantiles: min {:.0f}, 10% {:.0f}, 25% {:.0f}, median {:.0f}, 75% {:.0f}, 90% {:.0f}, max {:.0f}".format(
+                *q
+            )
         )
         secs = np.array([r.seconds for r in rows])
         console.print(
@@ -200,7 +208,9 @@ def print_summary(rows: list[Row], eps: float) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--limit", type=int, default=None, help="only the first N Ngan et al. fits (all six pbrt fits always)")
+    parser.add_argument(
+        "--limit", type=int, default=None, help="only the first N Ngan et al. fits (all six pbrt fits always)"
+    )
     parser.add_argument("--quick", action="store_true", help="same as --limit 8")
     parser.add_argument("--eps", type=float, default=0.03)
     args = parser.parse_args(argv)

@@ -34,12 +34,11 @@ from typing import Any
 import numpy as np
 from rich.console import Console
 from rich.table import Table
-
+from shrmkit.analysis.latlong import pixel_angles, pixel_directions
 from shrmkit.analysis.lighting import lighting_coefficients
 from shrmkit.analysis.orders import choose_orders
 from shrmkit.analysis.reference import reference_radiance
-from shrmkit.analysis.shrm import SHRM, global_from_local, local_shrm_fast, prefilter
-from shrmkit.analysis.latlong import pixel_angles, pixel_directions
+from shrmkit.analysis.shrm import SHRM, default_size, global_from_local, local_shrm_fast, prefilter
 from shrmkit.brdf_io.envmap import EnvironmentMap, load_env
 from shrmkit.brdf_io.specs import load_brdf
 
@@ -143,8 +142,20 @@ def table_phong(env: EnvironmentMap, exponents: list[int], S: int, n_pix: int, r
         f"({n_out} px); reference time EXTRAPOLATED from {n_pix} random output pixels",
         box=None,
     )
-    for col in ("s", "F", "P", "ε_ρ", "T_orders", "T_freq (SHT+synth)", "T_ref measured", "T_ref full (extrap.)",
-                "ratio", "RH02 T4", "rel RMS freq", "√ε_B pred"):
+    for col in (
+        "s",
+        "F",
+        "P",
+        "ε_ρ",
+        "T_orders",
+        "T_freq (SHT+synth)",
+        "T_ref measured",
+        "T_ref full (extrap.)",
+        "ratio",
+        "RH02 T4",
+        "rel RMS freq",
+        "√ε_B pred",
+    ):
         table.add_column(col, justify="right")
     for s in exponents:
         brdf = load_brdf(f"phong:s={s}")
@@ -156,9 +167,18 @@ def table_phong(env: EnvironmentMap, exponents: list[int], S: int, n_pix: int, r
         t_full = t_ref * n_out / n_pix
         err = relative_rms(shrm.radiance(R, V), ref)
         table.add_row(
-            str(s), str(shrm.F), str(shrm.P), f"{shrm.eps['brdf']:.4f}", fmt_time(t_orders), fmt_time(t_freq),
-            fmt_time(t_ref), fmt_time(t_full), f"{t_full / t_freq:.0f}×",
-            f"{RH02_TABLE4[s]:g}×" if s in RH02_TABLE4 else "", f"{err:.4f}", f"{np.sqrt(shrm.eps['reflected']):.4f}",
+            str(s),
+            str(shrm.F),
+            str(shrm.P),
+            f"{shrm.eps['brdf']:.4f}",
+            fmt_time(t_orders),
+            fmt_time(t_freq),
+            fmt_time(t_ref),
+            fmt_time(t_full),
+            f"{t_full / t_freq:.0f}×",
+            f"{RH02_TABLE4[s]:g}×" if s in RH02_TABLE4 else "",
+            f"{err:.4f}",
+            f"{np.sqrt(shrm.eps['reflected']):.4f}",
         )
     console.print(table)
 
@@ -185,8 +205,21 @@ def table_microfacet(
         f"{S}×{2 * S}; reference time EXTRAPOLATED from {n_pix} random (view, pixel) pairs with θ_v <= 80°",
         box=None,
     )
-    for col in ("σ", "F", "P", "ε_ρ", "T_orders", "T_prefilter", f"T_{n_view} view maps", "T_freq total",
-                "T_ref measured", "T_ref full (extrap.)", "ratio", "rel RMS freq", "√ε_B pred"):
+    for col in (
+        "σ",
+        "F",
+        "P",
+        "ε_ρ",
+        "T_orders",
+        "T_prefilter",
+        f"T_{n_view} view maps",
+        "T_freq total",
+        "T_ref measured",
+        "T_ref full (extrap.)",
+        "ratio",
+        "rel RMS freq",
+        "√ε_B pred",
+    ):
         table.add_column(col, justify="right")
     pix_dirs = pixel_directions(S, 2 * S).reshape(-1, 3)
     for sigma in sigmas:
@@ -208,9 +241,19 @@ def table_microfacet(
         err = relative_rms(ours, ref)
         t_freq = t_pre + t_maps
         table.add_row(
-            f"{sigma:g}", str(shrm.F), str(shrm.P), f"{shrm.eps['brdf']:.4f}", fmt_time(t_orders), fmt_time(t_pre),
-            fmt_time(t_maps), fmt_time(t_freq), fmt_time(t_ref), fmt_time(t_full), f"{t_full / t_freq:.0f}×",
-            f"{err:.4f}", f"{np.sqrt(shrm.eps['reflected']):.4f}",
+            f"{sigma:g}",
+            str(shrm.F),
+            str(shrm.P),
+            f"{shrm.eps['brdf']:.4f}",
+            fmt_time(t_orders),
+            fmt_time(t_pre),
+            fmt_time(t_maps),
+            fmt_time(t_freq),
+            fmt_time(t_ref),
+            fmt_time(t_full),
+            f"{t_full / t_freq:.0f}×",
+            f"{err:.4f}",
+            f"{np.sqrt(shrm.eps['reflected']):.4f}",
         )
     console.print(table)
     console.print("  RH02 Table 5 target: ratio >= 1000×. The error uses the view-map pixel values (pixel centres).")
@@ -219,31 +262,62 @@ def table_microfacet(
 # ----------------------------------------------------------------------------------------
 # (c) speed against error
 # ----------------------------------------------------------------------------------------
-def table_sweep(env: EnvironmentMap, specs: list[str], tolerances: list[float], n_pairs: int, seed: int) -> None:
+def table_sweep(
+    env: EnvironmentMap, specs: list[str], tolerances: list[float], n_pairs: int, seed: int, max_size: int
+) -> None:
     table = Table(
-        title=f"(c) speed vs error, env {env.name} {env.height}×{env.width}, SHRM size S = 10F (default), "
+        title=f"(c) speed vs error, env {env.name} {env.height}×{env.width}, SHRM size S = min(10F, {max_size}), "
         f"error on {n_pairs} random (R, V) pairs (R uniform, θ_v <= 80°)",
         box=None,
     )
-    for col in ("BRDF", "eps", "F", "P", "S", "T_orders", "T_freq (SHT+synth)", "ε_B pred", "√ε_B pred",
-                "bound", "rel RMS measured", "T_ref (pairs)"):
+    for col in (
+        "BRDF",
+        "eps",
+        "F",
+        "P",
+        "S",
+        "T_orders",
+        "T_freq (SHT+synth)",
+        "ε_B pred",
+        "√ε_B pred",
+        "bound",
+        "rel RMS measured",
+        "T_ref (pairs)",
+    ):
         table.add_column(col, justify="right")
     for spec in specs:
         brdf = load_brdf(spec)
         R, V = random_pairs(n_pairs, np.random.default_rng(seed))
         t_ref, ref = timed(lambda R=R, V=V, brdf=brdf: reference_radiance(env, brdf, R, V))
         for tol in tolerances:
-            shrm = prefilter(env, brdf, tol)
+            F = scene_F(env, brdf, tol)
+            shrm = prefilter(env, brdf, tol, size=min(default_size(F), max_size))
             err = relative_rms(shrm.radiance(R, V), ref)
             table.add_row(
-                spec, f"{tol:g}", str(shrm.F), str(shrm.P), str(shrm.height),
-                fmt_time(shrm.meta["timings"]["orders"]), fmt_time(freq_time(shrm)),
-                f"{shrm.eps['reflected']:.2e}", f"{np.sqrt(shrm.eps['reflected']):.4f}", f"{shrm.eps['bound']:.2e}",
-                f"{err:.4f}", fmt_time(t_ref),
+                spec,
+                f"{tol:g}",
+                str(shrm.F),
+                str(shrm.P),
+                str(shrm.height),
+                fmt_time(shrm.meta["timings"]["orders"]),
+                fmt_time(freq_time(shrm)),
+                f"{shrm.eps['reflected']:.2e}",
+                f"{np.sqrt(shrm.eps['reflected']):.4f}",
+                f"{shrm.eps['bound']:.2e}",
+                f"{err:.4f}",
+                fmt_time(t_ref),
             )
     console.print(table)
     console.print("  ε_B is an energy fraction; the RMS radiance error it predicts is √ε_B (plus the bilinear")
-    console.print("  interpolation of the S×2S SHRM, which the prediction does not include).")
+    console.print("  interpolation of the S×2S SHRM, which the prediction does not include). S is capped because the")
+    console.print(
+        "  synthesis holds a complex (P+1)(2P+1)·S·2S·3 array: at P = 16, S = 470 (the default 10F) it needs ~12 GB."
+    )
+
+
+def scene_F(env: EnvironmentMap, brdf: Any, tol: float) -> int:
+    """F_B that prefilter() will choose at ``tol`` (a cheap size-2 prefilter)."""
+    return prefilter(env, brdf, tol, size=2).F
 
 
 # ----------------------------------------------------------------------------------------
@@ -269,9 +343,14 @@ def table_targets(repeats: int, quick: bool) -> None:
             repeats,
         )
         t_syn, _ = timed(synth, repeats)
-        table.add_row("SHRM synthesis σ=0.1, 128×256 (local spin-SHT + global rotation)",
-                      f"({orders.F}, {orders.P})", str(nthreads), fmt_time(t_syn), "<= 20 ms",
-                      "yes" if t_syn <= 0.02 else "NO")
+        table.add_row(
+            "SHRM synthesis σ=0.1, 128×256 (local spin-SHT + global rotation)",
+            f"({orders.F}, {orders.P})",
+            str(nthreads),
+            fmt_time(t_syn),
+            "<= 20 ms",
+            "yes" if t_syn <= 0.02 else "NO",
+        )
         table.add_row("  of which local SHRM (spin SHTs)", "", str(nthreads), fmt_time(t_local), "", "")
     sources = [("builtin:sky 1024×512", env)]
     if GRACE.is_file() and not quick:
@@ -281,12 +360,20 @@ def table_targets(repeats: int, quick: bool) -> None:
             t_total, shrm = timed(lambda s=source, n=nthreads: prefilter(s, brdf, 0.03, nthreads=n), repeats)
             tm = shrm.meta["timings"]
             table.add_row(
-                f"full prefilter microfacet σ=0.1, {label}, S={shrm.height}", f"({shrm.F}, {shrm.P})",
-                str(nthreads), fmt_time(t_total), "<= 0.5 s", "yes" if t_total <= 0.5 else "NO",
+                f"full prefilter microfacet σ=0.1, {label}, S={shrm.height}",
+                f"({shrm.F}, {shrm.P})",
+                str(nthreads),
+                fmt_time(t_total),
+                "<= 0.5 s",
+                "yes" if t_total <= 0.5 else "NO",
             )
             table.add_row(
-                "  of which orders / lighting SHT / synthesis", "", "",
-                f"{fmt_time(tm['orders'])} / {fmt_time(tm['lighting'])} / {fmt_time(tm['synthesis'])}", "", "",
+                "  of which orders / lighting SHT / synthesis",
+                "",
+                "",
+                f"{fmt_time(tm['orders'])} / {fmt_time(tm['lighting'])} / {fmt_time(tm['synthesis'])}",
+                "",
+                "",
             )
     console.print(table)
 
@@ -296,6 +383,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--quick", action="store_true", help="fewer materials, pixels and repeats (< 1 min)")
     parser.add_argument("--env-height", type=int, default=128, help="environment rows for (a)-(c) (default 128)")
     parser.add_argument("--size", type=int, default=64, help="SHRM rows S for (a), (b): S×2S output (default 64)")
+    parser.add_argument("--sweep-max-size", type=int, default=160, help="largest SHRM rows S in (c) (default 160)")
     parser.add_argument("--seed", type=int, default=1)
     args = parser.parse_args(argv)
     t_start = time.perf_counter()
@@ -303,17 +391,22 @@ def main(argv: list[str] | None = None) -> int:
         exponents, sigmas, tolerances = [8, 64, 512], [0.1, 0.3, 0.5], [0.1, 0.01]
         n_pix, n_pairs, repeats = 40, 100, 1
     else:
-        exponents, sigmas, tolerances = [8, 16, 32, 64, 128, 256, 512], [0.1, 0.2, 0.3, 0.4, 0.5], [
-            0.1, 0.03, 0.01, 0.003, 0.001]
+        exponents, sigmas, tolerances = (
+            [8, 16, 32, 64, 128, 256, 512],
+            [0.1, 0.2, 0.3, 0.4, 0.5],
+            [0.1, 0.03, 0.01, 0.003, 0.001],
+        )
         n_pix, n_pairs, repeats = 200, 300, 3
     console.print(
         f"prefilter_speed: {'quick' if args.quick else 'full'} run; orders at eps = 0.03 unless stated; "
-        "times are the minimum over repeats" + ("" if args.quick else f" ({repeats})") + "; 1 ducc0 thread unless stated."
+        "times are the minimum over repeats"
+        + ("" if args.quick else f" ({repeats})")
+        + "; 1 ducc0 thread unless stated."
     )
     for env in environments(args.env_height, args.quick):
         table_phong(env, exponents, args.size, n_pix, repeats, args.seed)
         table_microfacet(env, sigmas, args.size, 10, n_pix, repeats, args.seed)
-        table_sweep(env, ["microfacet:sigma=0.2", "phong:s=64"], tolerances, n_pairs, args.seed)
+        table_sweep(env, ["microfacet:sigma=0.2", "phong:s=64"], tolerances, n_pairs, args.seed, args.sweep_max_size)
     table_targets(repeats, args.quick)
     console.print(f"total benchmark wall time {time.perf_counter() - t_start:.1f} s")
     return 0

@@ -111,8 +111,8 @@ def _disc_coverage(height: int, centre: np.ndarray, radius: float, sub: int = 8)
     """Fraction of each pixel inside a spherical cap, scaled so Σ coverage·Ω = 2π(1 − cos r).
 
     Sub-sample (a, b) of pixel (i, j) is at cos θ = cos θ_i⁻ − (a + ½)/sub·Δcos θ_i,
-    φ = 2π(j + (b + ½)/sub)/W: equal-area within the pixel. Only rows and columns that
-    can meet the cap are sub-sampled.
+    φ = 2π(j + (b + ½)/sub)/W: equal-area within the pixel. Only rows that can meet the
+    cap are sub-sampled.
     """
     width = 2 * height
     cap_cos = np.cos(radius)

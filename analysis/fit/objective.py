@@ -17,6 +17,7 @@ multi-start fits fast and robust.
 
 from __future__ import annotations
 
+import functools
 import itertools
 
 import numpy as np
@@ -27,10 +28,11 @@ from .sampling import FitSamples
 
 __all__ = ["solve_bounded_lsq", "ProjectedObjective"]
 
-_LOG_IRLS = 4  # reweighting passes of the log metric
+_LOG_IRLS = 3  # reweighting passes of the log metric
 _LOG_TINY = -700.0  # columns whose true scale is below e^-700 cannot carry a weight
 
 
+@functools.cache
 def _faces(m: int, constrained: bool) -> tuple[np.ndarray, np.ndarray]:
     free = np.array(list(itertools.product([False, True], repeat=m)), dtype=bool)
     if not constrained:

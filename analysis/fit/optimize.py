@@ -180,7 +180,7 @@ def fit_brdf(
     max_theta_deg: float = 80.0,
     energy_conserving: bool = True,
     xtol_rel: float = 1e-7,
-    max_evals: int = 2000,
+    max_evals: int = 1000,
     samples: FitSamples | None = None,
     progress: ProgressCallback | None = None,
 ) -> FitResult:
