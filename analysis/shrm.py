@@ -150,7 +150,7 @@ def local_shrm_fast(
     l_of_index = np.concatenate([np.arange(m, lmax + 1) for m in range(lmax + 1)])
     phi0 = np.pi / width
     for p in range(P + 1):
-        for s in range(p + 1):
+        for s in range(min(p, lmax) + 1):  # spin s needs l >= s: B_{p,±s} = 0 when s > lmax
             rho = coefficients.coeffs[l_of_index, p, s, :].T  # (3, n_alm)
             rho = np.where(l_of_index[None, :] >= s, rho, 0.0)
             for c in range(3):

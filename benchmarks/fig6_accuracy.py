@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 from rich.console import Console
 from rich.table import Table
+
 from shrmkit.analysis.brdf_coeffs import rho_lpq
 from shrmkit.analysis.lighting import lighting_coefficients
 from shrmkit.analysis.orders import eps_table

@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 from rich.console import Console
 from rich.table import Table
+
 from shrmkit.analysis.orders import DEFAULT_MAX_F, DEFAULT_MAX_P, choose_orders
 from shrmkit.brdf_io.models import Lafortune, LafortuneLobe, rgb
 

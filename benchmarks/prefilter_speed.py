@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 from rich.console import Console
 from rich.table import Table
+
 from shrmkit.analysis.latlong import pixel_angles, pixel_directions
 from shrmkit.analysis.lighting import lighting_coefficients
 from shrmkit.analysis.orders import choose_orders

@@ -21,6 +21,7 @@ import argparse
 import time
 
 import numpy as np
+
 from shrmkit.analysis.latlong import pixel_directions
 from shrmkit.analysis.sh import real_sph_harm
 from shrmkit.analysis.shrm import SHRM

@@ -81,7 +81,10 @@ def _print_tables(doc: dict, table: np.ndarray) -> None:
             scene.add_column(key, justify="right")
         # a capped F_L means ε_L > tol up to the largest order computed: F_L is at least that
         scene.add_row(
-            f">= {doc['F_L']}" if doc["lighting_capped"] else str(doc["F_L"]), str(doc["F_B"]), str(doc["P_B"]), f"{doc['eps_L']:.3g}",
+            f">= {doc['F_L']}" if doc["lighting_capped"] else str(doc["F_L"]),
+            str(doc["F_B"]),
+            str(doc["P_B"]),
+            f"{doc['eps_L']:.3g}",
             f"{doc['bound']:.3g}",
         )
         stdout.print(scene)

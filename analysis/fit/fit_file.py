@@ -11,12 +11,12 @@ import math
 import os
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import IO, Any
+from typing import Any
 
 import nlopt
 
 from ..._version import __version__
-from ...brdf_io.table import atomic_write
+from ...brdf_io.atomic import atomic_path
 from .optimize import FitResult
 
 __all__ = ["FIT_FORMAT", "FIT_FORMAT_VERSION", "fit_document", "write_fit_json"]
@@ -79,8 +79,6 @@ def write_fit_json(
 ) -> Path:
     """Write :func:`fit_document` to ``path`` atomically (temporary file + ``os.replace``)."""
     text = json.dumps(fit_document(result, source), indent=2, allow_nan=False) + "\n"
-
-    def write(f: IO[bytes]) -> None:
-        f.write(text.encode("utf-8"))
-
-    return atomic_write(path, write)
+    with atomic_path(path) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+    return Path(path)

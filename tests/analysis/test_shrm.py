@@ -95,7 +95,8 @@ def test_global_shrm_matches_local_expansion():
         V = rng.normal(size=3)
         V /= np.linalg.norm(V)
         Y_local = complex_sph_harm(P, (rot.T @ V)[None])[0]
-        expected = np.einsum("k,kc->c", Y_local, np.concatenate([local[p, P - p : P + p + 1, i, j] for p in range(P + 1)]))
+        local_here = np.concatenate([local[p, P - p : P + p + 1, i, j] for p in range(P + 1)])
+        expected = np.einsum("k,kc->c", Y_local, local_here)
         got = real_sph_harm(P, V[None])[0] @ real[:, i, j]
         np.testing.assert_allclose(got, expected.real, atol=1e-12)
         assert np.abs(expected.imag).max() < 1e-12

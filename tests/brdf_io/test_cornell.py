@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
 import shrmkit
 from shrmkit.brdf_io.colour import (
     CIE1931_CMF,

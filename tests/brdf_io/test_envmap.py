@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from scipy import integrate
+
 from shrmkit.brdf_io.envmap import EnvironmentMap, load_env, save_env
 from shrmkit.brdf_io.errors import BadInputError
 

@@ -7,6 +7,7 @@ import time
 import numpy as np
 import pytest
 from scipy import integrate
+
 from shrmkit.brdf_io.envmap import EnvironmentMap, load_env
 from shrmkit.brdf_io.errors import BadInputError
 from shrmkit.brdf_io.hdr_codecs import read_image, write_exr, write_pfm
@@ -220,3 +221,19 @@ def test_real_latlong_maps(shared_data):
         env = load_env(path, up="y")
         assert env.width == 2 * env.height and env.radiance.min() >= 0
         assert env.radiance[: env.height // 2].mean() > env.radiance[env.height // 2 :].mean() * 0.5
+
+
+def test_public_geometry_helpers_match_references():
+    """References: the hand-inverted OpenGL table above; ∫ over the angular map's disc = 4π."""
+    from shrmkit.brdf_io.probe import cube_texel_directions, probe_pixel_directions
+
+    n = 6
+    c = 2 * (np.arange(n) + 0.5) / n - 1
+    u, v = np.meshgrid(c, c)
+    for face in FACES:
+        assert np.allclose(cube_texel_directions(n, face), _d3d_face_direction(face, u, v))
+    dirs, omega = probe_pixel_directions(512)
+    assert omega.sum() == pytest.approx(4 * np.pi, rel=1e-2)
+    inside = omega > 0
+    assert np.allclose(np.linalg.norm(dirs[inside], axis=-1), 1.0)
+    assert np.allclose(dirs[0, 256][[0, 2]], 0.0, atol=0.02) and dirs[256 - 128, 256][1] > 0.999

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from shrmkit.brdf_io.halfdiff import directions_to_halfdiff, halfdiff_to_directions, spherical_angles
 
 

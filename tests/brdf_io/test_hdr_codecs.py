@@ -6,6 +6,7 @@ import time
 
 import numpy as np
 import pytest
+
 from shrmkit.brdf_io.errors import BadInputError
 from shrmkit.brdf_io.hdr_codecs import (
     read_exr,

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
 import shrmkit
 from shrmkit.brdf_io.errors import BadInputError
 from shrmkit.brdf_io.halfdiff import directions_to_halfdiff, halfdiff_to_directions

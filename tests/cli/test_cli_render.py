@@ -12,6 +12,7 @@ import numpy as np
 import OpenEXR
 import pytest
 from PIL import Image
+
 from shrmkit.cli.main import main
 from shrmkit.render.offscreen import probe_offscreen
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import pytest
+
 from shrmkit.render.offscreen import probe_offscreen
 
 _PROBE: list[tuple[bool, str]] = []

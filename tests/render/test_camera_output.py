@@ -13,6 +13,7 @@ import numpy as np
 import OpenEXR
 import pytest
 from PIL import Image
+
 from shrmkit.render.camera import Camera, orbit_camera
 from shrmkit.render.output import (
     composite,

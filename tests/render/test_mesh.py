@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import trimesh
+
 from shrmkit.brdf_io.errors import BadInputError
 from shrmkit.render.mesh import load_mesh, make_mesh
 

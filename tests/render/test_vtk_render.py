@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 import OpenEXR
 import pytest
+
 from shrmkit.analysis.latlong import pixel_directions
 from shrmkit.analysis.sh import real_sph_harm
 from shrmkit.analysis.shrm import SHRM

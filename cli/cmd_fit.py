@@ -1,0 +1,144 @@
+"""``shrm fit``: fit a Lafortune, Cook–Torrance or RH02 microfacet model to a BRDF (nlopt).
+
+Prints the parameters, the errors and the errors per view-elevation band (rich tables on
+stdout, or one JSON object with ``--json``); ``-o params.json`` writes the fit document of
+``data_specs/fit_json.md`` atomically, which ``shrmkit.load_brdf`` reads back as the model.
+Progress of the multi-start fit goes to stderr. Exit status: 0 when the fit converged, 1
+when nlopt stopped without converging (the result is still printed and written), 2 on bad
+input.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.table import Table
+
+from ..analysis.fit import FitResult, fit_brdf
+from ..analysis.fit.fit_file import fit_document, write_fit_json
+from ..analysis.fit.metrics import METRICS
+from ..analysis.fit.models_param import MODELS
+from ..brdf_io.errors import BadInputError
+from ..brdf_io.specs import load_brdf
+from .common import print_json, stderr, stdout
+
+HELP = "fit a Lafortune, Cook-Torrance or microfacet model to a BRDF (nlopt)"
+
+
+def _int_in(lo: int, hi: int):
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+        if not lo <= value <= hi:
+            raise argparse.ArgumentTypeError(f"must be in {lo}..{hi}, got {value}")
+        return value
+
+    return parse
+
+
+def _angle(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not 0.0 < value <= 90.0:
+        raise argparse.ArgumentTypeError(f"must be in (0, 90] degrees, got {text}")
+    return value
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("brdf", help="BRDF file (.binary, .npz, .brdf, .json) or spec string")
+    parser.add_argument("--model", choices=MODELS, default="lafortune", help="model to fit (default lafortune)")
+    parser.add_argument("--lobes", type=_int_in(1, 4), default=1, help="Lafortune lobes (default 1)")
+    parser.add_argument(
+        "--distribution", choices=("beckmann", "ggx"), default="beckmann",
+        help="Cook-Torrance distribution (default beckmann)",
+    )
+    parser.add_argument(
+        "--metric", choices=METRICS, default="rel",
+        help="error minimized: rel = cosine-weighted relative RMS, log = log-space RMS (default rel)",
+    )
+    parser.add_argument("--seed", type=_int_in(0, 2**31 - 1), default=0, help="seed (default 0)")
+    parser.add_argument("--samples", type=_int_in(256, 1 << 22), default=32768,
+                        help="direction pairs drawn for tables and models (default 32768)")
+    parser.add_argument("--starts", type=_int_in(1, 64), default=4, help="multi-start seeds (default 4)")
+    parser.add_argument("--max-theta", type=_angle, default=80.0,
+                        help="ignore samples with theta_i or theta_o above this, degrees (default 80)")
+    parser.add_argument("--no-energy", action="store_true",
+                        help="do not constrain the fit to conserve energy")
+    parser.add_argument("--json", action="store_true", help="print the fit document as one JSON object")
+    parser.add_argument("-o", "--output", help="write the fit document (JSON) to this file")
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.output and not args.output.lower().endswith(".json"):
+        raise BadInputError(args.output, "the output file must end in .json (load_brdf reads it back)")
+    brdf = load_brdf(args.brdf)
+    with Progress(
+        TextColumn("[progress.description]{task.description}"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
+        TimeElapsedColumn(), console=stderr, transient=True, disable=args.json,
+    ) as progress:
+        task = progress.add_task(f"fitting {args.model} to {brdf.name}", total=None)
+
+        def report(done: int, total: int) -> None:
+            progress.update(task, completed=done, total=total)
+
+        result = fit_brdf(
+            brdf, args.model, lobes=args.lobes, distribution=args.distribution, metric=args.metric,
+            seed=args.seed, n_samples=args.samples, starts=args.starts, max_theta_deg=args.max_theta,
+            energy_conserving=not args.no_energy, progress=report,
+        )
+    if args.output:
+        write_fit_json(args.output, result, source=args.brdf)
+    if args.json:
+        print_json(fit_document(result, source=args.brdf))
+    else:
+        _print_tables(result, brdf.name)
+        if args.output:
+            stdout.print(f"wrote {args.output}")
+    if not result.success:
+        stderr.print(f"shrm fit: warning: {result.message}")
+        return 1
+    return 0
+
+
+def _fmt(value: object) -> str:
+    if isinstance(value, list):
+        return " / ".join(f"{v:.4g}" for v in value)
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    return str(value)
+
+
+def _print_tables(result: FitResult, name: str) -> None:
+    params = Table(title=f"{result.model} fit of {name}")
+    params.add_column("parameter")
+    params.add_column("value (r / g / b)", justify="right")
+    for key, value in result.params.items():
+        if key == "lobes":
+            for k, lobe in enumerate(value, start=1):
+                for lk, lv in lobe.items():
+                    params.add_row(f"lobe {k} {lk}", _fmt(lv))
+        else:
+            params.add_row(key, _fmt(value))
+    stdout.print(params)
+
+    summary = Table(title="errors")
+    for col in ("rel_rms", "log_rms", "status", "evaluations", "seconds", "samples", "dropped"):
+        summary.add_column(col, justify="right")
+    summary.add_row(
+        f"{result.errors['rel_rms']:.4g}", f"{result.errors['log_rms']:.4g}", result.status,
+        str(result.evaluations), f"{result.seconds:.2f}", str(result.n_samples), str(result.n_dropped),
+    )
+    stdout.print(summary)
+
+    bands = Table(title="errors per view elevation θ_o")
+    for col in ("θ_o (deg)", "samples", "rel_rms", "log_rms"):
+        bands.add_column(col, justify="right")
+    for b in result.bands:
+        bands.add_row(f"{b.lo_deg:g}–{b.hi_deg:g}", str(b.n), f"{b.rel_rms:.4g}", f"{b.log_rms:.4g}")
+    stdout.print(bands)
+    stdout.print(f"spec: {result.brdf.to_spec()}", soft_wrap=True)
