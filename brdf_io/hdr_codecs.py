@@ -24,14 +24,13 @@ References
 from __future__ import annotations
 
 import contextlib
-import os
 import re
-import tempfile
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import numpy as np
 
+from .atomic import atomic_path
 from .errors import BadInputError
 
 __all__ = [
@@ -52,18 +51,12 @@ __all__ = [
 # --------------------------------------------------------------------------------------
 @contextlib.contextmanager
 def _atomic_path(path: Path) -> Iterator[Path]:
-    """Yield a temporary path beside ``path``; on success move it onto ``path``."""
+    """:func:`~shrmkit.brdf_io.atomic.atomic_path`, refusing a missing output folder."""
     path = Path(path)
     if not path.parent.is_dir():
         raise BadInputError(path, f"output folder {path.parent} does not exist")
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp" + path.suffix, dir=path.parent)
-    os.close(fd)
-    tmp = Path(tmp_name)
-    try:
+    with atomic_path(path, suffix=".tmp" + path.suffix) as tmp:
         yield tmp
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
 
 
 def _check_rgb(path: Path, image: np.ndarray) -> np.ndarray:

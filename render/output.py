@@ -22,15 +22,13 @@ IEC 61966-2-1:1999, sRGB transfer function.
 
 from __future__ import annotations
 
-import os
-import tempfile
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
 from ..analysis.latlong import bilinear_lookup
+from ..brdf_io.atomic import atomic_path
 from .camera import Camera
 
 __all__ = [
@@ -47,24 +45,6 @@ __all__ = [
 ]
 
 TONE_MAPS = ("srgb", "filmic")
-
-
-@contextmanager
-def _atomic(path: Path) -> Iterator[Path]:
-    """Yield a temporary path next to ``path``; move it over ``path`` on success, delete on error."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
-    os.close(fd)
-    try:
-        yield Path(tmp)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp creates 0600; give the file normal permissions
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 def environment_background(env_radiance: np.ndarray, camera: Camera, width: int, height: int) -> np.ndarray:
@@ -135,7 +115,7 @@ def write_exr(path: str | Path, radiance: np.ndarray, alpha: np.ndarray | None =
     if alpha is not None:
         channels["A"] = np.ascontiguousarray(np.asarray(alpha, dtype=np.float32))
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
-    with _atomic(Path(path)) as tmp:
+    with atomic_path(path) as tmp:
         with OpenEXR.File(header, channels) as exr:
             exr.write(str(tmp))
 
@@ -144,7 +124,7 @@ def write_png(path: str | Path, image8: np.ndarray) -> None:
     """Write a uint8 RGB or RGBA image to PNG, atomically."""
     from PIL import Image
 
-    with _atomic(Path(path)) as tmp:
+    with atomic_path(path) as tmp:
         Image.fromarray(np.asarray(image8, dtype=np.uint8)).save(tmp, format="PNG")
 
 
@@ -155,7 +135,7 @@ def write_gif(path: str | Path, frames: Sequence[np.ndarray], *, fps: float = 20
     if not frames:
         raise ValueError("no frames")
     images = [Image.fromarray(np.asarray(f, dtype=np.uint8)[..., :3]) for f in frames]
-    with _atomic(Path(path)) as tmp:
+    with atomic_path(path) as tmp:
         images[0].save(
             tmp,
             format="GIF",
