@@ -78,8 +78,9 @@ def run(args: argparse.Namespace) -> int:
         raise BadInputError(args.output, "the output file must end in .json (load_brdf reads it back)")
     brdf = load_brdf(args.brdf)
     with Progress(
-        TextColumn("[progress.description]{task.description}"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
-        TimeElapsedColumn(), console=stderr, transient=True, disable=args.json,
+        TextColumn("[progress.description]{task.description}"), BarColumn(),
+        TextColumn("{task.completed}/{task.total}"), TimeElapsedColumn(),
+        console=stderr, transient=True, disable=args.json or not stderr.is_terminal,
     ) as progress:
         task = progress.add_task(f"fitting {args.model} to {brdf.name}", total=None)
 

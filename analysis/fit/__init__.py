@@ -1,7 +1,15 @@
 """Fitting analytic models (Lafortune, Cook–Torrance, RH02's simplified microfacet) to
-measured BRDFs with nlopt; see :func:`fit_brdf` and ``data_specs/fit_json.md``."""
+measured BRDFs with nlopt.
 
+Modules: ``sampling`` (fit samples and quadrature weights), ``models_param`` (shape /
+colour parameterizations and physical bounds), ``objective`` (variable projection),
+``metrics`` (error metrics), ``optimize`` (:func:`fit_brdf`, :class:`FitResult`),
+``report`` (errors per view-elevation band), ``fit_file`` (the JSON document,
+``data_specs/fit_json.md``).
+"""
+
+from .fit_file import fit_document, write_fit_json
 from .optimize import FitResult, fit_brdf
 from .report import BandError, band_errors
 
-__all__ = ["fit_brdf", "FitResult", "BandError", "band_errors"]
+__all__ = ["fit_brdf", "FitResult", "BandError", "band_errors", "fit_document", "write_fit_json"]

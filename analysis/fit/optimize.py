@@ -242,8 +242,21 @@ def fit_brdf(
     param = make_param(model, lobes=int(lobes), distribution=distribution)
     objective = ProjectedObjective(param, samples, metric, energy_conserving)
 
-    # global stage: physically motivated starts + Sobol points over the box
+    # global stage: physically motivated starts + Sobol points over the box; a K-lobe
+    # Lafortune fit also starts from the (K-1)-lobe optimum plus each single-lobe start,
+    # so adding a lobe never makes the fit worse (the new lobe's weight can be 0)
     candidates = _global_candidates(param, seed, n_sobol=32 * param.dim)
+    if model == "lafortune" and lobes > 1:
+        previous = fit_brdf(
+            brdf, model, lobes=int(lobes) - 1, metric=metric, seed=seed, starts=starts,
+            max_theta_deg=max_theta_deg, energy_conserving=energy_conserving, xtol_rel=xtol_rel,
+            max_evals=max_evals, samples=samples,
+        )
+        x_prev = np.concatenate([[np.arctan2(lobe["cz"], lobe["cxy"]), np.log(lobe["n"])]
+                                 for lobe in previous.params["lobes"]])
+        singles = make_param(model, lobes=1).starts()
+        nested = np.clip([np.concatenate([x_prev, one]) for one in singles], param.lower, param.upper)
+        candidates = np.concatenate([nested, candidates])
     values = np.array([objective(x) for x in candidates])
     seeds = _pick_distinct(candidates, values, param, starts)
     total = len(seeds) + 1
