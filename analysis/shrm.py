@@ -247,6 +247,7 @@ def prefilter(
     max_F: int = DEFAULT_MAX_F,
     max_P: int = DEFAULT_MAX_P,
     nthreads: int = 1,
+    azimuth_free: bool = False,
     progress: Any = None,
 ) -> SHRM:
     """Prefilter an environment into a global SHRM (RH02 §4–5, Appendix C).
@@ -264,6 +265,9 @@ def prefilter(
         Rows S_B of the S_B × 2S_B output (default :func:`default_size` of F_B).
     F, P
         Force the orders instead of choosing them.
+    azimuth_free
+        Keep only the q = 0 terms of the local SHRM (Kautz & McCool 2000; RH02 Fig. 9):
+        B(α, β, θ_o) = Σ_p B_p0(α, β) Y_p0(ω_o'). Exact for radially symmetric lobes.
     progress
         Optional callable ``progress(stage: str)`` told when each stage starts.
 
@@ -306,6 +310,8 @@ def prefilter(
     stage("synthesis")
     t0 = time.perf_counter()
     local = local_shrm_fast(lighting, orders.coefficients, F_B, P_B, S, 2 * S, nthreads=nthreads)
+    if azimuth_free:
+        local[:, np.arange(2 * P_B + 1) != P_B] = 0.0
     theta, phi = pixel_angles(S, 2 * S)
     coeffs = global_from_local(local, theta[:, None], phi[None, :]).astype(np.float32)
     timings["synthesis"] = time.perf_counter() - t0
@@ -327,5 +333,6 @@ def prefilter(
         "timings": timings,
         "shrmkit_version": __version__,
         "frame": "z-up; lat-long pixel centres theta=(i+1/2)pi/H, phi=2pi(j+1/2)/W",
+        "azimuth_free": bool(azimuth_free),
     }
     return SHRM(F=F_B, P=P_B, coeffs=coeffs, tolerance=float(eps), eps=eps_info, meta=meta)
