@@ -69,12 +69,17 @@ def rho_lpq(reparam: ReparamBRDF, F0: int, P0: int) -> BRDFCoefficients:
     xo, wo = grid.theta_o()
     # pass 1: Σ_φ ρ̂ cos(qφ_k) Δφ = Re FFT (φ_k = 2πk/n)
     g = np.fft.rfft(reparam.values, axis=2).real[:, :, : P0 + 1] * (2.0 * np.pi / grid.n_phi)
-    # pass 2: θ_o' sum with f_pq(θ_o') → h[i, p, q, c]
-    fo = legendre_f(P0, P0, xo)  # (P0+1, P0+1, n_o)
-    h = np.einsum("pqo,o,ioqc->ipqc", fo, wo, g)
-    # pass 3: θ_i' sum with f_lq(θ_i') and the 2π of eq. 13
-    fi = legendre_f(F0, P0, xi)  # (F0+1, P0+1, n_i)
-    coeffs = 2.0 * np.pi * np.einsum("lqi,i,ipqc->lpqc", fi, wi, h)
+    # pass 2: θ_o' sum with f_pq(θ_o') → h[i, p, q, c]; pass 3: θ_i' sum with f_lq(θ_i')
+    # and the 2π of eq. 13 — one matrix product per q
+    fo = legendre_f(P0, P0, xo) * wo  # (P0+1, P0+1, n_o), weights folded in
+    fi = legendre_f(F0, P0, xi) * wi  # (F0+1, P0+1, n_i)
+    n_i = g.shape[0]
+    coeffs = np.zeros((F0 + 1, P0 + 1, P0 + 1, 3))
+    for q in range(P0 + 1):
+        h = np.tensordot(fo[:, q, :], g[:, :, q, :], axes=(1, 1))  # (p, i, c)
+        coeffs[:, :, q, :] = 2.0 * np.pi * (fi[:, q, :] @ h.transpose(1, 0, 2).reshape(n_i, -1)).reshape(
+            F0 + 1, P0 + 1, 3
+        )
     l_idx = np.arange(F0 + 1)[:, None, None]
     p_idx = np.arange(P0 + 1)[None, :, None]
     q_idx = np.arange(P0 + 1)[None, None, :]

@@ -216,12 +216,19 @@ def global_from_local(local: np.ndarray, alpha: np.ndarray, beta: np.ndarray) ->
     b = np.asarray(beta, dtype=np.float64)
     real = np.zeros(((P + 1) ** 2,) + grid_shape + (3,))
     root2 = np.sqrt(2.0)
+    rows_only = a.ndim == len(grid_shape) and all(n == 1 for n in a.shape[1:])  # α constant along rows
     for p in range(P + 1):
-        d = wigner_d_tilde(p, a)  # (*grid, 2p+1, 2p+1) [s+p, q+p]
         blk = local[p, P - p : P + p + 1]  # (2p+1 over q, *grid, 3)
-        tilde = np.einsum("...sq,q...c->s...c", d, blk, optimize=True)  # (2p+1 over s, *grid, 3)
+        if rows_only:
+            # one small d̃^p(α) per row and a batched matrix product over the rest of the row
+            d = wigner_d_tilde(p, a.reshape(-1))[:, p:, :]  # (H, s = 0..p, q)
+            rows = blk.reshape(2 * p + 1, grid_shape[0], -1).transpose(1, 0, 2)  # (H, q, rest)
+            tilde = np.matmul(d, rows).transpose(1, 0, 2).reshape((p + 1,) + grid_shape + (3,))
+        else:
+            d = wigner_d_tilde(p, a)[..., p:, :]  # (*grid, s = 0..p, q)
+            tilde = np.einsum("...sq,q...c->s...c", d, blk, optimize=True)
         for s in range(0, p + 1):
-            value = np.exp(-1j * s * b)[..., None] * tilde[s + p]
+            value = np.exp(-1j * s * b)[..., None] * tilde[s]
             if s == 0:
                 real[real_index(p, 0)] = value.real
             else:
@@ -246,7 +253,7 @@ def prefilter(
     P: int | None = None,
     max_F: int = DEFAULT_MAX_F,
     max_P: int = DEFAULT_MAX_P,
-    nthreads: int = 1,
+    nthreads: int = 0,
     azimuth_free: bool = False,
     progress: Any = None,
 ) -> SHRM:
@@ -268,6 +275,8 @@ def prefilter(
     azimuth_free
         Keep only the q = 0 terms of the local SHRM (Kautz & McCool 2000; RH02 Fig. 9):
         B(α, β, θ_o) = Σ_p B_p0(α, β) Y_p0(ω_o'). Exact for radially symmetric lobes.
+    nthreads
+        Threads for the SHTs (0: all available cores).
     progress
         Optional callable ``progress(stage: str)`` told when each stage starts.
 

@@ -16,8 +16,10 @@ transform of RH02 eq. 13: Gauss–Legendre in cos θ_i' and cos θ_o' (nodes str
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
+from scipy.special import roots_legendre
 
 from .brdf import BRDF
 from .errors import BadInputError
@@ -59,17 +61,25 @@ class ReparamGrid:
 
     def theta_i(self) -> tuple[np.ndarray, np.ndarray]:
         """(cos θ_i' nodes, weights), nodes descending from near +1 (θ ascending)."""
-        x, w = np.polynomial.legendre.leggauss(self.n_theta_i)
-        return x[::-1], w[::-1]
+        return _gauss_legendre_descending(self.n_theta_i)
 
     def theta_o(self) -> tuple[np.ndarray, np.ndarray]:
         """(cos θ_o' nodes, weights), θ ascending; all strictly inside (0, π)."""
-        x, w = np.polynomial.legendre.leggauss(self.n_theta_o)
-        return x[::-1], w[::-1]
+        return _gauss_legendre_descending(self.n_theta_o)
 
     def phi(self) -> np.ndarray:
         """φ' nodes 2πk/n_phi."""
         return 2.0 * np.pi * np.arange(self.n_phi) / self.n_phi
+
+
+@lru_cache(maxsize=64)
+def _gauss_legendre_descending(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Gauss–Legendre nodes on [−1, 1] in descending order and their weights (read-only)."""
+    x, w = roots_legendre(n)
+    x, w = x[::-1].copy(), w[::-1].copy()
+    x.setflags(write=False)
+    w.setflags(write=False)
+    return x, w
 
 
 @dataclass(frozen=True, eq=False)

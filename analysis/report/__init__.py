@@ -1,0 +1,1 @@
+"""Per-BRDF accuracy reports and batch processing over BRDF libraries."""
