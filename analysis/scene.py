@@ -32,7 +32,7 @@ from .lighting import LightingCoefficients
 from .orders import OrderChoice
 from .sh import Lambda
 
-__all__ = ["SceneOrders", "scene_orders", "reflected_error", "residual_bound"]
+__all__ = ["SceneOrders", "scene_orders", "reflected_error", "residual_bound", "lanczos_window"]
 
 
 @dataclass(frozen=True)
@@ -56,9 +56,19 @@ def _brdf_band_energies(coefficients: BRDFCoefficients, P: int) -> tuple[np.ndar
     return terms[:, : P + 1].sum(axis=1), terms[:, P + 1 :].sum(axis=1)
 
 
-def reflected_error(lighting: LightingCoefficients, coefficients: BRDFCoefficients, F: int, P: int) -> float:
+def reflected_error(
+    lighting: LightingCoefficients,
+    coefficients: BRDFCoefficients,
+    F: int,
+    P: int,
+    window: np.ndarray | None = None,
+) -> float:
     """Relative energy error ε_B of truncating B to l <= F, p <= P, against all the
-    coefficients available (l <= min(F0, lmax), p <= P0); worst channel."""
+    coefficients available (l <= min(F0, lmax), p <= P0); worst channel.
+
+    With a ``window`` σ_l (l = 0..F) multiplying the kept coefficients, the kept bands
+    contribute their attenuation Σ Λ_l² a_l r_l (1 − σ_l)² to the error as well.
+    """
     a = lighting.band_energy()
     r_in, r_out = _brdf_band_energies(coefficients, P)
     n = min(a.shape[0], r_in.shape[0])
@@ -66,8 +76,17 @@ def reflected_error(lighting: LightingCoefficients, coefficients: BRDFCoefficien
     full = lam2 * a[:n] * (r_in[:n] + r_out[:n])
     kept = lam2[: F + 1] * a[: F + 1] * r_in[: F + 1]
     total = full.sum(axis=0)
+    error = total - kept.sum(axis=0)
+    if window is not None:
+        error = error + ((1.0 - np.asarray(window)[: F + 1, None]) ** 2 * kept).sum(axis=0)
     live = total > 1e-300
-    return float((1.0 - kept.sum(axis=0)[live] / total[live]).max())
+    return float((error[live] / total[live]).max())
+
+
+def lanczos_window(F: int) -> np.ndarray:
+    """Lanczos σ-factors σ_l = sinc(l/(F+1)), l = 0..F: damp the Gibbs ringing of a
+    truncated expansion at the cost of some blur (the cost enters :func:`reflected_error`)."""
+    return np.sinc(np.arange(F + 1) / (F + 1.0))
 
 
 def residual_bound(lighting: LightingCoefficients, coefficients: BRDFCoefficients, F: int, P: int) -> float:

@@ -21,14 +21,22 @@ import numpy as np
 
 from ..brdf_io.errors import BadInputError
 from .brdf_coeffs import BRDFCoefficients
-from .latlong import bilinear_lookup, pixel_angles
+from .latlong import bilinear_lookup, pixel_angles, pixel_directions
 from .lighting import LightingCoefficients, alm_index, lighting_coefficients
 from .orders import DEFAULT_MAX_F, DEFAULT_MAX_P, choose_orders
-from .scene import reflected_error, residual_bound, scene_orders
+from .scene import lanczos_window, reflected_error, residual_bound, scene_orders
 from .sh import Lambda, real_index, real_sph_harm
 from .wigner import rotation_D, wigner_d_tilde
 
-__all__ = ["SHRM", "prefilter", "local_shrm_fast", "local_shrm_direct", "global_from_local", "default_size"]
+__all__ = [
+    "SHRM",
+    "prefilter",
+    "local_shrm_fast",
+    "local_shrm_direct",
+    "global_from_local",
+    "default_size",
+    "gibbs_negative",
+]
 
 
 @dataclass(frozen=True, eq=False)
@@ -238,6 +246,19 @@ def global_from_local(local: np.ndarray, alpha: np.ndarray, beta: np.ndarray) ->
     return real
 
 
+def gibbs_negative(coeffs: np.ndarray, P: int) -> float:
+    """Ringing measure: −min / max of the normal-view radiance B(R, V = R) over the map
+    (worst channel; 0 when nothing is negative). Truncating a sharp lobe creates
+    negative lobes (Gibbs); a window reduces them."""
+    height, width = coeffs.shape[1:3]
+    basis = real_sph_harm(P, pixel_directions(height, width))  # (H, W, n_coef)
+    normal_view = np.einsum("hwk,khwc->hwc", basis, coeffs)
+    peak = normal_view.max(axis=(0, 1))
+    low = normal_view.min(axis=(0, 1))
+    live = peak > 0
+    return float(np.max(np.clip(-low[live] / peak[live], 0.0, None), initial=0.0))
+
+
 def default_size(F: int) -> int:
     """S_B from the rule S ≈ 10F (RH02 §5.2), clamped to [32, 1024]."""
     return int(np.clip(10 * F, 32, 1024))
@@ -255,6 +276,7 @@ def prefilter(
     max_P: int = DEFAULT_MAX_P,
     nthreads: int = 0,
     azimuth_free: bool = False,
+    window: str = "none",
     progress: Any = None,
 ) -> SHRM:
     """Prefilter an environment into a global SHRM (RH02 §4–5, Appendix C).
@@ -277,6 +299,11 @@ def prefilter(
         B(α, β, θ_o) = Σ_p B_p0(α, β) Y_p0(ω_o'). Exact for radially symmetric lobes.
     nthreads
         Threads for the SHTs (0: all available cores).
+    window
+        ``"none"`` or ``"lanczos"``: multiply ρ̂_lpq by Lanczos σ-factors sinc(l/(F+1))
+        to damp the negative lobes (Gibbs ringing) a sharp truncation creates (DESIGN §7).
+        Its error cost is included in ``eps["reflected"]``; the ringing left is reported
+        as ``eps["gibbs_negative"]`` (most negative normal-view radiance / largest).
     progress
         Optional callable ``progress(stage: str)`` told when each stage starts.
 
@@ -313,12 +340,20 @@ def prefilter(
     timings["lighting"] = time.perf_counter() - t0
     F_B = scene.F_B if F is None else int(min(F, lmax_light))
     P_B = scene.P_B if P is None else int(min(P, orders.coefficients.P0))
+    if window not in ("none", "lanczos"):
+        raise BadInputError(None, f"window={window!r}: choose 'none' or 'lanczos'")
+    sigma = lanczos_window(F_B) if window == "lanczos" else None
+    coefficients = orders.coefficients
+    if sigma is not None:
+        damped = coefficients.coeffs.copy()
+        damped[: F_B + 1] *= sigma[:, None, None, None]
+        coefficients = BRDFCoefficients(coeffs=damped, energy=coefficients.energy, name=coefficients.name)
     S = default_size(F_B) if size is None else int(size)
     if S < 2 or S > 8192:
         raise BadInputError(None, f"SHRM size must be in [2, 8192] rows, got {S}")
     stage("synthesis")
     t0 = time.perf_counter()
-    local = local_shrm_fast(lighting, orders.coefficients, F_B, P_B, S, 2 * S, nthreads=nthreads)
+    local = local_shrm_fast(lighting, coefficients, F_B, P_B, S, 2 * S, nthreads=nthreads)
     if azimuth_free:
         local[:, np.arange(2 * P_B + 1) != P_B] = 0.0
     theta, phi = pixel_angles(S, 2 * S)
@@ -328,8 +363,9 @@ def prefilter(
     eps_info = {
         "brdf": float(orders.table[min(F_B, orders.F0), P_B]),
         "lighting": float(lighting.eps()[min(F_B, lighting.lmax)]),
-        "reflected": reflected_error(lighting, orders.coefficients, F_B, P_B),
+        "reflected": reflected_error(lighting, orders.coefficients, F_B, P_B, sigma),
         "bound": residual_bound(lighting, orders.coefficients, F_B, P_B),
+        "gibbs_negative": gibbs_negative(coeffs, P_B),
     }
     meta = {
         "brdf": brdf.name,
@@ -343,5 +379,6 @@ def prefilter(
         "shrmkit_version": __version__,
         "frame": "z-up; lat-long pixel centres theta=(i+1/2)pi/H, phi=2pi(j+1/2)/W",
         "azimuth_free": bool(azimuth_free),
+        "window": window,
     }
     return SHRM(F=F_B, P=P_B, coeffs=coeffs, tolerance=float(eps), eps=eps_info, meta=meta)
