@@ -32,9 +32,11 @@ __all__ = [
     "SHRM",
     "prefilter",
     "local_shrm_fast",
+    "local_shrm_at",
     "local_shrm_direct",
     "global_from_local",
     "default_size",
+    "cube_directions",
     "gibbs_negative",
 ]
 
@@ -47,6 +49,10 @@ class SHRM:
     ----------
     F, P
         Orders in the reflection direction and in the view direction.
+    cube
+        Optional float32 ((P+1)², 6, S, S, 3): the same global SHRM on a cube map (faces
+        +X, −X, +Y, −Y, +Z, −Z of the z-up frame, OpenGL texel axes: see
+        :func:`cube_directions` and ``data_specs/shrm_file.md``).
     coeffs
         float32 array ((P+1)², H, W, 3): B̃_pq(α, β) at the pixel centres
         α = (i+½)π/H, β = 2π(j+½)/W (z-up frame), real basis index p² + p + q.
@@ -64,11 +70,16 @@ class SHRM:
     tolerance: float = float("nan")
     eps: dict[str, float] = field(default_factory=dict)
     meta: dict[str, Any] = field(default_factory=dict)
+    cube: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         n = (self.P + 1) ** 2
         if self.coeffs.ndim != 4 or self.coeffs.shape[0] != n or self.coeffs.shape[3] != 3:
             raise ValueError(f"coeffs must have shape ({n}, H, W, 3), got {self.coeffs.shape}")
+        if self.cube is not None and (
+            self.cube.ndim != 5 or self.cube.shape[:2] != (n, 6) or self.cube.shape[2] != self.cube.shape[3]
+        ):
+            raise ValueError(f"cube must have shape ({n}, 6, S, S, 3), got {self.cube.shape}")
 
     @property
     def height(self) -> int:
@@ -122,6 +133,39 @@ def _full_m_lighting(lighting: LightingCoefficients, l: int) -> np.ndarray:
     return np.concatenate([neg[:, :0:-1], pos], axis=1)
 
 
+def _spin_terms(lighting: LightingCoefficients, coefficients: BRDFCoefficients, F: int, P: int):
+    """Yield (p, s, channel, E_lm, lmax): the ducc0 input of each spin-s synthesis.
+
+    With 𝒟^l_{m,−s}(α, β) = (−1)^s Λ_l ₛY_lm(α, β) for ducc0's spin-s harmonics (fed
+    E_lm = −a_lm, B_lm = 0 for a real-symmetric set; checked against the explicit sum),
+    B_{p,−s} = Σ_lm (−1)^s Λ_l L_lm ρ̂_lps ₛY_lm is one spin-s synthesis (GRAD_ONLY) of
+    E_lm = −(−1)^s Λ_l L_lm ρ̂_lps, and B_{p,s} = (−1)^s conj(B_{p,−s}). For s = 0 the
+    input is the plain spin-0 set Λ_l L_lm ρ̂_lp0.
+    """
+    lmax = min(F, lighting.lmax, coefficients.F0)
+    if P > coefficients.P0:
+        raise ValueError(f"P={P} exceeds the computed P0={coefficients.P0}")
+    l_of_index = np.concatenate([np.arange(m, lmax + 1) for m in range(lmax + 1)])
+    m_of_index = np.concatenate([np.full(lmax + 1 - m, m) for m in range(lmax + 1)])
+    alm_light = lighting.alm[:, alm_index(l_of_index, m_of_index, lighting.lmax)] * Lambda(l_of_index)[None, :]
+    for p in range(P + 1):
+        for s in range(min(p, lmax) + 1):  # spin s needs l >= s: B_{p,±s} = 0 when s > lmax
+            rho = np.where(l_of_index[None, :] >= s, coefficients.coeffs[l_of_index, p, s, :].T, 0.0)
+            for c in range(3):
+                alm = alm_light[c] * rho[c]
+                yield p, s, c, (alm if s == 0 else -((-1.0) ** s) * alm), lmax
+
+
+def _store_spin_field(out: np.ndarray, p: int, s: int, c: int, P: int, field: np.ndarray) -> None:
+    """Place a synthesized B_{p,−s} (and its conjugate partner B_{p,s}) into ``out``."""
+    if s == 0:
+        out[p, P, ..., c] = field[0]
+    else:
+        neg = field[0] + 1j * field[1]
+        out[p, P - s, ..., c] = neg
+        out[p, P + s, ..., c] = ((-1.0) ** s) * np.conj(neg)
+
+
 def local_shrm_fast(
     lighting: LightingCoefficients,
     coefficients: BRDFCoefficients,
@@ -134,49 +178,45 @@ def local_shrm_fast(
 ) -> np.ndarray:
     """Local SHRM B_pq(α, β) on a lat-long grid by spin-weighted SHT (DESIGN §6).
 
-    With 𝒟^l_{m,−s}(α, β) = (−1)^s Λ_l ₛY_lm(α, β) for ducc0's spin-s harmonics (fed
-    E_lm = −a_lm, B_lm = 0 for a real-symmetric set; checked against the explicit sum),
-    B_{p,−s} = Σ_lm (−1)^s Λ_l L_lm ρ̂_lps ₛY_lm is one spin-s synthesis (GRAD_ONLY), and
-    B_{p,s} = (−1)^s conj(B_{p,−s}).
+    One ducc0 ``synthesis_2d`` per (p, |q|, channel); see :func:`_spin_terms`.
 
     Returns
     -------
     complex128 (P+1, 2P+1, H, W, 3), indexed [p, q+P]; zero where |q| > p.
     """
-    lmax = min(F, lighting.lmax, coefficients.F0)
-    if P > coefficients.P0:
-        raise ValueError(f"P={P} exceeds the computed P0={coefficients.P0}")
     out = np.zeros((P + 1, 2 * P + 1, height, width, 3), dtype=np.complex128)
-    ls, ms = np.meshgrid(np.arange(lmax + 1), np.arange(lmax + 1), indexing="ij")
-    valid = ms <= ls
-    idx_l = ls[valid]
-    idx = alm_index(idx_l, ms[valid], lmax)
-    lam = Lambda(np.arange(lmax + 1))
-    alm_light = np.zeros((3, (lmax + 1) * (lmax + 2) // 2), dtype=np.complex128)
-    alm_light[:, idx] = lighting.alm[:, alm_index(idx_l, ms[valid], lighting.lmax)]
-    alm_light *= lam[np.concatenate([np.arange(m, lmax + 1) for m in range(lmax + 1)])][None, :]
-    l_of_index = np.concatenate([np.arange(m, lmax + 1) for m in range(lmax + 1)])
-    phi0 = np.pi / width
-    for p in range(P + 1):
-        for s in range(min(p, lmax) + 1):  # spin s needs l >= s: B_{p,±s} = 0 when s > lmax
-            rho = coefficients.coeffs[l_of_index, p, s, :].T  # (3, n_alm)
-            rho = np.where(l_of_index[None, :] >= s, rho, 0.0)
-            for c in range(3):
-                alm = alm_light[c] * rho[c]
-                if s == 0:
-                    field = ducc0.sht.experimental.synthesis_2d(
-                        alm=alm[None, :], spin=0, lmax=lmax, geometry="F1",
-                        ntheta=height, nphi=width, phi0=phi0, nthreads=nthreads,
-                    )[0]
-                    out[p, P, :, :, c] = field
-                else:
-                    qu = ducc0.sht.experimental.synthesis_2d(
-                        alm=(-((-1.0) ** s) * alm)[None, :], spin=s, lmax=lmax, geometry="F1",
-                        ntheta=height, nphi=width, phi0=phi0, nthreads=nthreads, mode="GRAD_ONLY",
-                    )
-                    neg = qu[0] + 1j * qu[1]
-                    out[p, P - s, :, :, c] = neg
-                    out[p, P + s, :, :, c] = ((-1.0) ** s) * np.conj(neg)
+    for p, s, c, alm, lmax in _spin_terms(lighting, coefficients, F, P):
+        field = ducc0.sht.experimental.synthesis_2d(
+            alm=alm[None, :], spin=s, lmax=lmax, geometry="F1", ntheta=height, nphi=width,
+            phi0=np.pi / width, nthreads=nthreads, mode="STANDARD" if s == 0 else "GRAD_ONLY",
+        )
+        _store_spin_field(out, p, s, c, P, field)
+    return out
+
+
+def local_shrm_at(
+    lighting: LightingCoefficients,
+    coefficients: BRDFCoefficients,
+    F: int,
+    P: int,
+    theta: np.ndarray,
+    phi: np.ndarray,
+    *,
+    nthreads: int = 1,
+    epsilon: float = 1e-10,
+) -> np.ndarray:
+    """Local SHRM at arbitrary directions (θ, φ) by ducc0's general (NUFFT) synthesis.
+
+    Used for cube-map output. Returns complex128 (P+1, 2P+1, n, 3) for n directions.
+    """
+    loc = np.stack([np.ravel(theta), np.mod(np.ravel(phi), 2.0 * np.pi)], axis=-1).astype(np.float64)
+    out = np.zeros((P + 1, 2 * P + 1, loc.shape[0], 3), dtype=np.complex128)
+    for p, s, c, alm, lmax in _spin_terms(lighting, coefficients, F, P):
+        field = ducc0.sht.experimental.synthesis_general(
+            alm=alm[None, :], spin=s, lmax=lmax, loc=loc, epsilon=epsilon, nthreads=nthreads,
+            mode="STANDARD" if s == 0 else "GRAD_ONLY",
+        )
+        _store_spin_field(out, p, s, c, P, field)
     return out
 
 
@@ -259,6 +299,32 @@ def gibbs_negative(coeffs: np.ndarray, P: int) -> float:
     return float(np.max(np.clip(-low[live] / peak[live], 0.0, None), initial=0.0))
 
 
+# Cube faces in the z-up frame with OpenGL's texel axes (OpenGL 4.6 Table 8.19): face ->
+# (major axis, direction of increasing column u, direction of increasing row v).
+CUBE_FACES = ("+x", "-x", "+y", "-y", "+z", "-z")
+CUBE_AXES = (
+    ((1, 0, 0), (0, 0, -1), (0, -1, 0)),
+    ((-1, 0, 0), (0, 0, 1), (0, -1, 0)),
+    ((0, 1, 0), (1, 0, 0), (0, 0, 1)),
+    ((0, -1, 0), (1, 0, 0), (0, 0, -1)),
+    ((0, 0, 1), (1, 0, 0), (0, -1, 0)),
+    ((0, 0, -1), (-1, 0, 0), (0, -1, 0)),
+)
+
+
+def cube_directions(size: int) -> np.ndarray:
+    """Unit texel-centre directions (6, S, S, 3): texel (f, i, j) of face f, row i,
+    column j points along major + u_j·u + v_i·v, u_j = 2(j+½)/S − 1, v_i = 2(i+½)/S − 1."""
+    c = 2.0 * (np.arange(size) + 0.5) / size - 1.0
+    faces = []
+    for major, u_axis, v_axis in CUBE_AXES:
+        d = np.asarray(major, float) + c[None, :, None] * np.asarray(u_axis, float) + c[:, None, None] * np.asarray(
+            v_axis, float
+        )
+        faces.append(d / np.linalg.norm(d, axis=-1, keepdims=True))
+    return np.stack(faces)
+
+
 def default_size(F: int) -> int:
     """S_B from the rule S ≈ 10F (RH02 §5.2), clamped to [32, 1024]."""
     return int(np.clip(10 * F, 32, 1024))
@@ -277,6 +343,8 @@ def prefilter(
     nthreads: int = 0,
     azimuth_free: bool = False,
     window: str = "none",
+    cube: bool = False,
+    cube_size: int | None = None,
     progress: Any = None,
 ) -> SHRM:
     """Prefilter an environment into a global SHRM (RH02 §4–5, Appendix C).
@@ -304,6 +372,9 @@ def prefilter(
         to damp the negative lobes (Gibbs ringing) a sharp truncation creates (DESIGN §7).
         Its error cost is included in ``eps["reflected"]``; the ringing left is reported
         as ``eps["gibbs_negative"]`` (most negative normal-view radiance / largest).
+    cube, cube_size
+        Also synthesize the SHRM on a 6 × S × S cube map (default S = rows // 2) through
+        ducc0's general synthesis at the texel centres.
     progress
         Optional callable ``progress(stage: str)`` told when each stage starts.
 
@@ -359,6 +430,23 @@ def prefilter(
     theta, phi = pixel_angles(S, 2 * S)
     coeffs = global_from_local(local, theta[:, None], phi[None, :]).astype(np.float32)
     timings["synthesis"] = time.perf_counter() - t0
+    cube_coeffs = None
+    if cube:
+        stage("cube map")
+        t0 = time.perf_counter()
+        n_cube = max(2, S // 2) if cube_size is None else int(cube_size)
+        if n_cube < 2 or n_cube > 4096:
+            raise BadInputError(None, f"cube face size must be in [2, 4096], got {n_cube}")
+        dirs = cube_directions(n_cube).reshape(-1, 3)
+        alpha = np.arccos(np.clip(dirs[:, 2], -1.0, 1.0))
+        beta = np.arctan2(dirs[:, 1], dirs[:, 0])
+        local_cube = local_shrm_at(lighting, coefficients, F_B, P_B, alpha, beta, nthreads=nthreads)
+        if azimuth_free:
+            local_cube[:, np.arange(2 * P_B + 1) != P_B] = 0.0
+        cube_coeffs = global_from_local(local_cube, alpha, beta).reshape(
+            ((P_B + 1) ** 2, 6, n_cube, n_cube, 3)
+        ).astype(np.float32)
+        timings["cube"] = time.perf_counter() - t0
     timings["total"] = time.perf_counter() - t
     eps_info = {
         "brdf": float(orders.table[min(F_B, orders.F0), P_B]),
@@ -381,4 +469,4 @@ def prefilter(
         "azimuth_free": bool(azimuth_free),
         "window": window,
     }
-    return SHRM(F=F_B, P=P_B, coeffs=coeffs, tolerance=float(eps), eps=eps_info, meta=meta)
+    return SHRM(F=F_B, P=P_B, coeffs=coeffs, tolerance=float(eps), eps=eps_info, meta=meta, cube=cube_coeffs)

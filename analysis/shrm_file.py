@@ -51,10 +51,14 @@ def save_shrm(path: str | Path, shrm: SHRM) -> Path:
         "grid": "latlong",
         "orientation": ORIENTATION,
         "meta": _json_safe(shrm.meta),
+        "cube": None if shrm.cube is None else "faces +x,-x,+y,-y,+z,-z of the z-up frame, OpenGL texel axes",
     }
+    arrays = {"coeffs": np.asarray(shrm.coeffs, dtype=np.float32)}
+    if shrm.cube is not None:
+        arrays["cube"] = np.asarray(shrm.cube, dtype=np.float32)
     with atomic_path(path, suffix=".npz") as tmp:
         with open(tmp, "wb") as handle:
-            np.savez_compressed(handle, coeffs=np.asarray(shrm.coeffs, dtype=np.float32), header=json.dumps(header))
+            np.savez_compressed(handle, header=json.dumps(header), **arrays)
     return path
 
 
@@ -74,6 +78,7 @@ def load_shrm(path: str | Path) -> SHRM:
         with np.load(path, allow_pickle=False) as archive:
             coeffs = archive["coeffs"]
             header = json.loads(str(archive["header"]))
+            cube = archive["cube"] if "cube" in archive.files else None
     except (OSError, ValueError, KeyError, zipfile.BadZipFile, json.JSONDecodeError, EOFError) as err:
         raise BadInputError(path, f"not a readable .shrm.npz file ({type(err).__name__}: {err})") from None
     if not isinstance(header, dict) or header.get("format") != FORMAT:
@@ -83,6 +88,11 @@ def load_shrm(path: str | Path) -> SHRM:
     F, P = int(header["F"]), int(header["P"])
     if coeffs.dtype != np.float32 or coeffs.ndim != 4 or coeffs.shape[0] != (P + 1) ** 2 or coeffs.shape[3] != 3:
         raise BadInputError(path, f"coefficient array {coeffs.dtype} {coeffs.shape} does not match P={P}")
-    if not np.all(np.isfinite(coeffs)):
-        raise BadInputError(path, f"{int(np.count_nonzero(~np.isfinite(coeffs)))} non-finite coefficients")
-    return SHRM(F=F, P=P, coeffs=coeffs, tolerance=float(header["tolerance"]), eps=header["eps"], meta=header["meta"])
+    if cube is not None and (cube.dtype != np.float32 or cube.shape[:2] != ((P + 1) ** 2, 6) or cube.ndim != 5):
+        raise BadInputError(path, f"cube array {cube.dtype} {cube.shape} does not match P={P}")
+    for name, array in (("coefficients", coeffs), ("cube coefficients", cube)):
+        if array is not None and not np.all(np.isfinite(array)):
+            raise BadInputError(path, f"{int(np.count_nonzero(~np.isfinite(array)))} non-finite {name}")
+    return SHRM(
+        F=F, P=P, coeffs=coeffs, tolerance=float(header["tolerance"]), eps=header["eps"], meta=header["meta"], cube=cube
+    )

@@ -25,13 +25,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--size", type=int, help="SHRM rows S (S x 2S lat-long); default 10 F, clamped to [32, 1024]")
     parser.add_argument("--max-F", type=int, default=DEFAULT_MAX_F)
     parser.add_argument("--max-P", type=int, default=DEFAULT_MAX_P)
-    parser.add_argument("--cube", action="store_true", help="(not yet supported) cube-map output")
+    parser.add_argument("--cube", action="store_true", help="also store the SHRM on a 6 x S x S cube map")
+    parser.add_argument("--cube-size", type=int, help="cube face size S (default: rows // 2)")
+    parser.add_argument("--window", choices=("none", "lanczos"), default="none", help="Lanczos damping of ringing")
     parser.add_argument("-o", "--output", required=True, help="output path, e.g. sky.shrm.npz")
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.cube:
-        raise BadInputError(None, "--cube output is not implemented yet; the lat-long SHRM is seam- and pole-free")
     out = Path(args.output)
     if not out.name.endswith(".npz"):
         raise BadInputError(out, "the SHRM output must end in .shrm.npz (or .npz)")
@@ -40,7 +40,8 @@ def run(args: argparse.Namespace) -> int:
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=stderr) as bar:
         task = bar.add_task("prefiltering", total=None)
         shrm = prefilter(
-            env, brdf, args.eps, size=args.size, max_F=args.max_F, max_P=args.max_P,
+            env, brdf, args.eps, size=args.size, max_F=args.max_F, max_P=args.max_P, cube=args.cube,
+            cube_size=args.cube_size, window=args.window,
             progress=lambda stage: bar.update(task, description=f"prefiltering: {stage}"),
         )
     shrm.save(out)
@@ -54,6 +55,11 @@ def run(args: argparse.Namespace) -> int:
         f"{t['synthesis']:.3f}", f"{out.stat().st_size / 1e6:.2f}",
     )
     stdout.print(table)
+    if shrm.cube is not None:
+        stdout.print(f"cube map: 6 x {shrm.cube.shape[2]}^2 texels, {t['cube']:.3f} s")
+    if shrm.eps.get("gibbs_negative", 0) > 0.01:
+        stdout.print(f"[yellow]note:[/yellow] ringing: negative lobes down to {shrm.eps['gibbs_negative']:.1%} of the "
+                     "peak (try --window lanczos)")
     if shrm.meta.get("orders_message"):
         stdout.print(f"[yellow]note:[/yellow] {shrm.meta['orders_message']}")
     stdout.print(f"wrote {out}")
