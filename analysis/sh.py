@@ -93,16 +93,12 @@ def real_sph_harm(lmax: int, dirs: np.ndarray) -> np.ndarray:
 
     Returns an array (..., (lmax+1)²) at flat index l² + l + m.
     """
-    dirs = np.asarray(dirs, dtype=np.float64)
-    cos_t = np.clip(dirs[..., 2], -1.0, 1.0)
-    phi = np.arctan2(dirs[..., 1], dirs[..., 0])
-    f = legendre_f(lmax, lmax, cos_t)
-    out = np.zeros(dirs.shape[:-1] + ((lmax + 1) ** 2,))
-    root2 = np.sqrt(2.0)
-    for l in range(lmax + 1):
-        out[..., real_index(l, 0)] = f[l, 0]
-        for m in range(1, l + 1):
-            sign = -1.0 if m % 2 else 1.0
-            out[..., real_index(l, m)] = root2 * sign * f[l, m] * np.cos(m * phi)
-            out[..., real_index(l, -m)] = root2 * sign * f[l, m] * np.sin(m * phi)
+    complex_y = complex_sph_harm(lmax, dirs)
+    out = complex_y.real.copy()  # m = 0 entries are real already
+    for l in range(1, lmax + 1):
+        m = np.arange(1, l + 1)
+        scale = np.sqrt(2.0) * np.where(m % 2, -1.0, 1.0)
+        positive = complex_y[..., l * l + l + m]
+        out[..., l * l + l + m] = scale * positive.real
+        out[..., l * l + l - m] = scale * positive.imag
     return out

@@ -19,6 +19,7 @@ import numpy as np
 
 from ..brdf_io.atomic import atomic_path
 from ..brdf_io.errors import BadInputError
+from ..brdf_io.jsonutil import to_jsonable
 from .shrm import SHRM
 
 __all__ = ["save_shrm", "load_shrm", "FORMAT", "VERSION"]
@@ -26,16 +27,6 @@ __all__ = ["save_shrm", "load_shrm", "FORMAT", "VERSION"]
 FORMAT = "shrmkit-shrm"
 VERSION = 1
 ORIENTATION = "z-up; row i at theta=(i+1/2)pi/H, column j at phi=2pi(j+1/2)/W from +x toward +y"
-
-
-def _json_safe(value: object) -> object:
-    if isinstance(value, dict):
-        return {str(k): _json_safe(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_json_safe(v) for v in value]
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
 
 
 def save_shrm(path: str | Path, shrm: SHRM) -> Path:
@@ -47,10 +38,10 @@ def save_shrm(path: str | Path, shrm: SHRM) -> Path:
         "F": int(shrm.F),
         "P": int(shrm.P),
         "tolerance": float(shrm.tolerance),
-        "eps": _json_safe(shrm.eps),
+        "eps": to_jsonable(shrm.eps),
         "grid": "latlong",
         "orientation": ORIENTATION,
-        "meta": _json_safe(shrm.meta),
+        "meta": to_jsonable(shrm.meta),
         "cube": None if shrm.cube is None else "faces +x,-x,+y,-y,+z,-z of the z-up frame, OpenGL texel axes",
     }
     arrays = {"coeffs": np.asarray(shrm.coeffs, dtype=np.float32)}

@@ -29,7 +29,7 @@ from .atomic import atomic_path
 from .brdf import BRDF, Kind
 from .errors import BadInputError
 from .halfdiff import directions_to_halfdiff, halfdiff_to_directions
-from .table import EVAL_BLOCK, MissingAwareGrid, eval_with_mask, flatten_directions
+from .table import EVAL_BLOCK, MaskedTableBRDF, MissingAwareGrid, eval_with_mask, flatten_directions
 
 __all__ = [
     "MERL_DIMS",
@@ -78,7 +78,7 @@ def merl_index_coordinates(
     return u, v, w
 
 
-class MerlBRDF(BRDF):
+class MerlBRDF(MaskedTableBRDF):
     """A MERL-format tabulated BRDF, interpolated in index space excluding missing samples.
 
     Attributes
@@ -125,14 +125,6 @@ class MerlBRDF(BRDF):
             has[sel] = ~no_data
         return out.reshape(*shape, 3), has.reshape(shape)
 
-    def eval_counted(self, L: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, int]:
-        """rho and the number of above-surface query points with no present sample near."""
-        rho, has = self.eval_masked(L, V)
-        return rho, int(np.sum(~has))
-
-    def eval(self, L: np.ndarray, V: np.ndarray) -> np.ndarray:
-        """rho(L, V) in 1/sr, (..., 3); 0 below the surface and where no sample is present."""
-        return self.eval_masked(L, V)[0]
 
 
 def read_merl(path: str | os.PathLike[str]) -> MerlBRDF:

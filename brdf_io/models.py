@@ -77,6 +77,14 @@ def _half_vector_cos(L: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, np.ndarr
     return cos_h, cos_d
 
 
+def _rho_from_rho_hat(brdf: BRDF, L: np.ndarray, V: np.ndarray) -> np.ndarray:
+    """ρ = ρ̂ / cos θ_i above the surface, 0 below, for models that define ρ̂ directly."""
+    L, V = as_directions(L, V)
+    cos_i = L[..., 2]
+    above = (cos_i > 0) & (V[..., 2] > 0)
+    return np.where(above[..., None], brdf.rho_hat(L, V) / np.where(above, cos_i, 1.0)[..., None], 0.0)
+
+
 @dataclass(frozen=True, eq=False, repr=False)
 class _Analytic(BRDF):
     kind: Kind = field(default="analytic", init=False)
@@ -104,10 +112,7 @@ class PhongLobe(_Analytic):
         return lobe[..., None] * self.ks
 
     def eval(self, L: np.ndarray, V: np.ndarray) -> np.ndarray:
-        L, V = as_directions(L, V)
-        cos_i = L[..., 2]
-        above = (cos_i > 0) & (V[..., 2] > 0)
-        return np.where(above[..., None], self.rho_hat(L, V) / np.where(above, cos_i, 1.0)[..., None], 0.0)
+        return _rho_from_rho_hat(self, L, V)
 
     def to_spec(self) -> str:
         spec = f"phong:s={self.s:.9g}"
@@ -130,10 +135,7 @@ class SimplifiedMicrofacet(_Analytic):
         return lobe[..., None] * self.ks
 
     def eval(self, L: np.ndarray, V: np.ndarray) -> np.ndarray:
-        L, V = as_directions(L, V)
-        cos_i = L[..., 2]
-        safe = np.where(cos_i > 0, cos_i, 1.0)
-        return self.rho_hat(L, V) / safe[..., None]
+        return _rho_from_rho_hat(self, L, V)
 
     def to_spec(self) -> str:
         spec = f"microfacet:sigma={self.sigma:.9g}"

@@ -103,7 +103,7 @@ CUBE_FACE_AXES: dict[str, tuple[tuple[int, int, int], tuple[int, int, int], tupl
     "nz": ((0, 0, -1), (-1, 0, 0), (0, -1, 0)),
 }
 
-# project = CUBE_TO_PROJECT @ cube: X = -z_c, Y = -x_c, Z = y_c. The cube frame is
+# project = CUBE_TO_PROJECT @ cube: X = z_c, Y = -x_c, Z = y_c. The cube frame is
 # left-handed as seen from inside, so the map is a reflection (det = -1); it keeps the
 # faces unmirrored: looking along cube +z_c with y_c up, +x_c is on the right, and
 # looking along project -X with Z up, -Y is on the right.

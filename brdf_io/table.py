@@ -32,6 +32,7 @@ from .errors import BadInputError
 from .halfdiff import spherical_angles
 
 __all__ = [
+    "MaskedTableBRDF",
     "TABLE_FORMAT",
     "TABLE_FORMAT_VERSION",
     "EVAL_BLOCK",
@@ -228,7 +229,25 @@ def _check_values(source: object, values: Any, shape: tuple[int, int, int]) -> n
 # --------------------------------------------------------------------------------------
 
 
-class TableBRDF(BRDF):
+class MaskedTableBRDF(BRDF):
+    """A tabulated BRDF whose interpolation says where it had data (``eval_masked``);
+    ``eval`` and ``eval_counted`` derive from it."""
+
+    def eval_masked(self, L: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(rho (..., 3), has_data (...)); rho is 0 below the surface and without data."""
+        raise NotImplementedError
+
+    def eval_counted(self, L: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, int]:
+        """rho and the number of above-surface query points with no present sample near."""
+        rho, has = self.eval_masked(L, V)
+        return rho, int(np.sum(~has))
+
+    def eval(self, L: np.ndarray, V: np.ndarray) -> np.ndarray:
+        """rho(L, V) in 1/sr, (..., 3); 0 below the surface and where no sample is present."""
+        return self.eval_masked(L, V)[0]
+
+
+class TableBRDF(MaskedTableBRDF):
     """rho(θ_i, θ_o, φ_d) on a rectilinear grid, trilinear in angle (data_specs/brdf_table.md).
 
     Attributes
@@ -295,14 +314,6 @@ class TableBRDF(BRDF):
             has[sel] = ~no_data
         return out.reshape(*shape, 3), has.reshape(shape)
 
-    def eval_counted(self, L: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, int]:
-        """rho and the number of above-surface query points with no present sample near."""
-        rho, has = self.eval_masked(L, V)
-        return rho, int(np.sum(~has))
-
-    def eval(self, L: np.ndarray, V: np.ndarray) -> np.ndarray:
-        """rho(L, V) in 1/sr, (..., 3); 0 below the surface and where no sample is present."""
-        return self.eval_masked(L, V)[0]
 
 
 # --------------------------------------------------------------------------------------

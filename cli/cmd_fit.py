@@ -21,32 +21,16 @@ from ..analysis.fit.metrics import METRICS
 from ..analysis.fit.models_param import MODELS
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.specs import load_brdf
-from .common import print_json, stderr, stdout
+from .common import number_in, print_json, stderr, stdout
 
 HELP = "fit a Lafortune, Cook-Torrance or microfacet model to a BRDF (nlopt)"
 
 
 def _int_in(lo: int, hi: int):
-    def parse(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-        if not lo <= value <= hi:
-            raise argparse.ArgumentTypeError(f"must be in {lo}..{hi}, got {value}")
-        return value
-
-    return parse
+    return number_in(lo, hi, integer=True)
 
 
-def _angle(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not 0.0 < value <= 90.0:
-        raise argparse.ArgumentTypeError(f"must be in (0, 90] degrees, got {text}")
-    return value
+_angle = number_in(0.0, 90.0, lo_open=True, unit=" degrees")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

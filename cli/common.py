@@ -10,44 +10,39 @@ from typing import Any
 import numpy as np
 from rich.console import Console
 
-__all__ = ["stdout", "stderr", "positive_float", "tolerance", "print_json", "to_jsonable"]
+from ..brdf_io.jsonutil import to_jsonable
+
+__all__ = ["stdout", "stderr", "number_in", "positive_float", "tolerance", "print_json", "to_jsonable"]
 
 stdout = Console(highlight=False)
 stderr = Console(stderr=True, highlight=False)
 
 
-def tolerance(text: str) -> float:
-    """argparse type for ε: a number in (0, 1)."""
-    value = positive_float(text)
-    if value >= 1.0:
-        raise argparse.ArgumentTypeError(f"eps must be in (0, 1), got {text}")
-    return value
+def number_in(
+    lo: float, hi: float, *, integer: bool = False, lo_open: bool = False, hi_open: bool = False, unit: str = ""
+):
+    """argparse type factory: a finite number (or integer) in [lo, hi]; ``lo_open``/``hi_open``
+    exclude the ends."""
+    kind = "an integer" if integer else "a number"
+
+    def parse(text: str) -> float:
+        try:
+            value = int(text) if integer else float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not {kind}: {text!r}") from None
+        if not np.isfinite(value) or value > hi or value < lo or (lo_open and value == lo) or (hi_open and value == hi):
+            left, right = "(" if lo_open else "[", ")" if hi_open else "]"
+            raise argparse.ArgumentTypeError(f"must be in {left}{lo:g}, {hi:g}{right}{unit}, got {text}")
+        return value
+
+    return parse
 
 
-def positive_float(text: str) -> float:
-    """argparse type: a finite number > 0."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not np.isfinite(value) or value <= 0:
-        raise argparse.ArgumentTypeError(f"must be a finite number > 0, got {text}")
-    return value
+tolerance = number_in(0.0, 1.0, lo_open=True, hi_open=True)
+"""argparse type for ε: a number in (0, 1)."""
 
-
-def to_jsonable(value: Any) -> Any:
-    """Convert numpy scalars/arrays (and nested containers) to JSON types."""
-    if isinstance(value, dict):
-        return {str(k): to_jsonable(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [to_jsonable(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return to_jsonable(value.tolist())
-    if isinstance(value, np.generic):
-        return value.item()
-    if isinstance(value, float) and not np.isfinite(value):
-        return None
-    return value
+positive_float = number_in(0.0, np.inf, lo_open=True)
+"""argparse type: a finite number > 0."""
 
 
 def print_json(doc: dict[str, Any]) -> None:

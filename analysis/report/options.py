@@ -1,0 +1,133 @@
+"""Options of a BRDF accuracy report, with a ``quick`` and a ``full`` profile.
+
+Everything that changes the numbers of a report is an option here and is recorded in
+``report.json`` (``data_specs/report_json.md``), so a report can be reproduced.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field, replace
+from typing import Any
+
+from ...brdf_io.errors import BadInputError
+
+__all__ = ["ReportOptions", "DEFAULT_TOLERANCES", "DEFAULT_MODELS", "PREVIEW_MODES", "profile"]
+
+DEFAULT_TOLERANCES = (0.1, 0.03, 0.01)
+DEFAULT_MODELS = ("lafortune", "cook-torrance")
+#: ``auto``: OpenGL when an offscreen context works, else the CPU reference renderer;
+#: ``gl``, ``cpu``: force one; ``none``: no preview.
+PREVIEW_MODES = ("auto", "gl", "cpu", "none")
+
+
+@dataclass(frozen=True)
+class ReportOptions:
+    """What a report computes and at which cost.
+
+    Attributes
+    ----------
+    eps
+        Main tolerance ε: the scene orders, residual bound and preview use it.
+    tolerances
+        Tolerances of the order table and the speed-against-error rows (``eps`` is added).
+    envs
+        Environment specs or files (``shrmkit.load_env``).
+    env_height
+        Environments are area-resampled to ``env_height`` × 2·``env_height``: the angular
+        reference sums every pixel for every (R, V) pair, so keep it small.
+    models
+        Models fitted (``shrmkit.fit_brdf``): ``lafortune``, ``cook-torrance``, ``microfacet``.
+    lobes
+        Lafortune lobes.
+    fit_samples, fit_starts
+        ``n_samples`` and ``starts`` of ``fit_brdf``.
+    n_pairs
+        Random (R, V) pairs on which the SHRM is compared with the angular reference.
+    seed
+        Seed of every random choice (pairs, fit samples, fit starts).
+    max_F, max_P
+        Caps of ``choose_orders``.
+    preview, preview_size, mesh
+        Preview renderer (:data:`PREVIEW_MODES`), image size in pixels, and an optional mesh
+        (file or ``builtin:``) rendered besides the sphere.
+    albedo_nodes
+        Gauss–Legendre nodes in cos θ_i of the directional-albedo quadrature (2× as many in φ).
+    """
+
+    eps: float = 0.03
+    tolerances: tuple[float, ...] = DEFAULT_TOLERANCES
+    envs: tuple[str, ...] = ("builtin:sky",)
+    env_height: int = 64
+    models: tuple[str, ...] = DEFAULT_MODELS
+    lobes: int = 1
+    fit_samples: int = 16384
+    fit_starts: int = 4
+    n_pairs: int = 300
+    seed: int = 0
+    max_F: int = 256
+    max_P: int = 16
+    preview: str = "auto"
+    preview_size: int = 192
+    mesh: str | None = None
+    albedo_nodes: int = 64
+    profile: str = field(default="full")
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.eps) and 0.0 < self.eps < 1.0):
+            raise BadInputError(None, f"eps must be in (0, 1), got {self.eps!r}")
+        for tol in self.tolerances:
+            if not (math.isfinite(tol) and 0.0 < tol < 1.0):
+                raise BadInputError(None, f"every tolerance must be in (0, 1), got {tol!r}")
+        if not 4 <= self.env_height <= 2048:
+            raise BadInputError(None, f"env_height must be in [4, 2048], got {self.env_height!r}")
+        if self.n_pairs < 1:
+            raise BadInputError(None, f"n_pairs must be >= 1, got {self.n_pairs!r}")
+        if self.preview not in PREVIEW_MODES:
+            raise BadInputError(None, f"preview must be one of {', '.join(PREVIEW_MODES)}, got {self.preview!r}")
+        if not 16 <= self.preview_size <= 2048:
+            raise BadInputError(None, f"preview_size must be in [16, 2048], got {self.preview_size!r}")
+        if not self.envs:
+            raise BadInputError(None, "at least one environment is needed")
+        if self.albedo_nodes < 8:
+            raise BadInputError(None, f"albedo_nodes must be >= 8, got {self.albedo_nodes!r}")
+        from ..fit.models_param import MODELS
+
+        for model in self.models:
+            if model not in MODELS:
+                raise BadInputError(None, f"unknown model {model!r}; choose from {', '.join(MODELS)}")
+
+    @property
+    def all_tolerances(self) -> tuple[float, ...]:
+        """``tolerances`` and ``eps``, without repeats, loosest first."""
+        return tuple(sorted({float(t) for t in (*self.tolerances, self.eps)}, reverse=True))
+
+    def with_changes(self, **changes: Any) -> ReportOptions:
+        """A copy with some options changed (validated again)."""
+        return replace(self, **changes)
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-able record of the options (``report.json`` ``options``)."""
+        d = asdict(self)
+        d["tolerances"] = list(self.all_tolerances)
+        d["envs"] = list(self.envs)
+        d["models"] = list(self.models)
+        return d
+
+
+def profile(name: str = "full", **changes: Any) -> ReportOptions:
+    """The ``full`` (default options) or ``quick`` profile, with ``changes`` applied.
+
+    ``quick`` (tests and ``shrm demo``): environments of 32 rows, 150 (R, V) pairs, fits on
+    4096 samples from one start, orders capped at F <= 96, a 128-pixel preview.
+    """
+    if name == "full":
+        return ReportOptions(**changes)
+    if name == "quick":
+        base: dict[str, Any] = dict(
+            env_height=32, n_pairs=150, fit_samples=4096, fit_starts=1, max_F=96, preview_size=128,
+            albedo_nodes=48, profile="quick",
+        )
+        base.update(changes)
+        return ReportOptions(**base)
+    raise BadInputError(None, f"unknown report profile {name!r}; choose 'quick' or 'full'")
