@@ -28,7 +28,15 @@ from ..brdf_io.errors import BadInputError
 from ..brdf_io.reparam import ReparamBRDF, ReparamGrid, reparameterize
 from .brdf_coeffs import BRDFCoefficients, rho_lpq
 
-__all__ = ["OrderChoice", "eps_table", "choose_from_table", "choose_orders", "DEFAULT_MAX_F", "DEFAULT_MAX_P"]
+__all__ = [
+    "OrderChoice",
+    "eps_table",
+    "choose_from_table",
+    "choose_orders",
+    "orders_on_grid_for",
+    "DEFAULT_MAX_F",
+    "DEFAULT_MAX_P",
+]
 
 DEFAULT_MAX_F = 512
 DEFAULT_MAX_P = 16
@@ -206,4 +214,27 @@ def choose_orders(
         grid=grid,
         n_without_data=missing,
         coefficients=coefficients,
+    )
+
+
+def orders_on_grid_for(brdf: BRDF, eps: float, F: int, P: int) -> OrderChoice:
+    """ρ̂_lpq and ε(F, P) on one quadrature grid sized for given orders (no search).
+
+    For callers that force (F, P): the RH02 choice on this grid is still reported in
+    ``F``/``P`` (capped if the grid cannot meet ``eps``), but the grid is neither grown
+    nor refined (``converged`` is False and ``message`` says so).
+    """
+    _validate(eps, max(F, 1), P)
+    t0 = time.perf_counter()
+    grid = ReparamGrid.for_orders(F, P)
+    coefficients, missing = _coefficients_on(brdf, grid, grid.n_theta_i - 1, max(P, 1))
+    table = eps_table(coefficients)
+    F_rule, P_rule, capped = choose_from_table(table, eps)
+    notes = [f"orders given (F={F}, P={P}): the grid was sized for them and not refined"]
+    if missing:
+        notes.append(f"{missing} reparameterized samples had no measurement to interpolate (set to 0)")
+    return OrderChoice(
+        F=F_rule, P=P_rule, eps=float(table[F_rule, P_rule]), tolerance=float(eps), table=table, capped=capped,
+        converged=False, message="; ".join(notes), seconds=time.perf_counter() - t0, grid=grid,
+        n_without_data=missing, coefficients=coefficients,
     )

@@ -23,7 +23,7 @@ from ..brdf_io.errors import BadInputError
 from .brdf_coeffs import BRDFCoefficients
 from .latlong import bilinear_lookup, pixel_angles, pixel_directions
 from .lighting import LightingCoefficients, alm_index, lighting_coefficients
-from .orders import DEFAULT_MAX_F, DEFAULT_MAX_P, choose_orders
+from .orders import DEFAULT_MAX_F, DEFAULT_MAX_P, choose_orders, orders_on_grid_for
 from .scene import lanczos_window, reflected_error, residual_bound, scene_orders
 from .sh import Lambda, real_index, real_sph_harm
 from .wigner import rotation_D, wigner_d_tilde
@@ -33,6 +33,7 @@ __all__ = [
     "prefilter",
     "local_shrm_fast",
     "local_shrm_at",
+    "global_shrm_latlong",
     "local_shrm_direct",
     "global_from_local",
     "default_size",
@@ -133,7 +134,9 @@ def _full_m_lighting(lighting: LightingCoefficients, l: int) -> np.ndarray:
     return np.concatenate([neg[:, :0:-1], pos], axis=1)
 
 
-def _spin_terms(lighting: LightingCoefficients, coefficients: BRDFCoefficients, F: int, P: int):
+def _spin_terms(
+    lighting: LightingCoefficients, coefficients: BRDFCoefficients, F: int, P: int, only_p: int | None = None
+):
     """Yield (p, s, channel, E_lm, lmax): the ducc0 input of each spin-s synthesis.
 
     With 𝒟^l_{m,−s}(α, β) = (−1)^s Λ_l ₛY_lm(α, β) for ducc0's spin-s harmonics (fed
@@ -148,7 +151,7 @@ def _spin_terms(lighting: LightingCoefficients, coefficients: BRDFCoefficients, 
     l_of_index = np.concatenate([np.arange(m, lmax + 1) for m in range(lmax + 1)])
     m_of_index = np.concatenate([np.full(lmax + 1 - m, m) for m in range(lmax + 1)])
     alm_light = lighting.alm[:, alm_index(l_of_index, m_of_index, lighting.lmax)] * Lambda(l_of_index)[None, :]
-    for p in range(P + 1):
+    for p in range(P + 1) if only_p is None else (only_p,):
         for s in range(min(p, lmax) + 1):  # spin s needs l >= s: B_{p,±s} = 0 when s > lmax
             rho = np.where(l_of_index[None, :] >= s, coefficients.coeffs[l_of_index, p, s, :].T, 0.0)
             for c in range(3):
@@ -191,6 +194,63 @@ def local_shrm_fast(
             phi0=np.pi / width, nthreads=nthreads, mode="STANDARD" if s == 0 else "GRAD_ONLY",
         )
         _store_spin_field(out, p, s, c, P, field)
+    return out
+
+
+def global_shrm_latlong(
+    lighting: LightingCoefficients,
+    coefficients: BRDFCoefficients,
+    F: int,
+    P: int,
+    height: int,
+    width: int,
+    *,
+    nthreads: int = 1,
+    azimuth_free: bool = False,
+    rows_per_block: int = 64,
+) -> np.ndarray:
+    """Global SHRM on a lat-long grid, one view order p at a time (memory-lean path).
+
+    Same result as :func:`global_from_local` of :func:`local_shrm_fast`, but only the
+    q <= 0 half of one p-block of the local SHRM is held at a time (B_{p,q} =
+    (−1)^q conj(B_{p,−q})), and the rotation B̃_ps = e^{−isβ} Σ_q B_pq d̃^p_sq(α) runs in
+    row blocks. ``azimuth_free`` keeps only q = 0 (Kautz & McCool 2000).
+
+    Returns float32 ((P+1)², H, W, 3), real basis.
+    """
+    theta, phi = pixel_angles(height, width)
+    out = np.zeros(((P + 1) ** 2, height, width, 3), dtype=np.float32)
+    root2 = np.sqrt(2.0)
+    for p in range(P + 1):
+        neg = np.zeros((p + 1, height, width, 3), dtype=np.complex128)  # neg[s] = B_{p,−s}
+        for _, s, c, alm, lmax in _spin_terms(lighting, coefficients, F, P, only_p=p):
+            if azimuth_free and s > 0:
+                continue
+            field = ducc0.sht.experimental.synthesis_2d(
+                alm=alm[None, :], spin=s, lmax=lmax, geometry="F1", ntheta=height, nphi=width,
+                phi0=np.pi / width, nthreads=nthreads, mode="STANDARD" if s == 0 else "GRAD_ONLY",
+            )
+            neg[s, ..., c] = field[0] if s == 0 else field[0] + 1j * field[1]
+        d = wigner_d_tilde(p, theta)[:, p:, :]  # (H, s = 0..p, q = −p..p)
+        d_neg = np.ascontiguousarray(d[:, :, p::-1])  # columns q = 0, −1, ..., −p: multiply neg[0..p]
+        d_pos = np.ascontiguousarray(d[:, :, p + 1 :] * np.where(np.arange(1, p + 1) % 2, -1.0, 1.0))  # × conj(neg[q])
+        phase = np.exp(-1j * np.arange(p + 1)[:, None] * phi[None, :])  # (s, W)
+        for r0 in range(0, height, rows_per_block):
+            r1 = min(height, r0 + rows_per_block)
+            rows = neg[:, r0:r1].reshape(p + 1, r1 - r0, -1).transpose(1, 0, 2)  # (h, s', W*3)
+            # real BLAS products on contiguous parts (conj(neg) flips the sign of the imaginary part)
+            re, im = np.ascontiguousarray(rows.real), np.ascontiguousarray(rows.imag)
+            t_re, t_im = np.matmul(d_neg[r0:r1], re), np.matmul(d_neg[r0:r1], im)
+            if p:
+                t_re += np.matmul(d_pos[r0:r1], np.ascontiguousarray(re[:, 1:]))
+                t_im -= np.matmul(d_pos[r0:r1], np.ascontiguousarray(im[:, 1:]))
+            tilde = (t_re + 1j * t_im).reshape(r1 - r0, p + 1, width, 3).transpose(1, 0, 2, 3)
+            tilde = tilde * phase[:, None, :, None]
+            out[real_index(p, 0), r0:r1] = tilde[0].real
+            for s in range(1, p + 1):
+                sign = -1.0 if s % 2 else 1.0
+                out[real_index(p, s), r0:r1] = root2 * sign * tilde[s].real
+                out[real_index(p, -s), r0:r1] = -root2 * sign * tilde[s].imag
     return out
 
 
@@ -291,10 +351,14 @@ def gibbs_negative(coeffs: np.ndarray, P: int) -> float:
     (worst channel; 0 when nothing is negative). Truncating a sharp lobe creates
     negative lobes (Gibbs); a window reduces them."""
     height, width = coeffs.shape[1:3]
-    basis = real_sph_harm(P, pixel_directions(height, width))  # (H, W, n_coef)
-    normal_view = np.einsum("hwk,khwc->hwc", basis, coeffs)
-    peak = normal_view.max(axis=(0, 1))
-    low = normal_view.min(axis=(0, 1))
+    dirs = pixel_directions(height, width)
+    peak = np.full(3, -np.inf)
+    low = np.full(3, np.inf)
+    for r0 in range(0, height, 32):  # row blocks keep the basis array small at high P
+        basis = real_sph_harm(P, dirs[r0 : r0 + 32]).astype(np.float32)  # (h, W, n_coef)
+        normal_view = np.einsum("hwk,khwc->hwc", basis, coeffs[:, r0 : r0 + 32])
+        peak = np.maximum(peak, normal_view.max(axis=(0, 1)))
+        low = np.minimum(low, normal_view.min(axis=(0, 1)))
     live = peak > 0
     return float(np.max(np.clip(-low[live] / peak[live], 0.0, None), initial=0.0))
 
@@ -399,7 +463,10 @@ def prefilter(
         brdf = load_brdf(brdf)
     stage("orders")
     t0 = time.perf_counter()
-    orders = choose_orders(brdf, eps, max_F=max_F, max_P=max_P)
+    if F is not None and P is not None:
+        orders = orders_on_grid_for(brdf, eps, int(F), int(P))
+    else:
+        orders = choose_orders(brdf, eps, max_F=max_F, max_P=max_P)
     timings["orders"] = time.perf_counter() - t0
     stage("lighting")
     t0 = time.perf_counter()
@@ -407,8 +474,8 @@ def prefilter(
     # lighting beyond F_ρ too, so the achieved error and the bound see the residual energy
     lmax_light = int(min(max(2 * orders.F, orders.F + 16, F or 0), height - 1, orders.coefficients.F0))
     lighting = lighting_coefficients(env.radiance, lmax_light, name=env.name, nthreads=nthreads)
-    scene = scene_orders(orders, lighting)
     timings["lighting"] = time.perf_counter() - t0
+    scene = scene_orders(orders, lighting)
     F_B = scene.F_B if F is None else int(min(F, lmax_light))
     P_B = scene.P_B if P is None else int(min(P, orders.coefficients.P0))
     if window not in ("none", "lanczos"):
@@ -424,11 +491,9 @@ def prefilter(
         raise BadInputError(None, f"SHRM size must be in [2, 8192] rows, got {S}")
     stage("synthesis")
     t0 = time.perf_counter()
-    local = local_shrm_fast(lighting, coefficients, F_B, P_B, S, 2 * S, nthreads=nthreads)
-    if azimuth_free:
-        local[:, np.arange(2 * P_B + 1) != P_B] = 0.0
-    theta, phi = pixel_angles(S, 2 * S)
-    coeffs = global_from_local(local, theta[:, None], phi[None, :]).astype(np.float32)
+    coeffs = global_shrm_latlong(
+        lighting, coefficients, F_B, P_B, S, 2 * S, nthreads=nthreads, azimuth_free=azimuth_free
+    )
     timings["synthesis"] = time.perf_counter() - t0
     cube_coeffs = None
     if cube:
@@ -447,7 +512,7 @@ def prefilter(
             ((P_B + 1) ** 2, 6, n_cube, n_cube, 3)
         ).astype(np.float32)
         timings["cube"] = time.perf_counter() - t0
-    timings["total"] = time.perf_counter() - t
+    t0 = time.perf_counter()
     eps_info = {
         "brdf": float(orders.table[min(F_B, orders.F0), P_B]),
         "lighting": float(lighting.eps()[min(F_B, lighting.lmax)]),
@@ -455,6 +520,8 @@ def prefilter(
         "bound": residual_bound(lighting, orders.coefficients, F_B, P_B),
         "gibbs_negative": gibbs_negative(coeffs, P_B),
     }
+    timings["errors"] = time.perf_counter() - t0
+    timings["total"] = time.perf_counter() - t
     meta = {
         "brdf": brdf.name,
         "environment": env.name,

@@ -31,8 +31,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--env", default="builtin:sky", help="environment map spec or file (default builtin:sky)")
     p.add_argument("--brdf", default="microfacet:sigma=0.2", help="BRDF spec or file (default microfacet:sigma=0.2)")
     p.add_argument("--eps", type=float, default=0.03, help="SHRM tolerance epsilon (default 0.03)")
-    p.add_argument("--mode", choices=("distant", "perpixel"), default="distant",
-                   help="distant viewer (RH02 eq. 12) or per-pixel view direction (default distant)")
+    p.add_argument("--mode", choices=("distant", "perpixel", "rsibr", "kautz-mccool"), default="distant",
+                   help="distant viewer (RH02 eq. 12), per-pixel view direction, Cabral et al. 1999 (12 "
+                        "blended maps) or Kautz-McCool 2000 (q = 0 SHRM, per pixel) (default distant)")
     p.add_argument("--size", type=int, default=512, help="image width and height in pixels (default 512)")
     p.add_argument("--camera", choices=("perspective", "ortho"), default="perspective")
     p.add_argument("--view", default="1,0,0", help="direction from the object toward the camera, z-up frame")
@@ -79,7 +80,8 @@ def run(args: argparse.Namespace) -> int:
     env = load_env(args.env)
     brdf = load_brdf(args.brdf)
     t0 = time.perf_counter()
-    shrm = prefilter(env, brdf, eps=args.eps)
+    shrm = prefilter(env, brdf, eps=args.eps, azimuth_free=args.mode == "kautz-mccool")
+    render_mode = "perpixel" if args.mode == "kautz-mccool" else args.mode
     t_prefilter = time.perf_counter() - t0
     print(f"mesh {mesh.name}: {mesh.n_triangles} triangles")
     print(f"SHRM F={shrm.F} P={shrm.P} on {shrm.height}x{shrm.width} (eps {args.eps:g})")
@@ -87,7 +89,7 @@ def run(args: argparse.Namespace) -> int:
 
     cameras = turntable_cameras(camera, args.turntable) if args.turntable else [camera]
     frames, timings = render_frames(
-        mesh, shrm, cameras, size=args.size, mode=args.mode, env_radiance=env.radiance,
+        mesh, shrm, cameras, size=args.size, mode=render_mode, env_radiance=env.radiance,
         background=args.background, fps_frames=args.fps_frames,
     )
     print(f"renderer: {timings.backend}, mode {args.mode}, {args.size}x{args.size}, {args.camera}")

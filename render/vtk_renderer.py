@@ -23,7 +23,13 @@ from .mesh import Mesh
 from .offscreen import make_render_window, read_rgba_float
 from .shader import MODES, atlas_layout, fragment_replacements, vertex_replacements
 
-__all__ = ["SHRMRenderer", "RenderResult", "coefficient_atlas"]
+__all__ = ["SHRMRenderer", "RenderResult", "coefficient_atlas", "RENDER_MODES"]
+
+#: Shader modes plus ``rsibr`` (Cabral et al. 1999: the distant-mode shader fed, per frame, the
+#: spherical-barycentric blend of twelve maps made from the SHRM at the icosahedron's
+#: vertices, ``analysis.compare.rsibr``). Kautz–McCool is the SHRM shader fed an
+#: azimuth-free SHRM (``prefilter(..., azimuth_free=True)``), so it needs no mode here.
+RENDER_MODES = MODES + ("rsibr",)
 
 #: Largest texture edge we rely on (llvmpipe and current GPUs allow at least 16384).
 MAX_TEXTURE_SIZE = 16384
@@ -118,6 +124,7 @@ class _Object:
     center: np.ndarray
     radius: float
     flat_coeffs: np.ndarray | None  # (n, H·W·3) for the distant-mode update
+    rsibr: object = None  # RSIBRMaps for mode "rsibr"
 
 
 class SHRMRenderer:
@@ -154,8 +161,13 @@ class SHRMRenderer:
         from vtkmodules.vtkRenderingCore import vtkActor
         from vtkmodules.vtkRenderingOpenGL2 import vtkOpenGLPolyDataMapper
 
-        if mode not in MODES:
-            raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
+        if mode not in RENDER_MODES:
+            raise ValueError(f"mode must be one of {RENDER_MODES}, got {mode!r}")
+        rsibr = None
+        if mode == "rsibr":
+            from ..analysis.compare.rsibr import rsibr_from_shrm
+
+            rsibr = rsibr_from_shrm(shrm)
         n, h, w, _ = shrm.coeffs.shape
         if mode == "perpixel":
             cols, rows = atlas_layout(n)
@@ -180,7 +192,7 @@ class SHRMRenderer:
         sp = actor.GetShaderProperty()
         for tag, text in vertex_replacements():
             sp.AddVertexShaderReplacement(tag, True, text, False)
-        for tag, text in fragment_replacements(mode, shrm.P, h, w):
+        for tag, text in fragment_replacements("distant" if mode == "rsibr" else mode, shrm.P, h, w):
             sp.AddFragmentShaderReplacement(tag, True, text, False)
         uni = sp.GetFragmentCustomUniforms()
         uni.SetUniform3f("shrmEye", [0.0, 0.0, 0.0])
@@ -190,7 +202,7 @@ class SHRMRenderer:
         lo, hi = mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)
         center = 0.5 * (lo + hi)
         radius = float(np.max(np.linalg.norm(mesh.vertices - center, axis=1)))
-        self._objects.append(_Object(mesh, shrm, mode, actor, tex, data, buf, center, radius, flat))
+        self._objects.append(_Object(mesh, shrm, mode, actor, tex, data, buf, center, radius, flat, rsibr))
         return len(self._objects) - 1
 
     def update_view_maps(self, camera: Camera) -> None:
@@ -199,6 +211,10 @@ class SHRMRenderer:
         Ṽ is the direction from the object's bounding-sphere centre toward the camera.
         """
         for obj in self._objects:
+            if obj.mode == "rsibr":  # Cabral et al. 1999: blend of the face's three maps
+                obj.buffer.reshape(obj.rsibr.maps.shape[1:])[...] = obj.rsibr.view_map(camera.view_direction(obj.center))
+                obj.image.Modified()
+                continue
             if obj.mode != "distant":
                 continue
             view = camera.view_direction(obj.center)

@@ -23,7 +23,8 @@ Computer Graphics Forum 26(3) (Eurographics 2007), doi:10.1111/j.1467-8659.2007.
    i_l the modified spherical Bessel function), then one fast SH synthesis per level.
    The Gaussian's coefficients decay like exp(−l²σ²/2): the narrowest level is
    σ_0 = 4/H for an H-row environment (a_l < 4e-4 at the truncation l = H − 1, so no
-   visible ringing); level j is stored at max(8, H/2^j) rows.
+   visible ringing); level j is stored at the power of two of rows >= 4π/σ_j (pixel pitch
+   <= σ_j/4), between 8 and H rows.
 
 3. **Render**: B(R, V) = Σ_k w_k (G_σk * L)(d_k) with d_k = cos θ_μ R + sin θ_μ t, t the unit
    vector toward V perpendicular to R; σ between levels is interpolated linearly in
@@ -155,7 +156,8 @@ def sg_mip_stack(
     sigmas = s0 * 2.0 ** np.arange(J)
     levels = []
     for j, sigma in enumerate(sigmas):
-        h = max(8, height >> j)
+        # pixel pitch π/h at most σ/4: bilinear lookup of the blurred map then errs by ~(π/h)²/8σ² < 1%
+        h = int(min(height, max(8, 2 ** int(np.ceil(np.log2(4.0 * np.pi / sigma))))))
         lj = min(lmax, h - 1)
         a = sg_zonal_factors(sigma, lmax)
         keep = l_of <= lj

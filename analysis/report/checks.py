@@ -21,7 +21,8 @@ import numpy as np
 
 from ...brdf_io.brdf import BRDF
 
-__all__ = ["directional_albedo", "reciprocity_check", "scattered_reciprocity", "data_checks", "ALBEDO_VIEWS_DEG"]
+__all__ = ["directional_albedo", "reciprocity_check", "scattered_reciprocity", "data_checks",
+           "merl_missing_above_surface", "ALBEDO_VIEWS_DEG"]
 
 ALBEDO_VIEWS_DEG = (0.0, 15.0, 30.0, 45.0, 60.0, 70.0, 80.0, 85.0)
 #: relative asymmetry |ρ(L,V) − ρ(V,L)| / max(ρ) above which a BRDF is called non-reciprocal
@@ -103,6 +104,25 @@ def scattered_reciprocity(L: np.ndarray, V: np.ndarray, rgb: np.ndarray, tol_deg
     }
 
 
+def merl_missing_above_surface(brdf: BRDF) -> int | None:
+    """Missing MERL table samples whose (L, V) are both above the surface (``None`` if not MERL).
+
+    Samples with tan θ_h tan θ_d |cos φ_d| >= 1 put L or V below the surface; they are
+    missing in every MERL file (and in tabulated models) and are not a data problem.
+    """
+    values = getattr(brdf, "values", None)
+    if values is None or getattr(values, "shape", None) != (3, 90, 90, 180):
+        return None
+    from ...brdf_io.halfdiff import halfdiff_to_directions
+    from ...brdf_io.merl import merl_sample_angles
+
+    th, td, pd = merl_sample_angles()
+    L, V = halfdiff_to_directions(th[:, None, None], td[None, :, None], pd[None, None, :])
+    above = (L[..., 2] > 0) & (V[..., 2] > 0)
+    missing = np.any(np.isnan(values), axis=0)
+    return int(np.count_nonzero(missing & above))
+
+
 def data_checks(brdf: BRDF, analysis_brdf: BRDF, *, seed: int = 0, albedo_nodes: int = 64) -> dict[str, Any]:
     """The ``data_checks`` block of a report (``data_specs/report_json.md``).
 
@@ -119,6 +139,7 @@ def data_checks(brdf: BRDF, analysis_brdf: BRDF, *, seed: int = 0, albedo_nodes:
     return {
         "n_measurements": int(len(brdf)) if scattered else None,
         "n_missing": int(getattr(brdf, "n_missing", 0)),
+        "n_missing_above_surface": merl_missing_above_surface(brdf),
         "n_clamped": int(getattr(brdf, "n_clipped", 0)),
         "reciprocity": reciprocity,
         "albedo": {

@@ -17,7 +17,10 @@ import numpy as np
 from ...brdf_io.envmap import EnvironmentMap
 from ..shrm import SHRM
 
-__all__ = ["PreviewImage", "png_bytes", "render_previews", "resolve_preview_mode"]
+__all__ = [
+    "PREVIEW_VIEW", "PreviewImage", "png_bytes", "render_previews", "resolve_preview_mode", "preview_camera",
+    "cpu_sphere_image", "preview_exposure", "unit_mesh",
+]
 
 #: direction from the object toward the camera (z-up frame): slightly above the horizon
 PREVIEW_VIEW = (1.0, 0.35, 0.45)
@@ -57,17 +60,19 @@ def resolve_preview_mode(mode: str) -> tuple[str, str]:
     return "cpu", f"no offscreen OpenGL ({message}): CPU reference renderer used, mesh previews skipped"
 
 
-def _camera():
+def preview_camera():  # -> render.camera.Camera
+    """The preview camera: frames the unit sphere from :data:`PREVIEW_VIEW`."""
     from ...render.camera import Camera
 
     return Camera.looking_at(view=np.array(PREVIEW_VIEW), up=(0.0, 0.0, 1.0), margin=1.15)
 
 
-def _cpu_sphere(shrm: SHRM, env: EnvironmentMap, size: int) -> np.ndarray:
+def cpu_sphere_image(shrm: SHRM, env: EnvironmentMap, size: int) -> np.ndarray:
+    """Linear (size, size, 3) image of the unit sphere shaded by ``shrm`` over ``env`` (numpy only)."""
     from ...render.cpu_reference import shade, sphere_geometry
     from ...render.output import composite, environment_background
 
-    camera = _camera()
+    camera = preview_camera()
     geometry = sphere_geometry(camera, size, size)
     radiance = shade(geometry, shrm.radiance).astype(np.float32)
     alpha = geometry.hit.astype(np.float32)
@@ -97,10 +102,10 @@ def render_previews(
         return [], ["preview disabled"]
     images: list[PreviewImage] = []
     notes: list[str] = []
-    exposure = _exposure(env)
+    exposure = preview_exposure(env)
     if mode == "cpu":
         t0 = time.perf_counter()
-        linear = _cpu_sphere(shrm, env, size)
+        linear = cpu_sphere_image(shrm, env, size)
         images.append(PreviewImage("sphere", png_bytes(to_8bit(linear, exposure=exposure)), "cpu-reference",
                                    time.perf_counter() - t0))
         if mesh:
@@ -110,10 +115,10 @@ def render_previews(
     from ...render.pipeline import render_frames
 
     targets = [("sphere", "builtin:sphere")] + ([("mesh", mesh)] if mesh else [])
-    camera = _camera()
+    camera = preview_camera()
     for key, source in targets:
         frames, timings = render_frames(
-            load_mesh(source), shrm, [camera], size=size, mode="distant", env_radiance=env.radiance,
+            unit_mesh(load_mesh(source)), shrm, [camera], size=size, mode="distant", env_radiance=env.radiance,
             background="env", fps_frames=0,
         )
         images.append(PreviewImage(key, png_bytes(to_8bit(frames[0].linear, exposure=exposure)),
@@ -121,7 +126,14 @@ def render_previews(
     return images, notes
 
 
-def _exposure(env: EnvironmentMap) -> float:
+def unit_mesh(mesh):  # Mesh -> Mesh
+    """The mesh moved and scaled into the unit sphere about the origin (what the camera frames)."""
+    centre = 0.5 * (mesh.vertices.min(axis=0) + mesh.vertices.max(axis=0))
+    radius = float(np.max(np.linalg.norm(mesh.vertices - centre, axis=1)))
+    return mesh.transformed(scale=1.0 / radius, translate=-centre / radius) if radius > 0 else mesh
+
+
+def preview_exposure(env: EnvironmentMap) -> float:
     """Stops that bring the environment's mean luminance to 0.18 (a middle grey)."""
     mean = float(np.average(env.radiance.mean(axis=(1, 2)), weights=env.solid_angles()))
     if not mean > 0:

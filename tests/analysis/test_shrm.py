@@ -241,3 +241,28 @@ def test_cube_map_matches_explicit_path_and_latlong(tmp_path):
     assert _rel_rms(np.einsum("k,knc->nc", Y, got), lat) < 0.02
     back = shrmkit.load_shrm(m.save(tmp_path / "cube.shrm.npz"))
     assert np.array_equal(back.cube, m.cube)
+
+
+def test_lean_global_path_matches_full_local_rotation():
+    """global_shrm_latlong (q <= 0 storage, row blocks) equals global_from_local of the full
+    local SHRM, including the azimuth-free variant."""
+    from shrmkit.analysis.shrm import global_shrm_latlong
+
+    img = np.random.default_rng(11).uniform(size=(20, 40, 3))
+    lc = lighting_coefficients(img, 10)
+    o = shrmkit.choose_orders(shrmkit.load_brdf("cook-torrance:alpha=0.4,kd=0.1,dist=ggx"), 0.05)
+    P = min(4, o.coefficients.P0)
+    theta, phi = pixel_angles(20, 40)
+    local = local_shrm_fast(lc, o.coefficients, 10, P, 20, 40)
+    full = global_from_local(local, theta[:, None], phi[None, :])
+    lean = global_shrm_latlong(lc, o.coefficients, 10, P, 20, 40, rows_per_block=7)
+    np.testing.assert_allclose(lean, full, atol=1e-5 * np.abs(full).max())
+    local[:, np.arange(2 * P + 1) != P] = 0.0
+    q0 = global_from_local(local, theta[:, None], phi[None, :])
+    lean_q0 = global_shrm_latlong(lc, o.coefficients, 10, P, 20, 40, azimuth_free=True)
+    np.testing.assert_allclose(lean_q0, q0, atol=1e-5 * np.abs(q0).max())
+
+
+def test_forced_orders_skip_the_search():
+    m = shrmkit.prefilter("builtin:sky,height=32", "microfacet:sigma=0.3", eps=0.03, F=9, P=3)
+    assert (m.F, m.P) == (9, 3) and "orders given" in m.meta["orders_message"]

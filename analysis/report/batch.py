@@ -1,0 +1,205 @@
+"""Reports over a library of BRDFs: serially, in worker processes, or on a Dask cluster.
+
+Each BRDF is one task, :func:`run_task`: it computes the report (``collect.py``) and
+renders all its files (``writer.report_files``) and returns them as bytes; the driver
+writes each folder atomically as results arrive and finally ``summary.csv`` and
+``index.html``. The task never raises: a BRDF that fails (a corrupt file, nothing to
+analyse) comes back as a ``status: failed`` report with its error, and the batch goes on.
+
+Three engines run the same task function:
+
+- serial (``workers=1``): in this process, with per-stage progress;
+- ``workers=N``: :class:`concurrent.futures.ProcessPoolExecutor` with the ``spawn``
+  start method (no fork of a process holding threads or an OpenGL context);
+- ``scheduler=ADDRESS``: a Dask ``distributed`` cluster (``Client(ADDRESS).map``); the
+  workers need shrmkit installed and the BRDF files readable at the same paths. Results
+  come back to this process, which writes them, so workers need no shared output folder.
+
+Results do not depend on the engine (every random choice is seeded per BRDF).
+"""
+
+from __future__ import annotations
+
+import re
+import time
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from ...brdf_io.errors import BadInputError
+from .collect import collect_report, failed_report
+from .options import ReportOptions
+from .writer import report_files, summary_row, write_folder, write_summary
+
+__all__ = ["ReportTask", "ReportOutcome", "BatchResult", "report_names", "run_task", "run_batch"]
+
+#: ``progress(event, name, detail)``: event ``"start"``, ``"stage"`` (serial only) or ``"done"``.
+BatchProgress = Callable[[str, str, str], None]
+
+_BRDF_SUFFIXES = (".binary", ".npz", ".brdf", ".json")
+
+
+@dataclass(frozen=True)
+class ReportTask:
+    """One BRDF to report on: its source (file or spec), folder name, options, and the
+    preview mode already resolved (``gl``, ``cpu`` or ``none``)."""
+
+    source: str
+    name: str
+    options: ReportOptions
+    preview_mode: str
+
+
+@dataclass(frozen=True)
+class ReportOutcome:
+    """What a task returns: the summary row and every file of the report folder."""
+
+    name: str
+    ok: bool
+    row: dict[str, Any]
+    files: dict[str, bytes]
+
+
+@dataclass(frozen=True)
+class BatchResult:
+    """Rows of the summary (input order), the output folder, and the number that failed."""
+
+    out_dir: Path
+    rows: list[dict[str, Any]]
+    n_failed: int
+    seconds: float
+    engine: str
+
+    @property
+    def ok(self) -> bool:
+        return self.n_failed == 0
+
+
+def report_names(sources: Sequence[str]) -> list[str]:
+    """Folder names: the file stem or the sanitized spec, made unique with ``-2``, ``-3``…"""
+    names: list[str] = []
+    for source in sources:
+        path = Path(source)
+        base = path.stem if path.suffix.lower() in _BRDF_SUFFIXES or path.exists() else source
+        base = re.sub(r"[^A-Za-z0-9._-]+", "_", base).strip("._") or "brdf"
+        name, k = base, 2
+        while name in names:
+            name, k = f"{base}-{k}", k + 1
+        names.append(name)
+    return names
+
+
+def run_task(task: ReportTask, progress: Callable[[str], None] | None = None) -> ReportOutcome:
+    """Compute and render one report; never raises for a bad BRDF (see module docstring)."""
+    t0 = time.perf_counter()
+    try:
+        doc, previews = collect_report(task.source, task.options, name=task.name,
+                                       preview_mode=task.preview_mode, progress=progress)
+    except Exception as err:  # any failure of one BRDF is reported, and the batch goes on
+        message = str(err) if isinstance(err, BadInputError) else f"{type(err).__name__}: {err}"
+        doc, previews = failed_report(task.source, task.name, task.options, message, time.perf_counter() - t0), []
+    return ReportOutcome(task.name, doc["status"] == "ok", summary_row(doc), report_files(doc, previews))
+
+
+def _serial(tasks: Sequence[ReportTask], progress: BatchProgress | None) -> Iterable[ReportOutcome]:
+    for task in tasks:
+        if progress is not None:
+            progress("start", task.name, "")
+        stage = (lambda s, n=task.name: progress("stage", n, s)) if progress is not None else None
+        yield run_task(task, stage)
+
+
+def _processes(tasks: Sequence[ReportTask], workers: int, progress: BatchProgress | None) -> Iterable[ReportOutcome]:
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+        futures = []
+        for task in tasks:
+            futures.append(pool.submit(run_task, task))
+            if progress is not None:
+                progress("start", task.name, "queued")
+        for future in as_completed(futures):
+            yield future.result()
+
+
+def _dask(tasks: Sequence[ReportTask], scheduler: str, progress: BatchProgress | None) -> Iterable[ReportOutcome]:
+    try:
+        from distributed import Client, as_completed
+    except ImportError:  # pragma: no cover - depends on the installation
+        raise BadInputError(None, "--dask-scheduler needs dask.distributed: pip install 'shrmkit[dask]'") from None
+    try:
+        client = Client(scheduler, set_as_default=False, timeout="30s")
+    except (OSError, TimeoutError, ValueError) as err:
+        raise BadInputError(scheduler, f"cannot connect to the Dask scheduler: {err}") from None
+    try:
+        futures = client.map(run_task, list(tasks), pure=False, key=[f"shrm-report-{t.name}" for t in tasks])
+        if progress is not None:
+            for task in tasks:
+                progress("start", task.name, "submitted")
+        for future in as_completed(futures):
+            yield future.result()
+    finally:
+        client.close()
+
+
+def run_batch(
+    sources: Sequence[str],
+    out_dir: str | Path,
+    options: ReportOptions,
+    *,
+    workers: int = 1,
+    scheduler: str | None = None,
+    progress: BatchProgress | None = None,
+) -> BatchResult:
+    """Report on every BRDF of ``sources`` into ``out_dir/<name>/``, then write the summary.
+
+    Parameters
+    ----------
+    sources
+        BRDF files or spec strings.
+    workers
+        Parallel processes on this machine (1: serial, in this process).
+    scheduler
+        Address of a Dask distributed scheduler (``tcp://host:8786``, or an in-process
+        ``LocalCluster``'s ``scheduler_address``); overrides ``workers``.
+    progress
+        ``progress(event, name, detail)`` (see :data:`BatchProgress`).
+
+    Returns
+    -------
+    BatchResult
+        ``n_failed`` counts the BRDFs whose report failed (they are in the summary).
+    """
+    from .preview import resolve_preview_mode
+
+    if not sources:
+        raise BadInputError(None, "no BRDF given")
+    if workers < 1:
+        raise BadInputError(None, f"workers must be >= 1, got {workers}")
+    t0 = time.perf_counter()
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    mode, note = resolve_preview_mode(options.preview)
+    names = report_names([str(s) for s in sources])
+    tasks = [ReportTask(str(s), n, options, mode) for s, n in zip(sources, names, strict=True)]
+    if scheduler:
+        outcomes, engine = _dask(tasks, scheduler, progress), f"dask ({scheduler})"
+    elif workers > 1 and len(tasks) > 1:
+        outcomes, engine = _processes(tasks, min(workers, len(tasks)), progress), f"{workers} processes"
+    else:
+        outcomes, engine = _serial(tasks, progress), "serial"
+    rows: dict[str, dict[str, Any]] = {}
+    for outcome in outcomes:
+        write_folder(out, outcome.name, outcome.files)
+        rows[outcome.name] = outcome.row
+        if progress is not None:
+            progress("done", outcome.name, "ok" if outcome.ok else "failed")
+    ordered = [rows[n] for n in names]
+    notes = [f"{len(ordered)} BRDFs, engine: {engine}, profile {options.profile}, eps {options.eps:g}."]
+    if note:
+        notes.append(note)
+    write_summary(out, ordered, notes)
+    n_failed = sum(1 for r in ordered if r["status"] != "ok")
+    return BatchResult(out, ordered, n_failed, time.perf_counter() - t0, engine)

@@ -1,0 +1,485 @@
+"""Compute one BRDF's accuracy report as a JSON-able dict (``data_specs/report_json.md``).
+
+Stages (each reported to the optional ``progress(stage)`` callback):
+
+1. ``load``: ``shrmkit.load_brdf``.
+2. ``fits``: ``shrmkit.fit_brdf`` for each model; errors per view-elevation band and
+   measured-vs-fitted slices in the plane of incidence.
+3. ``orders``: ``choose_orders`` at each tolerance (RH02 §5.1) and the ε(F, P) table.
+   Scattered measurements cannot be evaluated everywhere: the orders, SHRMs and previews
+   of a scattered BRDF use its best successful fit (the report says which).
+4. ``prefilter``: for each environment and tolerance, ``prefilter`` (orders, lighting SHT,
+   SHRM synthesis) and the relative RMS error of :meth:`SHRM.radiance` against the
+   angular-domain reference (``analysis.reference``, RH02 eq. 2) on seeded random (R, V)
+   pairs; the environment's F_L, the scene orders F_B, P_B and the residual bound
+   (``analysis.scene``).
+5. ``checks``: missing and clamped data, reciprocity, directional albedo (``checks.py``).
+6. ``preview``: sphere (and mesh) thumbnails (``preview.py``).
+
+Reproducibility: every random choice is seeded by ``options.seed``, floats are rounded
+to 10 significant digits, and every field that depends on the machine's speed has a key
+ending in ``_seconds`` (:func:`strip_timings` removes them), so the same inputs give the
+same ``report.json`` apart from those keys.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..._version import __version__
+from ...brdf_io.brdf import BRDF
+from ...brdf_io.envmap import load_env
+from ...brdf_io.errors import BadInputError
+from .checks import RECIPROCITY_TOLERANCE, data_checks
+from .options import ReportOptions
+from .preview import PreviewImage, render_previews
+
+__all__ = [
+    "REPORT_FORMAT",
+    "REPORT_FORMAT_VERSION",
+    "SLICE_VIEWS_DEG",
+    "collect_report",
+    "failed_report",
+    "jsonable",
+    "strip_timings",
+    "random_pairs",
+    "relative_rms",
+]
+
+REPORT_FORMAT = "shrmkit-report"
+REPORT_FORMAT_VERSION = 1
+SLICE_VIEWS_DEG = (0.0, 30.0, 60.0, 75.0)
+_SLICE_THETA_DEG = np.arange(-85.0, 85.0 + 1e-9, 2.5)
+_SIG_DIGITS = 10
+
+Progress = Callable[[str], None]
+
+
+def jsonable(value: Any, digits: int = _SIG_DIGITS) -> Any:
+    """Plain JSON types: numpy → Python, floats rounded to ``digits`` significant digits,
+    NaN/Inf → ``None`` (strict JSON has no NaN)."""
+    if isinstance(value, dict):
+        return {str(k): jsonable(v, digits) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [jsonable(v, digits) for v in value]
+    if isinstance(value, np.ndarray):
+        return jsonable(value.tolist(), digits)
+    if isinstance(value, np.bool_ | bool):
+        return bool(value)
+    if isinstance(value, np.integer):
+        return int(value)
+    if isinstance(value, float | np.floating):
+        x = float(value)
+        if not math.isfinite(x):
+            return None
+        return float(f"{x:.{digits - 1}e}") if x != 0.0 else 0.0
+    return value
+
+
+def strip_timings(doc: Any) -> Any:
+    """A copy of ``doc`` without the timing fields (keys ending in ``_seconds``)."""
+    if isinstance(doc, dict):
+        return {k: strip_timings(v) for k, v in doc.items() if not str(k).endswith("_seconds")}
+    if isinstance(doc, list):
+        return [strip_timings(v) for v in doc]
+    return doc
+
+
+def random_pairs(n: int, seed: int, max_view_deg: float = 80.0) -> tuple[np.ndarray, np.ndarray]:
+    """Seeded (R, V) pairs: R uniform on the sphere, the view at θ_v from the normal
+    N = normalize(R + V) with cos θ_v uniform in [cos ``max_view_deg``, 1], azimuth uniform.
+
+    The angle between R and V is 2θ_v.
+    """
+    rng = np.random.default_rng(seed)
+    R = rng.normal(size=(n, 3))
+    R /= np.linalg.norm(R, axis=1, keepdims=True)
+    helper = np.where(np.abs(R[:, 2:3]) < 0.9, [0.0, 0.0, 1.0], [1.0, 0.0, 0.0])
+    t1 = np.cross(R, helper)
+    t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
+    t2 = np.cross(R, t1)
+    psi = rng.uniform(0.0, 2.0 * np.pi, n)
+    T = np.cos(psi)[:, None] * t1 + np.sin(psi)[:, None] * t2
+    theta_v = np.arccos(rng.uniform(np.cos(np.radians(max_view_deg)), 1.0, n))
+    V = np.cos(2 * theta_v)[:, None] * R + np.sin(2 * theta_v)[:, None] * T
+    return R, V / np.linalg.norm(V, axis=1, keepdims=True)
+
+
+def relative_rms(estimate: np.ndarray, reference: np.ndarray) -> float:
+    """sqrt(Σ|estimate − reference|² / Σ|reference|²) over all pairs and channels."""
+    den = float(np.sum(reference**2))
+    return float(np.sqrt(np.sum((estimate - reference) ** 2) / den)) if den > 0 else float("nan")
+
+
+def _stage(progress: Progress | None, name: str) -> None:
+    if progress is not None:
+        progress(name)
+
+
+# ------------------------------------------------------------------------------- fits
+
+
+def _fit_entry(result: Any) -> dict[str, Any]:
+    return {
+        "model": result.model,
+        "spec": result.brdf.to_spec(),
+        "params": result.params,
+        "errors": dict(result.errors),
+        "bands": [b.as_dict() for b in result.bands],
+        "status": result.status,
+        "success": bool(result.success),
+        "message": result.message,
+        "evaluations": int(result.evaluations),
+        "n_samples": int(result.n_samples),
+        "n_dropped": int(result.n_dropped),
+        "error": None,
+        "fit_seconds": float(result.seconds),
+    }
+
+
+def _fits(brdf: BRDF, options: ReportOptions) -> tuple[list[dict[str, Any]], list[Any]]:
+    from ..fit import fit_brdf
+
+    entries, results = [], []
+    for model in options.models:
+        t0 = time.perf_counter()
+        try:
+            result = fit_brdf(
+                brdf, model, lobes=options.lobes, seed=options.seed, n_samples=options.fit_samples,
+                starts=options.fit_starts,
+            )
+        except BadInputError as err:
+            entries.append({"model": model, "success": False, "error": str(err),
+                            "fit_seconds": time.perf_counter() - t0})
+            results.append(None)
+            continue
+        entries.append(_fit_entry(result))
+        results.append(result)
+    return entries, results
+
+
+def _plane_directions(theta_deg: np.ndarray) -> np.ndarray:
+    t = np.radians(theta_deg)
+    return np.stack([np.sin(t), np.zeros_like(t), np.cos(t)], axis=-1)
+
+
+def _slices(brdf: BRDF, fitted: list[Any], models: tuple[str, ...]) -> dict[str, Any]:
+    """ρ in the plane of incidence at a few view elevations: measured and each fitted model.
+
+    V = (sin θ_o, 0, cos θ_o); L = (sin θ_i, 0, cos θ_i) with signed θ_i (the mirror
+    direction is θ_i = −θ_o). For scattered data the "view" is the file's incident
+    direction (reciprocity) and the measured points are those within 3° of the plane.
+    """
+    views = []
+    if brdf.kind == "scattered":
+        theta_i = np.degrees(np.arccos(np.clip(brdf.L[:, 2], -1, 1)))
+        levels = np.unique(np.round(theta_i))
+        chosen = sorted({float(levels[np.argmin(np.abs(levels - v))]) for v in SLICE_VIEWS_DEG})
+        for view in chosen:
+            sel = np.abs(theta_i - view) < 0.5
+            L, V, rgb = brdf.L[sel], brdf.V[sel], brdf.rgb[sel]
+            dphi = np.arctan2(V[:, 1], V[:, 0]) - np.arctan2(L[:, 1], L[:, 0])
+            in_plane = np.abs(np.sin(dphi)) < np.sin(np.radians(3.0))
+            signed = np.degrees(np.arccos(np.clip(V[in_plane, 2], -1, 1))) * np.sign(np.cos(dphi[in_plane]))
+            order = np.argsort(signed, kind="stable")
+            views.append({
+                "view_deg": view,
+                "measured_theta_deg": signed[order].tolist(),
+                "measured_rgb": rgb[in_plane][order].tolist(),
+                "fitted_rgb": {m: (None if f is None else f.brdf.eval(
+                    _plane_directions(_SLICE_THETA_DEG), _plane_directions(np.full_like(_SLICE_THETA_DEG, view))
+                ).tolist()) for m, f in zip(models, fitted, strict=True)},
+            })
+        return {"theta_deg": _SLICE_THETA_DEG.tolist(), "views": views, "measured": "scattered samples within 3 deg of the plane"}
+    L = _plane_directions(_SLICE_THETA_DEG)
+    for view in SLICE_VIEWS_DEG:
+        V = np.broadcast_to(_plane_directions(np.array([view]))[0], L.shape)
+        views.append({
+            "view_deg": view,
+            "measured_theta_deg": _SLICE_THETA_DEG.tolist(),
+            "measured_rgb": brdf.eval(L, V).tolist(),
+            "fitted_rgb": {m: (None if f is None else f.brdf.eval(L, V).tolist())
+                           for m, f in zip(models, fitted, strict=True)},
+        })
+    return {"theta_deg": _SLICE_THETA_DEG.tolist(), "views": views, "measured": "brdf evaluated on the slice"}
+
+
+# ------------------------------------------------------------------------------ orders
+
+
+def _orders(brdf: BRDF, options: ReportOptions) -> tuple[list[dict[str, Any]], dict[str, Any], Any]:
+    from ..orders import choose_orders
+
+    rows, choices = [], []
+    for tol in options.all_tolerances:
+        choice = choose_orders(brdf, tol, max_F=options.max_F, max_P=options.max_P)
+        choices.append(choice)
+        rows.append({
+            "tolerance": tol,
+            "F": choice.F,
+            "P": choice.P,
+            "eps": choice.eps,
+            "capped": bool(choice.capped),
+            "converged": bool(choice.converged),
+            "n_without_data": int(choice.n_without_data),
+            "message": choice.message,
+            "orders_seconds": choice.seconds,
+        })
+    # the tightest tolerance has the largest grid; keep F up to a little beyond the largest choice
+    finest = choices[-1]
+    F_keep = int(min(finest.F0, max(2 * max(c.F for c in choices) + 8, 32)))
+    table = finest.table[: F_keep + 1]
+    eps_table = {"tolerance": finest.tolerance, "F0": finest.F0, "P0": finest.P0, "eps": table}
+    main = next(c for c in choices if c.tolerance == options.eps)
+    return rows, eps_table, main
+
+
+# --------------------------------------------------------------------------- prefilter
+
+
+def _environments(brdf: BRDF, options: ReportOptions, progress: Progress | None):
+    from ..lighting import lighting_coefficients
+    from ..reference import reference_radiance
+    from ..shrm import prefilter
+
+    R, V = random_pairs(options.n_pairs, options.seed)
+    env_entries, speed_rows, main_shrms = [], [], []
+    for spec in options.envs:
+        env = load_env(spec, height=options.env_height)
+        _stage(progress, f"reference {env.name}")
+        t0 = time.perf_counter()
+        reference = reference_radiance(env, brdf, R, V)
+        ref_seconds = time.perf_counter() - t0
+        lighting = lighting_coefficients(env.radiance, env.height - 1, name=env.name)
+        entry: dict[str, Any] = {
+            "name": env.name,
+            "spec": spec,
+            "height": env.height,
+            "width": env.width,
+            "eps_L_curve": lighting.eps(),
+            "reference_seconds": ref_seconds,
+        }
+        for tol in options.all_tolerances:
+            _stage(progress, f"prefilter {env.name} eps={tol:g}")
+            shrm = prefilter(env, brdf, eps=tol, max_F=options.max_F, max_P=options.max_P)
+            err = relative_rms(shrm.radiance(R, V), reference)
+            t = shrm.meta["timings"]
+            n_out = shrm.height * shrm.width
+            row = {
+                "env": env.name,
+                "tolerance": tol,
+                "F_rho": shrm.meta["F_rho"],
+                "P_rho": shrm.meta["P_rho"],
+                "F_L": shrm.meta["F_L"],
+                "F_B": shrm.F,
+                "P_B": shrm.P,
+                "size": [shrm.height, shrm.width],
+                "eps_brdf": shrm.eps["brdf"],
+                "eps_lighting": shrm.eps["lighting"],
+                "eps_B": shrm.eps["reflected"],
+                "bound": shrm.eps["bound"],
+                "sqrt_eps_B": math.sqrt(max(shrm.eps["reflected"], 0.0)),
+                "measured_rel_rms": err,
+                "prefilter_seconds": t["total"],
+                "orders_seconds": t["orders"],
+                "lighting_seconds": t["lighting"],
+                "synthesis_seconds": t["synthesis"],
+                # the angular reference for the same S x 2S output, extrapolated from the pairs
+                "reference_map_seconds": ref_seconds / options.n_pairs * n_out,
+            }
+            speed_rows.append(row)
+            if tol == options.eps:
+                entry.update({
+                    "tolerance": tol,
+                    "F_L": row["F_L"],
+                    "F_B": row["F_B"],
+                    "P_B": row["P_B"],
+                    "bound": row["bound"],
+                    "eps_B": row["eps_B"],
+                    "measured_rel_rms": err,
+                    "n_pairs": options.n_pairs,
+                })
+                main_shrms.append((env, shrm))
+        env_entries.append(entry)
+    return env_entries, speed_rows, main_shrms
+
+
+# ----------------------------------------------------------------------------- warnings
+
+
+def _warnings(checks: dict[str, Any], orders: list[dict[str, Any]], fits: list[dict[str, Any]],
+              preview_notes: list[str], analysis_note: str) -> list[dict[str, str]]:
+    out = []
+
+    def add(code: str, message: str) -> None:
+        out.append({"code": code, "message": message})
+
+    reachable = checks["n_missing_above_surface"]
+    if reachable if reachable is not None else checks["n_missing"]:
+        n = reachable if reachable is not None else checks["n_missing"]
+        add("missing_measurements", f"{n} table samples above the surface are missing (no measurement)")
+    without = max((o["n_without_data"] for o in orders), default=0)
+    if without:
+        add("missing_measurements", f"{without} reparameterized samples had no measurement to interpolate (set to 0)")
+    dropped = max((f.get("n_dropped", 0) or 0 for f in fits), default=0)
+    if dropped:
+        add("missing_measurements", f"{dropped} fit samples dropped for lack of data")
+    if checks["n_clamped"]:
+        add("clamped_values", f"{checks['n_clamped']} RGB components were negative (out of gamut) and clamped to 0")
+    rec = checks["reciprocity"]
+    if rec["max_rel"] is not None and rec["max_rel"] > RECIPROCITY_TOLERANCE:
+        add("non_reciprocal", f"rho(L,V) != rho(V,L): max relative difference {rec['max_rel']:.3g} "
+            f"({rec['method']}, {rec['n_pairs']} pairs)")
+    albedo = checks["albedo"]
+    if albedo["max"] > 1.0 + 1e-3:
+        add("energy_gain", f"directional albedo {albedo['max']:.3g} > 1 at view {albedo['max_view_deg']:g} deg "
+            f"(of the {albedo['of']})")
+    for o in orders:
+        if o["capped"]:
+            add("orders_capped", f"eps {o['tolerance']:g}: not met within the caps F<={o['F']}, P<={o['P']} "
+                f"(eps(F, P) = {o['eps']:.3g}); raise max_F/max_P")
+        elif not o["converged"]:
+            add("orders_not_converged", f"eps {o['tolerance']:g}: {o['message']}")
+    for f in fits:
+        if f.get("error"):
+            add("fit_failed", f"{f['model']}: {f['error']}")
+        elif not f["success"]:
+            add("fit_failed", f"{f['model']}: {f['message']}")
+    for note in preview_notes:
+        add("preview", note)
+    if analysis_note:
+        add("analysis_on_fit", analysis_note)
+    return out
+
+
+# ------------------------------------------------------------------------------ report
+
+
+def _analysis_brdf(brdf: BRDF, fit_entries: list[dict[str, Any]], fit_results: list[Any]) -> tuple[BRDF, str, str]:
+    if brdf.kind != "scattered":
+        return brdf, "brdf", ""
+    ok = [(e["errors"]["rel_rms"], i) for i, e in enumerate(fit_entries) if e.get("success")]
+    if not ok:
+        raise BadInputError(brdf.name, "scattered measurements and no successful fit: nothing to analyse "
+                            "(orders need a BRDF that can be evaluated everywhere)")
+    best = min(ok)[1]
+    model = fit_entries[best]["model"]
+    return fit_results[best].brdf, f"fit:{model}", (
+        f"scattered measurements: orders, SHRMs and previews use the {model} fit "
+        f"(rel_rms {fit_entries[best]['errors']['rel_rms']:.3g})")
+
+
+def collect_report(
+    source: str | Path,
+    options: ReportOptions,
+    *,
+    name: str | None = None,
+    preview_mode: str | None = None,
+    progress: Progress | None = None,
+) -> tuple[dict[str, Any], list[PreviewImage]]:
+    """Compute the report of one BRDF.
+
+    Parameters
+    ----------
+    source
+        BRDF file or spec string (``shrmkit.load_brdf``).
+    options
+        :class:`~shrmkit.analysis.report.options.ReportOptions`.
+    name
+        Report name (default: the BRDF's name).
+    preview_mode
+        ``gl``, ``cpu`` or ``none``; default ``options.preview`` resolved by probing
+        (``preview.resolve_preview_mode``) — pass it resolved when running many reports.
+    progress
+        Optional ``progress(stage: str)``.
+
+    Returns
+    -------
+    (doc, previews)
+        The ``report.json`` document (JSON types) and the preview images.
+
+    Raises
+    ------
+    BadInputError
+        Unreadable BRDF, or nothing to analyse.
+    """
+    from ...brdf_io.specs import load_brdf
+    from .preview import resolve_preview_mode
+
+    t_start = time.perf_counter()
+    _stage(progress, "load")
+    brdf = load_brdf(source)
+    _stage(progress, "fits")
+    fit_entries, fit_results = _fits(brdf, options)
+    slices = _slices(brdf, fit_results, options.models)
+    analysed, analysis_of, analysis_note = _analysis_brdf(brdf, fit_entries, fit_results)
+    _stage(progress, "orders")
+    order_rows, eps_table, main_choice = _orders(analysed, options)
+    env_entries, speed_rows, main_shrms = _environments(analysed, options, progress)
+    _stage(progress, "checks")
+    checks = data_checks(brdf, analysed, seed=options.seed, albedo_nodes=options.albedo_nodes)
+    _stage(progress, "preview")
+    mode, mode_note = (preview_mode, "") if preview_mode else resolve_preview_mode(options.preview)
+    env0, shrm0 = main_shrms[0]
+    t0 = time.perf_counter()
+    try:
+        previews, notes = render_previews(shrm0, env0, mode=mode, size=options.preview_size, mesh=options.mesh)
+        preview_error = None
+    except Exception as err:  # a failed preview must not lose the report
+        previews, notes, preview_error = [], [f"preview failed: {err}"], str(err)
+    preview_block = {
+        "mode": mode,
+        "env": env0.name,
+        "tolerance": options.eps,
+        "F": shrm0.F,
+        "P": shrm0.P,
+        "images": [{"key": p.key, "file": f"preview_{p.key}.png", "renderer": p.renderer} for p in previews],
+        "notes": ([mode_note] if mode_note else []) + notes,
+        "error": preview_error,
+        "preview_seconds": time.perf_counter() - t0,
+    }
+    doc = {
+        "format": REPORT_FORMAT,
+        "format_version": REPORT_FORMAT_VERSION,
+        "status": "ok",
+        "name": name or brdf.name,
+        "source": str(source),
+        "brdf": {"name": brdf.name, "kind": brdf.kind, "analysis_of": analysis_of},
+        "options": options.as_dict(),
+        "orders": order_rows,
+        "main": {"tolerance": options.eps, "F": main_choice.F, "P": main_choice.P, "eps": main_choice.eps},
+        "eps_table": eps_table,
+        "environments": env_entries,
+        "speed_vs_error": speed_rows,
+        "fits": fit_entries,
+        "fit_slices": slices,
+        "data_checks": checks,
+        "warnings": _warnings(checks, order_rows, fit_entries, preview_block["notes"], analysis_note),
+        "preview": preview_block,
+        "error": None,
+        "provenance": {"shrmkit_version": __version__, "numpy_version": np.__version__},
+        "total_seconds": time.perf_counter() - t_start,
+    }
+    return jsonable(doc), previews
+
+
+def failed_report(source: str | Path, name: str, options: ReportOptions, error: str,
+                  seconds: float = 0.0) -> dict[str, Any]:
+    """The ``report.json`` of a BRDF whose report could not be made (``status: failed``)."""
+    return jsonable({
+        "format": REPORT_FORMAT,
+        "format_version": REPORT_FORMAT_VERSION,
+        "status": "failed",
+        "name": name,
+        "source": str(source),
+        "options": options.as_dict(),
+        "error": error,
+        "provenance": {"shrmkit_version": __version__, "numpy_version": np.__version__},
+        "total_seconds": seconds,
+    })

@@ -1,0 +1,149 @@
+"""Self-contained HTML: ``report.html`` (PNG plots embedded as base64 data URIs) and the
+batch ``index.html`` (a table sortable by clicking its headers, a few lines of inline JS).
+
+The report body is the Markdown of ``markdown.report_sections`` turned into HTML by a
+small converter for exactly the subset it writes (tables, bullet lists, bold, code,
+fenced code, images), so no Markdown package is needed.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import re
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+from .markdown import fmt, report_sections
+
+__all__ = ["markdown_to_html", "report_html", "index_html", "data_uri"]
+
+_STYLE = """
+body{font-family:system-ui,-apple-system,Segoe UI,Helvetica,Arial,sans-serif;margin:1.5em auto;max-width:1100px;
+color:#222;padding:0 1em}
+h1{font-size:1.6em;border-bottom:2px solid #444}h2{font-size:1.2em;margin-top:1.6em;border-bottom:1px solid #ccc}
+table{border-collapse:collapse;margin:.6em 0;font-size:.88em}th,td{border:1px solid #ccc;padding:.25em .55em;
+text-align:right}th{background:#f0f0f0}td:first-child,th:first-child{text-align:left}
+img{max-width:100%;border:1px solid #ddd;margin:.3em 0}code{background:#f4f4f4;padding:0 .2em}
+pre{background:#f4f4f4;padding:.6em;overflow:auto}.failed{color:#b00;font-weight:bold}.ok{color:#070}
+th.sortable{cursor:pointer}th.sortable:after{content:" \\2195";color:#999}
+"""
+
+_SORT_JS = """
+document.querySelectorAll('table.sortable').forEach(function(t){
+ t.querySelectorAll('th').forEach(function(th,i){th.classList.add('sortable');th.onclick=function(){
+  var b=t.tBodies[0],rows=Array.from(b.rows),asc=th.dataset.asc!=='1';th.dataset.asc=asc?'1':'0';
+  rows.sort(function(x,y){var a=x.cells[i].dataset.v||x.cells[i].textContent,c=y.cells[i].dataset.v||y.cells[i].textContent;
+   var na=parseFloat(a),nc=parseFloat(c);if(!isNaN(na)&&!isNaN(nc))return asc?na-nc:nc-na;
+   return asc?a.localeCompare(c):c.localeCompare(a);});rows.forEach(function(r){b.appendChild(r);});};});});
+"""
+
+
+def data_uri(png: bytes) -> str:
+    """``data:image/png;base64,...`` for embedding a PNG."""
+    return "data:image/png;base64," + base64.b64encode(png).decode("ascii")
+
+
+def _inline(text: str) -> str:
+    out = html.escape(text, quote=False)
+    out = re.sub(r"`([^`]+)`", r"<code>\1</code>", out)
+    out = re.sub(r"\*\*([^*]+)\*\*", r"<strong>\1</strong>", out)
+    return out
+
+
+def _cells(line: str) -> list[str]:
+    parts = re.split(r"(?<!\\)\|", line.strip())[1:-1]
+    return [p.strip().replace("\\|", "|") for p in parts]
+
+
+def markdown_to_html(text: str, images: Mapping[str, str] | None = None) -> str:
+    """HTML of the Markdown subset written by ``markdown.py``.
+
+    ``images`` maps an image file name to the ``src`` to use (e.g. a data URI); images
+    not in it keep their file name.
+    """
+    images = images or {}
+    lines = text.split("\n")
+    out: list[str] = []
+    i = 0
+    while i < len(lines):
+        line = lines[i]
+        if line.startswith("```"):
+            j = i + 1
+            while j < len(lines) and not lines[j].startswith("```"):
+                j += 1
+            out.append("<pre>" + html.escape("\n".join(lines[i + 1 : j])) + "</pre>")
+            i = j + 1
+        elif line.startswith("| "):
+            header = _cells(line)
+            rows = []
+            i += 2
+            while i < len(lines) and lines[i].startswith("| "):
+                rows.append(_cells(lines[i]))
+                i += 1
+            out.append("<table><thead><tr>" + "".join(f"<th>{_inline(h)}</th>" for h in header) + "</tr></thead><tbody>"
+                       + "".join("<tr>" + "".join(f"<td>{_inline(c)}</td>" for c in r) + "</tr>" for r in rows)
+                       + "</tbody></table>")
+        elif line.startswith("- "):
+            items = []
+            while i < len(lines) and lines[i].startswith("- "):
+                items.append(f"<li>{_inline(lines[i][2:])}</li>")
+                i += 1
+            out.append("<ul>" + "".join(items) + "</ul>")
+        elif m := re.fullmatch(r"!\[([^\]]*)\]\(([^)]+)\)", line.strip()):
+            alt, file = m.group(1), m.group(2)
+            src = images.get(file)
+            if src is not None:
+                out.append(f'<figure><img alt="{html.escape(alt)}" src="{src}"><figcaption>{html.escape(alt)}'
+                           "</figcaption></figure>")
+            i += 1
+        elif line.strip():
+            para = []
+            while i < len(lines) and lines[i].strip() and not lines[i].startswith(("| ", "- ", "```", "![")):
+                para.append(lines[i])
+                i += 1
+            out.append("<p>" + _inline(" ".join(para)) + "</p>")
+        else:
+            i += 1
+    return "\n".join(out)
+
+
+def _page(title: str, body: str, script: str = "") -> str:
+    return (f"<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{html.escape(title)}</title>"
+            f"<style>{_STYLE}</style></head><body>\n{body}\n"
+            + (f"<script>{script}</script>" if script else "") + "</body></html>\n")
+
+
+def report_html(doc: dict[str, Any], pngs: Mapping[str, bytes]) -> str:
+    """The self-contained ``report.html``: ``pngs`` maps file names (``plot_energy.png``,
+    ``preview_sphere.png``, ...) to PNG bytes, embedded as data URIs."""
+    images = {name: data_uri(data) for name, data in pngs.items()}
+    parts = [f"<h1>BRDF report: {html.escape(doc['name'])}</h1>"]
+    for title, body in report_sections(doc):
+        parts.append(f"<h2>{html.escape(title)}</h2>")
+        parts.append(markdown_to_html(body, images))
+    return _page(f"shrm report: {doc['name']}", "\n".join(parts))
+
+
+def index_html(columns: Sequence[str], rows: Sequence[Mapping[str, Any]], title: str = "shrm report summary",
+               notes: Sequence[str] = ()) -> str:
+    """The batch summary page: one row per BRDF, linked to its report, sortable columns."""
+    head = "".join(f"<th>{html.escape(c)}</th>" for c in columns)
+    body_rows = []
+    for row in rows:
+        cells = []
+        for c in columns:
+            value = row.get(c)
+            sort_key = "" if value is None else str(value)
+            if c == "name":
+                text = f'<a href="{html.escape(str(row["name"]))}/report.html">{html.escape(str(value))}</a>'
+            elif c == "status":
+                text = f'<span class="{"ok" if value == "ok" else "failed"}">{html.escape(str(value))}</span>'
+            else:
+                text = html.escape(fmt(value))
+            cells.append(f'<td data-v="{html.escape(sort_key)}">{text}</td>')
+        body_rows.append("<tr>" + "".join(cells) + "</tr>")
+    table = f'<table class="sortable"><thead><tr>{head}</tr></thead><tbody>{"".join(body_rows)}</tbody></table>'
+    note_html = "".join(f"<p>{html.escape(n)}</p>" for n in notes)
+    return _page(title, f"<h1>{html.escape(title)}</h1>{note_html}{table}<p>Click a column header to sort.</p>",
+                 _SORT_JS)

@@ -1,0 +1,145 @@
+"""``report.md``: a BRDF report as Markdown tables, linking the PNG files beside it.
+
+The text is built from ``report.json`` alone; :func:`report_sections` yields the
+(title, Markdown body) pairs that ``html.py`` renders too, so both say the same.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Sequence
+from typing import Any
+
+from .plots import PLOT_TITLES
+
+__all__ = ["fmt", "md_table", "report_sections", "report_markdown"]
+
+
+def fmt(value: Any, digits: int = 3) -> str:
+    """A number for a table: ``digits`` significant digits, ``—`` for missing."""
+    if value is None:
+        return "—"
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        return f"{value:.{digits}g}"
+    if isinstance(value, list | tuple):
+        return "×".join(fmt(v, digits) for v in value)
+    return str(value).replace("|", "\\|").replace("\n", " ")
+
+
+def md_table(header: Sequence[str], rows: Sequence[Sequence[Any]]) -> str:
+    """A GitHub-flavoured Markdown table."""
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    lines += ["| " + " | ".join(fmt(v) for v in row) + " |" for row in rows]
+    return "\n".join(lines)
+
+
+def _params_text(params: Any) -> str:
+    if isinstance(params, dict):
+        return ", ".join(f"{k}={_params_text(v)}" for k, v in params.items())
+    if isinstance(params, list):
+        if all(isinstance(v, int | float) for v in params):
+            return "/".join(fmt(v, 4) for v in params)
+        return "[" + "; ".join(_params_text(v) for v in params) + "]"
+    return fmt(params, 4)
+
+
+def report_sections(doc: dict[str, Any], image_link: Any = None) -> Iterator[tuple[str, str]]:
+    """(section title, Markdown body) pairs of a report.
+
+    ``image_link(key, file, alt)`` returns the Markdown (or HTML) of an image; the default
+    links ``file`` beside the report.
+    """
+    link = image_link or (lambda key, file, alt: f"![{alt}]({file})")
+    if doc["status"] != "ok":
+        yield "Failed", f"The report of `{doc['source']}` could not be made:\n\n```\n{doc.get('error')}\n```"
+        return
+    b = doc["brdf"]
+    head = [f"Source: `{doc['source']}` ({b['kind']}); main tolerance ε = {fmt(doc['main']['tolerance'])}: "
+            f"**F = {doc['main']['F']}, P = {doc['main']['P']}** (ε(F, P) = {fmt(doc['main']['eps'])})."]
+    if b["analysis_of"] != "brdf":
+        head.append(f"Orders, SHRMs and previews use `{b['analysis_of']}` (scattered measurements).")
+    head.append(f"Profile `{doc['options']['profile']}`, seed {doc['options']['seed']}, "
+                f"shrmkit {doc['provenance']['shrmkit_version']}; total {fmt(doc.get('total_seconds'))} s.")
+    yield "Summary", "\n\n".join(head)
+
+    if doc["warnings"]:
+        yield "Data warnings", "\n".join(f"- **{w['code']}**: {w['message']}" for w in doc["warnings"])
+    else:
+        yield "Data warnings", "None: no missing or clamped data, reciprocal, directional albedo ≤ 1."
+
+    rows = [[o["tolerance"], o["F"], o["P"], o["eps"], o["capped"], o["converged"], o["orders_seconds"]]
+            for o in doc["orders"]]
+    body = md_table(["tolerance", "F", "P", "ε(F, P)", "capped", "converged", "time (s)"], rows)
+    body += "\n\n" + link("energy", "plot_energy.png", PLOT_TITLES["energy"])
+    body += "\n\n" + link("accuracy_by_p", "plot_accuracy_by_p.png", PLOT_TITLES["accuracy_by_p"])
+    yield "Orders (RH02 §5.1)", body
+
+    rows = [[e["name"], f"{e['height']}×{e['width']}", e["F_L"], e["F_B"], e["P_B"], e["eps_B"], e["bound"],
+             e["measured_rel_rms"], e["n_pairs"]] for e in doc["environments"]]
+    body = (f"At ε = {fmt(doc['main']['tolerance'])}: F_L is the lighting's own order, F_B = min(F_ρ, F_L), "
+            "P_B = P_ρ; ε_B the predicted relative energy error of the reflected light field, the bound its "
+            "residual upper bound; the measured error is the relative RMS of the SHRM against brute-force "
+            "angular integration on random (R, V) pairs.\n\n")
+    body += md_table(["environment", "size", "F_L", "F_B", "P_B", "ε_B", "bound", "measured rel. RMS", "pairs"], rows)
+    yield "Environments", body
+
+    rows = [[r["env"], r["tolerance"], r["F_B"], r["P_B"], r["size"], r["eps_B"], r["sqrt_eps_B"], r["bound"],
+             r["measured_rel_rms"], r["prefilter_seconds"] * 1e3, r["reference_map_seconds"],
+             r["reference_map_seconds"] / max(r["prefilter_seconds"], 1e-12)] for r in doc["speed_vs_error"]]
+    body = md_table(["env", "ε", "F_B", "P_B", "SHRM size", "ε_B", "√ε_B", "bound", "measured rel. RMS",
+                     "prefilter (ms)", "angular (s, extrapolated)", "speed-up"], rows)
+    body += ("\n\nPrefilter time = order choice + lighting SHT + SHRM synthesis. The angular-domain time is the "
+             "reference's time on the random pairs, extrapolated to the same S×2S output.")
+    body += "\n\n" + link("speed_error", "plot_speed_error.png", PLOT_TITLES["speed_error"])
+    yield "Speed against error", body
+
+    rows = []
+    for f in doc["fits"]:
+        if f.get("error"):
+            rows.append([f["model"], "failed: " + f["error"], None, None, None, f["fit_seconds"]])
+        else:
+            rows.append([f["model"], f["spec"], f["errors"].get("rel_rms"), f["errors"].get("log_rms"),
+                         f["status"], f["fit_seconds"]])
+    body = md_table(["model", "fitted spec", "rel. RMS", "log RMS", "status", "time (s)"], rows)
+    params = [f"- {f['model']}: {_params_text(f['params'])}" for f in doc["fits"] if not f.get("error")]
+    if params:
+        body += "\n\nParameters:\n\n" + "\n".join(params)
+    band_rows = [[f["model"], f"{b['lo_deg']:g}–{b['hi_deg']:g}°", b["n"], b["rel_rms"], b["log_rms"]]
+                 for f in doc["fits"] for b in f.get("bands") or []]
+    if band_rows:
+        body += "\n\nError by view-elevation band:\n\n" + md_table(["model", "θ_o band", "samples", "rel. RMS",
+                                                                     "log RMS"], band_rows)
+        body += "\n\n" + link("fit_bands", "plot_fit_bands.png", PLOT_TITLES["fit_bands"])
+    body += "\n\n" + link("fit_slices", "plot_fit_slices.png", PLOT_TITLES["fit_slices"])
+    yield "Fits", body
+
+    c = doc["data_checks"]
+    rec = c["reciprocity"]
+    a = c["albedo"]
+    missing = c["n_missing"] if c["n_missing_above_surface"] is None else (
+        f"{c['n_missing']} ({c['n_missing_above_surface']} above the surface)")
+    rows = [["missing table samples", missing], ["clamped components", c["n_clamped"]],
+            ["reciprocity: max relative difference", f"{fmt(rec['max_rel'])} ({rec['method']}, {rec['n_pairs']} pairs)"],
+            ["max directional albedo", f"{fmt(a['max'])} at θ_o = {a['max_view_deg']:g}° (of the {a['of']})"]]
+    body = md_table(["check", "result"], rows)
+    body += "\n\nDirectional albedo per view (RGB): " + "; ".join(
+        f"{v:g}°: {'/'.join(fmt(x) for x in rgb)}" for v, rgb in zip(a["views_deg"], a["rgb"], strict=True))
+    yield "Data checks", body
+
+    p = doc["preview"]
+    parts = [f"{img['key']} ({img['renderer']}, ε = {fmt(p['tolerance'])}, F = {p['F']}, P = {p['P']}, "
+             f"environment {p['env']}):\n\n" + link(f"preview_{img['key']}", img["file"], f"preview {img['key']}")
+             for img in p["images"]]
+    parts += [f"- {n}" for n in p["notes"]]
+    yield "Preview", "\n\n".join(parts) if parts else "No preview."
+
+
+def report_markdown(doc: dict[str, Any]) -> str:
+    """The whole ``report.md``."""
+    out = [f"# BRDF report: {doc['name']}", ""]
+    for title, body in report_sections(doc):
+        out += [f"## {title}", "", body, ""]
+    return "\n".join(out)

@@ -1,0 +1,122 @@
+"""Write one BRDF's report folder atomically, and the batch summary (CSV and index.html).
+
+A report folder is assembled in a temporary folder beside its target and renamed into
+place, so a crash leaves either the old folder or the new one, never a half-written one
+(an existing folder is moved aside first and removed after the rename).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+import shutil
+import tempfile
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from ...brdf_io.atomic import atomic_path
+from .html import index_html, report_html
+from .markdown import report_markdown
+from .plots import make_plots
+
+__all__ = ["report_files", "write_folder", "summary_row", "summary_columns", "write_summary"]
+
+
+def report_files(doc: dict[str, Any], previews: Sequence[Any] = ()) -> dict[str, bytes]:
+    """Every file of a report folder: ``report.json``, ``report.md``, ``report.html`` and
+    the PNG plots and previews, as ``{file name: bytes}``."""
+    pngs = {f"plot_{key}.png": data for key, data in make_plots(doc).items()}
+    pngs.update({f"preview_{p.key}.png": p.png for p in previews})
+    files = {
+        "report.json": (json.dumps(doc, indent=1, ensure_ascii=False, allow_nan=False) + "\n").encode("utf-8"),
+        "report.md": report_markdown(doc).encode("utf-8"),
+        "report.html": report_html(doc, pngs).encode("utf-8"),
+    }
+    files.update(pngs)
+    return files
+
+
+def write_folder(out_dir: str | os.PathLike[str], name: str, files: Mapping[str, bytes]) -> Path:
+    """Write ``files`` into ``out_dir/name/`` atomically (temporary folder + rename)."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    final = out / name
+    tmp = Path(tempfile.mkdtemp(prefix=f".{name}.", suffix=".tmp", dir=out))
+    try:
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o777 & ~umask)
+        for file_name, data in files.items():
+            (tmp / file_name).write_bytes(data)
+        if final.exists():
+            old = Path(tempfile.mkdtemp(prefix=f".{name}.", suffix=".old", dir=out))
+            os.replace(final, old / name)
+            os.replace(tmp, final)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            os.replace(tmp, final)
+    finally:
+        if tmp.exists():
+            shutil.rmtree(tmp, ignore_errors=True)
+    return final
+
+
+def summary_row(doc: dict[str, Any]) -> dict[str, Any]:
+    """One summary row: name, status, (F, P) at each tolerance, fit errors, errors of the
+    SHRM against the reference, times (``*_seconds``), and the error of a failed report."""
+    row: dict[str, Any] = {"name": doc["name"], "status": doc["status"], "source": doc["source"]}
+    if doc["status"] != "ok":
+        row["error"] = doc.get("error")
+        row["total_seconds"] = doc.get("total_seconds")
+        return row
+    row["kind"] = doc["brdf"]["kind"]
+    for o in doc["orders"]:
+        row[f"F@{o['tolerance']:g}"] = o["F"]
+        row[f"P@{o['tolerance']:g}"] = o["P"]
+    for f in doc["fits"]:
+        row[f"fit_rel_rms_{f['model']}"] = None if f.get("error") else f["errors"].get("rel_rms")
+    for e in doc["environments"]:
+        row[f"shrm_rel_rms_{e['name']}"] = e["measured_rel_rms"]
+    row["warnings"] = len(doc["warnings"])
+    for f in doc["fits"]:
+        row[f"fit_{f['model']}_seconds"] = f.get("fit_seconds")
+    main = [r for r in doc["speed_vs_error"] if r["tolerance"] == doc["main"]["tolerance"]]
+    if main:
+        row["prefilter_seconds"] = main[0]["prefilter_seconds"]
+    row["total_seconds"] = doc.get("total_seconds")
+    row["error"] = None
+    return row
+
+
+def summary_columns(rows: Sequence[Mapping[str, Any]]) -> list[str]:
+    """Union of the rows' keys, in first-seen order, with ``error`` last."""
+    columns: list[str] = []
+    for row in rows:
+        for key in row:
+            if key not in columns:
+                columns.append(key)
+    if "error" in columns:
+        columns.remove("error")
+        columns.append("error")
+    return columns
+
+
+def write_summary(out_dir: str | os.PathLike[str], rows: Sequence[Mapping[str, Any]],
+                  notes: Sequence[str] = ()) -> tuple[Path, Path]:
+    """Write ``summary.csv`` and the sortable ``index.html`` into ``out_dir`` (atomically)."""
+    out = Path(out_dir)
+    columns = summary_columns(rows)
+    buf = io.StringIO()
+    writer = csv.DictWriter(buf, fieldnames=columns, lineterminator="\n")
+    writer.writeheader()
+    for row in rows:
+        writer.writerow({c: "" if row.get(c) is None else row.get(c) for c in columns})
+    csv_path, html_path = out / "summary.csv", out / "index.html"
+    with atomic_path(csv_path) as tmp:
+        tmp.write_text(buf.getvalue(), encoding="utf-8")
+    with atomic_path(html_path) as tmp:
+        tmp.write_text(index_html(columns, rows, notes=notes), encoding="utf-8")
+    return csv_path, html_path

@@ -1,0 +1,125 @@
+"""``shrm report``: per-BRDF accuracy reports and a sortable summary over a BRDF library.
+
+Exit status: 0 when every report was made, 1 when some BRDFs failed (each failure is in
+``summary.csv`` / ``index.html`` with its error, and has a ``report.json`` with
+``status: failed``), 2 for bad usage (unknown options, bad values, unreachable Dask
+scheduler).
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+from .common import stderr, stdout, tolerance
+
+HELP = "accuracy reports (orders, scene errors, fits, speed vs error, preview) for BRDFs, with a summary"
+
+
+def _csv_list(text: str) -> tuple[str, ...]:
+    items = tuple(t.strip() for t in text.split(",") if t.strip())
+    if not items:
+        raise argparse.ArgumentTypeError("expected a comma-separated list")
+    return items
+
+
+def _tolerances(text: str) -> tuple[float, ...]:
+    return tuple(tolerance(t) for t in _csv_list(text))
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be >= 1, got {text}")
+    return value
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("brdfs", nargs="+", metavar="BRDF", help="BRDF files (.binary, .npz, .brdf, .json) or spec strings")
+    p.add_argument("--eps", type=tolerance, default=0.03, help="main tolerance (scene orders, preview; default 0.03)")
+    p.add_argument("--tolerances", type=_tolerances, default=None,
+                   help="tolerances of the order table and speed rows (default 0.1,0.03,0.01)")
+    p.add_argument("--env", nargs="+", default=None, metavar="ENV",
+                   help="environment specs or files (default builtin:sky)")
+    p.add_argument("--env-height", type=_positive_int, default=None,
+                   help="environment rows used by the report (default 64, quick 32)")
+    p.add_argument("--models", type=_csv_list, default=None,
+                   help="models to fit, comma-separated (default lafortune,cook-torrance)")
+    p.add_argument("--lobes", type=_positive_int, default=1, help="Lafortune lobes (default 1)")
+    p.add_argument("--mesh", default=None, help="also preview this mesh (file or builtin:torus-knot ...)")
+    p.add_argument("--preview", choices=("auto", "gl", "cpu", "none"), default="auto",
+                   help="preview renderer: OpenGL if available else CPU (auto), or force one (default auto)")
+    p.add_argument("--pairs", type=_positive_int, default=None, help="(R, V) pairs for the measured error")
+    p.add_argument("--seed", type=int, default=0, help="seed of every random choice (default 0)")
+    p.add_argument("--quick", action="store_true",
+                   help="quick profile: 32-row environments, fewer pairs, small fits (what tests and demo use)")
+    p.add_argument("--out", default="shrm-report", help="output folder (default ./shrm-report)")
+    p.add_argument("--workers", type=_positive_int, default=1, help="parallel worker processes (default 1)")
+    p.add_argument("--dask-scheduler", default=None, metavar="ADDRESS",
+                   help="run the per-BRDF tasks on this Dask distributed scheduler (tcp://host:8786)")
+    p.add_argument("--max-F", type=_positive_int, default=None, help="cap on F (default 256, quick 96)")
+    p.add_argument("--fit-samples", type=_positive_int, default=None, help="fit samples (default 16384, quick 4096)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.epilog = "exit status: 0 all reports made, 1 some BRDFs failed (see summary), 2 bad usage"
+
+
+def options_from_args(args: argparse.Namespace):
+    """ReportOptions from the parsed arguments (the quick profile when ``--quick``)."""
+    from ..analysis.report.options import profile
+
+    changes = {"eps": args.eps, "lobes": args.lobes, "preview": args.preview, "seed": args.seed, "mesh": args.mesh}
+    for key, value in (("tolerances", args.tolerances), ("envs", tuple(args.env) if args.env else None),
+                       ("env_height", args.env_height), ("models", args.models), ("n_pairs", args.pairs),
+                       ("max_F", args.max_F), ("fit_samples", args.fit_samples)):
+        if value is not None:
+            changes[key] = value
+    return profile("quick" if args.quick else "full", **changes)
+
+
+def run_with_progress(sources: list[str], out: str, options, *, workers: int = 1, scheduler: str | None = None,
+                      show: bool = True):
+    """Run the batch with a rich progress bar on stderr; returns the BatchResult."""
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from ..analysis.report.batch import run_batch
+
+    columns = (TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+               TextColumn("{task.fields[stage]}"))
+    with Progress(*columns, console=stderr, transient=False, disable=not show) as bar:
+        task = bar.add_task("BRDFs", total=len(sources), stage="")
+
+        def progress(event: str, name: str, detail: str) -> None:
+            if event == "stage":
+                bar.update(task, stage=f"{name}: {detail}")
+            elif event == "done":
+                bar.advance(task)
+                bar.update(task, stage=f"{name}: {detail}")
+                if detail != "ok":
+                    bar.console.print(f"failed: {name}", markup=False, soft_wrap=True)
+
+        return run_batch(sources, out, options, workers=workers, scheduler=scheduler, progress=progress)
+
+
+def say(text: str) -> None:
+    """One plain line on stdout (no wrapping, no markup)."""
+    stdout.print(text, soft_wrap=True, markup=False, highlight=False)
+
+
+def run(args: argparse.Namespace) -> int:
+    options = options_from_args(args)
+    t0 = time.perf_counter()
+    result = run_with_progress(list(args.brdfs), args.out, options, workers=args.workers,
+                               scheduler=args.dask_scheduler, show=not args.no_progress)
+    for row in result.rows:
+        where = result.out_dir / row["name"] / "report.html"
+        if row["status"] == "ok":
+            say(f"{row['name']}: {where}")
+        else:
+            say(f"{row['name']}: FAILED: {row.get('error')}")
+    say(f"summary: {result.out_dir / 'index.html'} and {result.out_dir / 'summary.csv'}")
+    say(f"{len(result.rows) - result.n_failed} of {len(result.rows)} reports made in "
+                 f"{time.perf_counter() - t0:.1f} s ({result.engine})")
+    return 0 if result.ok else 1
