@@ -212,7 +212,8 @@ class SHRMRenderer:
         """
         for obj in self._objects:
             if obj.mode == "rsibr":  # Cabral et al. 1999: blend of the face's three maps
-                obj.buffer.reshape(obj.rsibr.maps.shape[1:])[...] = obj.rsibr.view_map(camera.view_direction(obj.center))
+                blended = obj.rsibr.view_map(camera.view_direction(obj.center))
+                obj.buffer.reshape(blended.shape)[...] = blended
                 obj.image.Modified()
                 continue
             if obj.mode != "distant":

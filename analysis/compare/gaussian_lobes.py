@@ -155,7 +155,7 @@ def sg_mip_stack(
     m_of = np.concatenate([np.full(lmax + 1 - m, m) for m in range(lmax + 1)])
     sigmas = s0 * 2.0 ** np.arange(J)
     levels = []
-    for j, sigma in enumerate(sigmas):
+    for sigma in sigmas:
         # pixel pitch π/h at most σ/4: bilinear lookup of the blurred map then errs by ~(π/h)²/8σ² < 1%
         h = int(min(height, max(8, 2 ** int(np.ceil(np.log2(4.0 * np.pi / sigma))))))
         lj = min(lmax, h - 1)

@@ -43,7 +43,11 @@ def directional_albedo(brdf: BRDF, views_deg: tuple[float, ...] = ALBEDO_VIEWS_D
     phi = (np.arange(n_phi) + 0.5) * 2.0 * np.pi / n_phi
     sin = np.sqrt(1.0 - mu**2)
     L = np.stack(
-        [sin[:, None] * np.cos(phi)[None, :], sin[:, None] * np.sin(phi)[None, :], np.broadcast_to(mu[:, None], (mu.size, n_phi))],
+        [
+            sin[:, None] * np.cos(phi)[None, :],
+            sin[:, None] * np.sin(phi)[None, :],
+            np.broadcast_to(mu[:, None], (mu.size, n_phi)),
+        ],
         axis=-1,
     )
     weight = w_mu[:, None] * (2.0 * np.pi / n_phi)
@@ -72,7 +76,12 @@ def reciprocity_check(brdf: BRDF, n: int = 2000, seed: int = 0) -> dict[str, Any
     b = brdf.eval(V, L)
     scale = float(max(np.max(np.abs(a)), np.max(np.abs(b)), 1e-300))
     diff = np.abs(a - b) / scale
-    return {"method": "random pairs", "n_pairs": int(n), "max_rel": float(diff.max()), "rms_rel": float(np.sqrt(np.mean(diff**2)))}
+    return {
+        "method": "random pairs",
+        "n_pairs": int(n),
+        "max_rel": float(diff.max()),
+        "rms_rel": float(np.sqrt(np.mean(diff**2))),
+    }
 
 
 def _angles(L: np.ndarray, V: np.ndarray) -> np.ndarray:

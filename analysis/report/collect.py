@@ -38,7 +38,7 @@ from ...brdf_io.envmap import load_env
 from ...brdf_io.errors import BadInputError
 from .checks import RECIPROCITY_TOLERANCE, data_checks
 from .options import ReportOptions
-from .preview import PreviewImage, render_previews
+from .preview import PREVIEW_DISABLED, PreviewImage, render_previews
 
 __all__ = [
     "REPORT_FORMAT",
@@ -196,7 +196,8 @@ def _slices(brdf: BRDF, fitted: list[Any], models: tuple[str, ...]) -> dict[str,
                     _plane_directions(_SLICE_THETA_DEG), _plane_directions(np.full_like(_SLICE_THETA_DEG, view))
                 ).tolist()) for m, f in zip(models, fitted, strict=True)},
             })
-        return {"theta_deg": _SLICE_THETA_DEG.tolist(), "views": views, "measured": "scattered samples within 3 deg of the plane"}
+        return {"theta_deg": _SLICE_THETA_DEG.tolist(), "views": views,
+                "measured": "scattered samples within 3 deg of the plane"}
     L = _plane_directions(_SLICE_THETA_DEG)
     for view in SLICE_VIEWS_DEG:
         V = np.broadcast_to(_plane_directions(np.array([view]))[0], L.shape)
@@ -460,7 +461,8 @@ def collect_report(
         "fits": fit_entries,
         "fit_slices": slices,
         "data_checks": checks,
-        "warnings": _warnings(checks, order_rows, fit_entries, preview_block["notes"], analysis_note),
+        "warnings": _warnings(checks, order_rows, fit_entries,
+                              [n for n in preview_block["notes"] if n != PREVIEW_DISABLED], analysis_note),
         "preview": preview_block,
         "error": None,
         "provenance": {"shrmkit_version": __version__, "numpy_version": np.__version__},

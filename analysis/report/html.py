@@ -19,8 +19,8 @@ from .markdown import fmt, report_sections
 __all__ = ["markdown_to_html", "report_html", "index_html", "data_uri"]
 
 _STYLE = """
-body{font-family:system-ui,-apple-system,Segoe UI,Helvetica,Arial,sans-serif;margin:1.5em auto;max-width:1100px;
-color:#222;padding:0 1em}
+body{font-family:system-ui,-apple-system,Segoe UI,Helvetica,Arial,sans-serif;margin:1.5em auto;
+max-width:1100px;color:#222;padding:0 1em}
 h1{font-size:1.6em;border-bottom:2px solid #444}h2{font-size:1.2em;margin-top:1.6em;border-bottom:1px solid #ccc}
 table{border-collapse:collapse;margin:.6em 0;font-size:.88em}th,td{border:1px solid #ccc;padding:.25em .55em;
 text-align:right}th{background:#f0f0f0}td:first-child,th:first-child{text-align:left}
@@ -33,7 +33,8 @@ _SORT_JS = """
 document.querySelectorAll('table.sortable').forEach(function(t){
  t.querySelectorAll('th').forEach(function(th,i){th.classList.add('sortable');th.onclick=function(){
   var b=t.tBodies[0],rows=Array.from(b.rows),asc=th.dataset.asc!=='1';th.dataset.asc=asc?'1':'0';
-  rows.sort(function(x,y){var a=x.cells[i].dataset.v||x.cells[i].textContent,c=y.cells[i].dataset.v||y.cells[i].textContent;
+  rows.sort(function(x,y){var a=x.cells[i].dataset.v||x.cells[i].textContent,
+   c=y.cells[i].dataset.v||y.cells[i].textContent;
    var na=parseFloat(a),nc=parseFloat(c);if(!isNaN(na)&&!isNaN(nc))return asc?na-nc:nc-na;
    return asc?a.localeCompare(c):c.localeCompare(a);});rows.forEach(function(r){b.appendChild(r);});};});});
 """

@@ -122,7 +122,8 @@ def report_sections(doc: dict[str, Any], image_link: Any = None) -> Iterator[tup
     missing = c["n_missing"] if c["n_missing_above_surface"] is None else (
         f"{c['n_missing']} ({c['n_missing_above_surface']} above the surface)")
     rows = [["missing table samples", missing], ["clamped components", c["n_clamped"]],
-            ["reciprocity: max relative difference", f"{fmt(rec['max_rel'])} ({rec['method']}, {rec['n_pairs']} pairs)"],
+            ["reciprocity: max relative difference",
+             f"{fmt(rec['max_rel'])} ({rec['method']}, {rec['n_pairs']} pairs)"],
             ["max directional albedo", f"{fmt(a['max'])} at θ_o = {a['max_view_deg']:g}° (of the {a['of']})"]]
     body = md_table(["check", "result"], rows)
     body += "\n\nDirectional albedo per view (RGB): " + "; ".join(

@@ -18,10 +18,12 @@ from ...brdf_io.envmap import EnvironmentMap
 from ..shrm import SHRM
 
 __all__ = [
-    "PREVIEW_VIEW", "PreviewImage", "png_bytes", "render_previews", "resolve_preview_mode", "preview_camera",
-    "cpu_sphere_image", "preview_exposure", "unit_mesh",
+    "PREVIEW_DISABLED", "PREVIEW_VIEW", "PreviewImage", "png_bytes", "render_previews", "resolve_preview_mode",
+    "preview_camera", "cpu_sphere_image", "preview_exposure", "unit_mesh",
 ]
 
+#: the note of a report made with ``preview="none"`` (not a warning)
+PREVIEW_DISABLED = "preview disabled"
 #: direction from the object toward the camera (z-up frame): slightly above the horizon
 PREVIEW_VIEW = (1.0, 0.35, 0.45)
 
@@ -99,7 +101,7 @@ def render_previews(
     from ...render.output import to_8bit
 
     if mode == "none":
-        return [], ["preview disabled"]
+        return [], [PREVIEW_DISABLED]
     images: list[PreviewImage] = []
     notes: list[str] = []
     exposure = preview_exposure(env)

@@ -106,7 +106,8 @@ def summary_columns(rows: Sequence[Mapping[str, Any]]) -> list[str]:
 
 def write_summary(out_dir: str | os.PathLike[str], rows: Sequence[Mapping[str, Any]],
                   notes: Sequence[str] = ()) -> tuple[Path, Path]:
-    """Write ``summary.csv`` and the sortable ``index.html`` into ``out_dir`` (atomically)."""
+    """Write ``summary.csv`` and the sortable ``index.html`` (without the long ``source``
+    column) into ``out_dir``, atomically."""
     out = Path(out_dir)
     columns = summary_columns(rows)
     buf = io.StringIO()
@@ -118,5 +119,5 @@ def write_summary(out_dir: str | os.PathLike[str], rows: Sequence[Mapping[str, A
     with atomic_path(csv_path) as tmp:
         tmp.write_text(buf.getvalue(), encoding="utf-8")
     with atomic_path(html_path) as tmp:
-        tmp.write_text(index_html(columns, rows, notes=notes), encoding="utf-8")
+        tmp.write_text(index_html([c for c in columns if c != "source"], rows, notes=notes), encoding="utf-8")
     return csv_path, html_path

@@ -59,7 +59,8 @@ def test_sg_norm_and_zonal_factors_against_quadrature() -> None:
         g = np.exp((t - 1.0) / sigma**2)
         assert sg_norm(sigma) == pytest.approx(2.0 * np.pi * np.sum(w * g), rel=1e-12)
         quad = np.array([2.0 * np.pi * np.sum(w * g * eval_legendre(l, t)) for l in range(30)]) / sg_norm(sigma)
-        np.testing.assert_allclose(sg_zonal_factors(sigma, 29), quad, rtol=1e-9, atol=1e-12)  # quadrature of P_l loses ~1e-13
+        # atol: the quadrature of P_l loses ~1e-13 to cancellation
+        np.testing.assert_allclose(sg_zonal_factors(sigma, 29), quad, rtol=1e-9, atol=1e-12)
 
 
 def test_k1_fit_recovers_width_and_weight() -> None:

@@ -1,0 +1,116 @@
+"""``shrm bench``: run the speed-against-error benchmarks in one process and print their tables.
+
+The benchmark scripts live in the source tree's ``benchmarks/`` folder (they are not part
+of the installed package): ``prefilter_speed.py`` (frequency-space vs angular-domain
+prefiltering, RH02 Tables 4–5, with the measured speed-up ratios and errors),
+``fit_speed.py`` (fit times and errors) and ``render_speed.py`` (frames per second; needs
+an offscreen OpenGL context and is skipped without one). Each is loaded from its file and
+its ``main`` called with ``--quick`` when asked; a benchmark that fails is reported and the
+others still run (exit status 1 if any failed).
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import importlib.util
+import inspect
+import sys
+import time
+from pathlib import Path
+
+from .common import stdout
+
+HELP = "run the speed-against-error benchmarks (prefilter vs angular reference, fits, render fps) and print tables"
+
+BENCHMARKS = {
+    "prefilter": ("prefilter_speed.py", "frequency-space vs angular-domain prefiltering (RH02 Tables 4-5)"),
+    "fit": ("fit_speed.py", "fit times and errors"),
+    "render": ("render_speed.py", "SHRM shader frames per second"),
+}
+
+
+def _default_folder() -> Path:
+    import shrmkit
+
+    return Path(shrmkit.__file__).resolve().parent / "benchmarks"
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--quick", action="store_true", help="the benchmarks' quick variants (about a minute each)")
+    p.add_argument("--only", choices=tuple(BENCHMARKS), nargs="+", default=None, help="run only these benchmarks")
+    p.add_argument("--benchmarks", default=None, metavar="DIR",
+                   help="folder of the benchmark scripts (default: benchmarks/ of the source checkout)")
+
+
+def _say(text: str) -> None:
+    stdout.print(text, soft_wrap=True, markup=False, highlight=False)
+
+
+def _load(path: Path):
+    spec = importlib.util.spec_from_file_location(f"shrm_bench_{path.stem}", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@contextlib.contextmanager
+def _argv(args: list[str]):
+    saved = sys.argv
+    sys.argv = [saved[0], *args]
+    try:
+        yield
+    finally:
+        sys.argv = saved
+
+
+def run_benchmark(path: Path, quick: bool) -> None:
+    """Load a benchmark script and call its ``main`` (with ``--quick`` if asked)."""
+    args = ["--quick"] if quick else []
+    module = _load(path)
+    main = getattr(module, "main", None)
+    if main is None:
+        raise RuntimeError(f"{path.name} has no main() entry point")
+    takes_argv = bool(inspect.signature(main).parameters)
+    with _argv(args):
+        rc = main(args) if takes_argv else main()
+    if isinstance(rc, int) and rc != 0:
+        raise RuntimeError(f"{path.name} exited with status {rc}")
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..brdf_io.errors import BadInputError
+
+    folder = Path(args.benchmarks) if args.benchmarks else _default_folder()
+    if not folder.is_dir():
+        raise BadInputError(folder, "no benchmarks folder (shrm bench needs a source checkout; pass --benchmarks DIR)")
+    names = args.only or list(BENCHMARKS)
+    results = []
+    for name in names:
+        file, what = BENCHMARKS[name]
+        path = folder / file
+        _say(f"\n=== {name}: {what} ({path}){' --quick' if args.quick else ''}")
+        if not path.is_file():
+            results.append((name, "missing", 0.0, f"{path} not found"))
+            _say(f"skipped: {path} not found")
+            continue
+        if name == "render":
+            from ..render.offscreen import probe_offscreen
+
+            ok, message = probe_offscreen(timeout=60.0)
+            if not ok:
+                results.append((name, "skipped", 0.0, f"no offscreen OpenGL: {message}"))
+                _say(f"skipped: no offscreen OpenGL context ({message})")
+                continue
+        t0 = time.perf_counter()
+        try:
+            run_benchmark(path, args.quick)
+        except Exception as err:  # one failing benchmark must not hide the others
+            results.append((name, "FAILED", time.perf_counter() - t0, f"{type(err).__name__}: {err}"))
+            _say(f"FAILED: {type(err).__name__}: {err}")
+            continue
+        results.append((name, "ok", time.perf_counter() - t0, ""))
+    _say("\n=== summary")
+    for name, status, seconds, note in results:
+        _say(f"{name:10s} {status:8s} {seconds:7.1f} s  {note}")
+    return 1 if any(status == "FAILED" for _, status, _, _ in results) else 0

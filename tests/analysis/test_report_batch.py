@@ -1,0 +1,114 @@
+"""Batch reports: a corrupt file among good ones, atomic folders, summary files, and the
+same results from the serial, process-pool and Dask engines."""
+
+from __future__ import annotations
+
+import csv
+import json
+
+import numpy as np
+import pytest
+
+from shrmkit.analysis.report.batch import report_names, run_batch
+from shrmkit.analysis.report.collect import strip_timings
+from shrmkit.analysis.report.options import profile
+from shrmkit.analysis.report.writer import write_folder
+
+GOOD = ["lafortune:kd=0.2,n=30,ks=2", "lambert:albedo=0.5"]
+
+
+def tiny_options():
+    return profile("quick", preview="none", models=("lafortune",), tolerances=(0.1,), eps=0.1, n_pairs=30,
+                   fit_samples=1024, albedo_nodes=16)
+
+
+def reports(out):
+    return {d.name: strip_timings(json.loads((d / "report.json").read_text())) for d in sorted(out.iterdir())
+            if d.is_dir()}
+
+
+@pytest.fixture(scope="module")
+def serial_batch(tmp_path_factory):
+    root = tmp_path_factory.mktemp("batch")
+    corrupt = root / "broken.binary"
+    corrupt.write_bytes(np.array([90, 90, 180], "<i4").tobytes() + b"\x00" * 1000)  # truncated MERL file
+    sources = [GOOD[0], str(corrupt), GOOD[1]]
+    events = []
+    result = run_batch(sources, root / "serial", tiny_options(), progress=lambda *e: events.append(e))
+    return root, sources, result, events
+
+
+def test_corrupt_file_is_reported_and_does_not_stop_the_batch(serial_batch):
+    root, sources, result, events = serial_batch
+    out = root / "serial"
+    assert result.n_failed == 1 and not result.ok
+    assert [r["status"] for r in result.rows] == ["ok", "failed", "ok"]
+    assert "truncated" in result.rows[1]["error"] and "broken.binary" in result.rows[1]["error"]
+    failed = json.loads((out / "broken" / "report.json").read_text())
+    assert failed["status"] == "failed" and "truncated" in failed["error"]
+    for name in ("lafortune_kd_0.2_n_30_ks_2", "lambert_albedo_0.5"):
+        doc = json.loads((out / name / "report.json").read_text())
+        assert doc["status"] == "ok"
+        assert (out / name / "report.html").read_text().count("data:image/png;base64,") >= 3
+        assert (out / name / "report.md").read_text().startswith("# BRDF report")
+    # the summary: one row per BRDF in input order, failure with its error
+    with open(out / "summary.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert [r["status"] for r in rows] == ["ok", "failed", "ok"]
+    assert rows[1]["error"].startswith(str(sources[1]))
+    assert rows[0]["F@0.1"] and rows[0]["fit_rel_rms_lafortune"]
+    index = (out / "index.html").read_text()
+    assert "broken" in index and 'class="sortable"' in index and "<script>" in index
+    # no temporary folders left behind (atomic writes)
+    assert not [p.name for p in out.iterdir() if p.name.startswith(".")]
+    # progress: every BRDF started and finished, stages reported
+    assert [e[1] for e in events if e[0] == "done"] == ["lafortune_kd_0.2_n_30_ks_2", "broken", "lambert_albedo_0.5"]
+    assert any(e[0] == "stage" and e[2] == "orders" for e in events)
+
+
+def test_lambert_albedo_in_batch_report(serial_batch):
+    """Lambert: directional albedo = albedo at every view (closed form), no warnings."""
+    root, _, _, _ = serial_batch
+    doc = json.loads((root / "serial" / "lambert_albedo_0.5" / "report.json").read_text())
+    np.testing.assert_allclose(doc["data_checks"]["albedo"]["rgb"], 0.5, rtol=1e-9)
+    assert doc["warnings"] == []
+
+
+@pytest.mark.slow
+def test_workers_match_serial(serial_batch):
+    """--workers 2 (spawned processes) gives the same reports as the serial run."""
+    root, sources, _, _ = serial_batch
+    result = run_batch(sources, root / "workers", tiny_options(), workers=2)
+    assert result.engine.startswith("2 processes") and result.n_failed == 1
+    assert reports(root / "workers") == reports(root / "serial")
+
+
+def test_dask_matches_serial(serial_batch):
+    """The same tasks on a Dask LocalCluster (in-process workers) give the same reports."""
+    distributed = pytest.importorskip("distributed")
+    root, sources, _, _ = serial_batch
+    with distributed.LocalCluster(
+        n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None
+    ) as cluster:
+        result = run_batch(sources, root / "dask", tiny_options(), scheduler=cluster.scheduler_address)
+    assert result.engine.startswith("dask") and result.n_failed == 1
+    assert [r["name"] for r in result.rows] == [r["name"] for r in run_rows(root / "serial")]
+    assert reports(root / "dask") == reports(root / "serial")
+
+
+def run_rows(out):
+    with open(out / "summary.csv", newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def test_report_names_are_unique_and_safe(tmp_path):
+    names = report_names(["a/b/gold.binary", "c/gold.binary", "phong:s=8", "x.npz"])
+    assert names == ["gold", "gold-2", "phong_s_8", "x"]
+
+
+def test_write_folder_replaces_atomically(tmp_path):
+    write_folder(tmp_path, "r", {"a.txt": b"one", "b.txt": b"two"})
+    write_folder(tmp_path, "r", {"a.txt": b"new"})
+    assert sorted(p.name for p in (tmp_path / "r").iterdir()) == ["a.txt"]
+    assert (tmp_path / "r" / "a.txt").read_bytes() == b"new"
+    assert [p.name for p in tmp_path.iterdir()] == ["r"]
