@@ -177,11 +177,6 @@ def choose_orders(
             F_goal, P_goal = max(F_goal, F), max(P_goal, P)
         else:
             break
-    if capped:
-        notes.append(
-            f"tolerance {eps:g} not met within the caps F<={max_F}, P<={max_P}: "
-            f"ε({F}, {P}) = {table[F, P]:.3g}; raise --max-F/--max-P"
-        )
     # convergence check on a 1.5x finer grid
     converged = False
     for _ in range(3):
@@ -197,6 +192,11 @@ def choose_orders(
         if same:
             converged = True
             break
+    if capped:
+        notes.append(
+            f"tolerance {eps:g} not met within the caps F<={max_F}, P<={max_P}: "
+            f"ε({F}, {P}) = {table[F, P]:.3g}; raise --max-F/--max-P"
+        )
     if not converged:
         notes.append("the order choice did not settle under quadrature refinement (table too coarse?)")
     if missing:

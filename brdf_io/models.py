@@ -38,6 +38,7 @@ __all__ = [
     "LafortuneLobe",
     "Lafortune",
     "CookTorrance",
+    "smith_g1_over_cos",
     "rgb",
 ]
 
@@ -203,15 +204,23 @@ class Lafortune(_Analytic):
         return "lafortune:" + ",".join(parts)
 
 
-def _smith_g1(cos_t: np.ndarray, alpha: float, distribution: str) -> np.ndarray:
-    """Smith masking G1 for a direction at cos θ to the normal (Walter et al. 2007)."""
-    cos_t = np.clip(cos_t, 1e-12, 1.0)
-    tan2 = (1.0 - cos_t**2) / cos_t**2
+def smith_g1_over_cos(cos_t: np.ndarray, alpha: float, distribution: str) -> np.ndarray:
+    """Smith masking G1(θ) divided by cos θ, finite down to grazing (Walter et al. 2007).
+
+    GGX (exact): G1/cos = 2 / (cos θ + sqrt(cos² θ + α² sin² θ)), 2/α at grazing.
+    Beckmann (Walter's rational approximation in a = cos θ/(α sin θ)): for a < 1.6,
+    G1/cos = (3.535 + 2.181 a) / (α sin θ (1 + 2.276 a + 2.577 a²)), else 1/cos θ.
+    Dividing analytically keeps ρ = D F G/(4 cos θ_i cos θ_o) finite where a cosine
+    underflows (a MERL sample exactly on the horizon, say).
+    """
+    c = np.clip(cos_t, 0.0, 1.0)
+    s = np.sqrt(1.0 - c * c)
     if distribution == "ggx":
-        return 2.0 / (1.0 + np.sqrt(1.0 + alpha**2 * tan2))
-    # a = 1/(α tan θ); a >= 1.6 (including normal incidence, tan θ = 0) means G1 = 1
-    a = np.minimum(1.6, 1.0 / (alpha * np.maximum(np.sqrt(tan2), 1e-300)))
-    return np.where(a < 1.6, (3.535 * a + 2.181 * a**2) / (1.0 + 2.276 * a + 2.577 * a**2), 1.0)
+        return 2.0 / (c + np.sqrt(c * c + alpha**2 * s * s))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a = np.where(s > 0, c / (alpha * np.where(s > 0, s, 1.0)), np.inf)
+        rational = (3.535 + 2.181 * a) / (alpha * s * (1.0 + 2.276 * a + 2.577 * a * a))
+        return np.where(a < 1.6, rational, 1.0 / np.where(c > 0, c, 1.0))
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -237,14 +246,19 @@ class CookTorrance(_Analytic):
         cos_i, cos_o = L[..., 2], V[..., 2]
         above = (cos_i > 0) & (cos_o > 0)
         cos_h, cos_d = _half_vector_cos(L, V)
-        D = np.where(cos_h > 0, self.distribution_value(cos_h), 0.0)
-        G = _smith_g1(cos_i, self.alpha, self.distribution) * _smith_g1(
-            cos_o, self.alpha, self.distribution
-        )
         fresnel = self.f0 + (1.0 - self.f0) * (1.0 - np.clip(cos_d, 0, 1))[..., None] ** 5
-        denom = 4.0 * np.where(above, cos_i * cos_o, 1.0)
-        spec = (D * G / denom)[..., None] * fresnel * self.ks
+        spec = self.microfacet_term(cos_i, cos_o, cos_h)[..., None] * fresnel * self.ks
         return np.where(above[..., None], self.kd / np.pi + spec, 0.0)
+
+    def microfacet_term(self, cos_i: np.ndarray, cos_o: np.ndarray, cos_h: np.ndarray) -> np.ndarray:
+        """D(θ_h) G(θ_i, θ_o) / (4 cos θ_i cos θ_o), finite down to grazing angles."""
+        D = np.where(cos_h > 0, self.distribution_value(cos_h), 0.0)
+        return (
+            D
+            * smith_g1_over_cos(cos_i, self.alpha, self.distribution)
+            * smith_g1_over_cos(cos_o, self.alpha, self.distribution)
+            / 4.0
+        )
 
     def to_spec(self) -> str:
         return (

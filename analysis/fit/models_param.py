@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from ...brdf_io.brdf import BRDF
-from ...brdf_io.models import CookTorrance, Lafortune, LafortuneLobe, SimplifiedMicrofacet, _smith_g1, rgb
+from ...brdf_io.models import CookTorrance, Lafortune, LafortuneLobe, SimplifiedMicrofacet, rgb
 from .sampling import FitSamples
 
 __all__ = [
@@ -217,9 +217,7 @@ class CookTorranceParam(ModelParam):
     def basis(self, x: np.ndarray, geo: Geometry) -> tuple[np.ndarray, np.ndarray]:
         alpha = float(np.exp(x[0]))
         proto = CookTorrance(kd=rgb(0.0), ks=rgb(1.0), alpha=alpha, f0=rgb(1.0), distribution=self.distribution)
-        D = np.where(geo.cos_h > 0, proto.distribution_value(geo.cos_h), 0.0)
-        G = _smith_g1(geo.cos_i, alpha, self.distribution) * _smith_g1(geo.cos_o, alpha, self.distribution)
-        s0 = D * G / (4.0 * geo.cos_i * geo.cos_o)
+        s0 = proto.microfacet_term(geo.cos_i, geo.cos_o, geo.cos_h)
         s1 = s0 * (1.0 - np.clip(geo.cos_d, 0.0, 1.0)) ** 5
         B, log_scale = _normalized_columns([np.full(len(s0), 1.0 / np.pi), s0, s1])
         return B, log_scale

@@ -101,3 +101,15 @@ def test_missing_merl_data_counted(tmp_path):
     o = shrmkit.choose_orders(shrmkit.load_brdf(path), eps=0.1, max_F=24, max_P=3)
     assert np.all(np.isfinite(o.table))
     assert o.n_without_data > 0 and "no measurement" in o.message
+
+
+def test_merl_tabulated_cook_torrance_keeps_its_orders(tmp_path):
+    """A reciprocal model written to MERL needs the same (F, P) as the model itself (±1)."""
+    from shrmkit.brdf_io.merl import write_merl
+
+    spec = "cook-torrance:kd=0.2/0.1/0.05,ks=1,alpha=0.3,f0=0.9/0.6/0.3,dist=ggx"
+    direct = shrmkit.choose_orders(shrmkit.load_brdf(spec), eps=0.05, max_F=64, max_P=10)
+    merl = shrmkit.choose_orders(shrmkit.load_brdf(write_merl(tmp_path / "ct.binary", shrmkit.load_brdf(spec))),
+                                 eps=0.05, max_F=64, max_P=10)
+    assert not direct.capped and not merl.capped
+    assert abs(direct.F - merl.F) <= 1 and abs(direct.P - merl.P) <= 1

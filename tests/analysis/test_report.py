@@ -259,3 +259,24 @@ def test_options_are_validated():
     with pytest.raises(shrmkit.BadInputError, match="profile"):
         profile("fast")
     assert profile("quick", eps=0.05).all_tolerances == (0.1, 0.05, 0.03, 0.01)
+
+
+@pytest.mark.slow
+def test_scattered_cornell_report_uses_the_fit(shared_data):
+    """Cornell krylon_blue (real scattered measurements, /work/shared/data): the analysis runs
+    on the fitted model; out-of-gamut components clamped on input are reported; the measured
+    slices come from the file's samples (1439 rows, θ_i in 10°…80°)."""
+    from shrmkit.brdf_io.cornell import read_cornell
+
+    path = shared_data / "brdf" / "cornell" / "krylon_blue.brdf"
+    raw = read_cornell(path)
+    options = profile("quick", preview="none", models=("lafortune",), tolerances=(0.1,), eps=0.1, n_pairs=50)
+    doc, _ = collect_report(path, options)
+    assert validate(doc, OK_SCHEMA) == []
+    assert doc["brdf"]["kind"] == "scattered" and doc["brdf"]["analysis_of"] == "fit:lafortune"
+    assert doc["data_checks"]["n_measurements"] == len(raw) == 1439
+    assert doc["data_checks"]["n_clamped"] == raw.n_clipped > 0
+    codes = {w["code"] for w in doc["warnings"]}
+    assert {"clamped_values", "analysis_on_fit"} <= codes
+    views = [v["view_deg"] for v in doc["fit_slices"]["views"]]
+    assert set(views) <= {10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 80.0}

@@ -121,3 +121,18 @@ def test_model_json_file(tmp_path):
     path.write_text('{"other": 1}')
     with pytest.raises(BadInputError, match="model_spec"):
         shrmkit.load_brdf(path)
+
+
+@pytest.mark.parametrize("dist, limit", [("ggx", 2 / 0.3), ("beckmann", 3.535 / 0.3)])
+def test_cook_torrance_finite_at_grazing(dist, limit):
+    """G1/cos θ → 2/α (GGX) and 3.535/α (Walter's Beckmann) as θ → 90°: a light direction
+    on the horizon up to round-off must not blow ρ up (regression: 1.8e3 at cos θ_i = 1e-16)."""
+    from shrmkit.brdf_io.models import smith_g1_over_cos
+
+    assert smith_g1_over_cos(np.array(1e-16), 0.3, dist) == pytest.approx(limit, rel=1e-9)
+    model = CookTorrance(kd=rgb(0), ks=rgb(1), alpha=0.3, f0=rgb(1), distribution=dist)
+    V = np.array([0.0, np.sin(0.2), np.cos(0.2)])
+    for cos_i in (1e-16, 1e-8, 1e-4):
+        L = np.array([-np.sqrt(1 - cos_i**2), 0.0, cos_i])
+        value = model.eval(L, V)[0]
+        assert np.isfinite(value) and value < 10.0
