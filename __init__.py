@@ -30,6 +30,7 @@ _LAZY = {
     "load_shrm": "shrmkit.analysis.shrm_file",
     "SHRM": "shrmkit.analysis.shrm",
     "fit_brdf": "shrmkit.analysis.fit",
+    "compare": "shrmkit.analysis.compare",
 }
 
 __all__ = ["__version__", *_LAZY]
