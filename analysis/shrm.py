@@ -389,9 +389,20 @@ def cube_directions(size: int) -> np.ndarray:
     return np.stack(faces)
 
 
-def default_size(F: int) -> int:
-    """S_B from the rule S ≈ 10F (RH02 §5.2), clamped to [32, 1024]."""
-    return int(np.clip(10 * F, 32, 1024))
+DEFAULT_MAP_BUDGET_BYTES = 256 << 20
+
+
+def default_size(F: int, P: int = 0, budget_bytes: int = DEFAULT_MAP_BUDGET_BYTES) -> int:
+    """S_B from the rule S ≈ 10F (RH02 §5.2), clamped to [32, 1024] and to a memory budget.
+
+    The global SHRM holds (P+1)² float32 RGB maps of S × 2S: the default S is lowered
+    until they fit in ``budget_bytes`` (256 MiB), which keeps high-P materials usable;
+    pass ``size=`` to override.
+    """
+    rule = int(np.clip(10 * F, 32, 1024))
+    per_row_squared = (P + 1) ** 2 * 2 * 3 * 4  # bytes per S² texels of all maps
+    fits = int(np.sqrt(budget_bytes / per_row_squared))
+    return max(8, min(rule, fits))
 
 
 def prefilter(
@@ -423,7 +434,8 @@ def prefilter(
         Tolerance: orders come from :func:`~shrmkit.analysis.orders.choose_orders` and
         F_B = min(F_ρ, F_L), P_B = P_ρ (:func:`~shrmkit.analysis.scene.scene_orders`).
     size
-        Rows S_B of the S_B × 2S_B output (default :func:`default_size` of F_B).
+        Rows S_B of the S_B × 2S_B output (default :func:`default_size`: 10 F_B, within
+        [32, 1024] rows and a 256 MiB map budget; the meta says when the budget applied).
     F, P
         Force the orders instead of choosing them.
     azimuth_free
@@ -486,7 +498,10 @@ def prefilter(
         damped = coefficients.coeffs.copy()
         damped[: F_B + 1] *= sigma[:, None, None, None]
         coefficients = BRDFCoefficients(coeffs=damped, energy=coefficients.energy, name=coefficients.name)
-    S = default_size(F_B) if size is None else int(size)
+    S = default_size(F_B, P_B) if size is None else int(size)
+    size_note = "" if size is not None or S == default_size(F_B, 0) else (
+        f"map rows lowered from {default_size(F_B, 0)} to {S} to fit the 256 MiB default budget (use size=)"
+    )
     if S < 2 or S > 8192:
         raise BadInputError(None, f"SHRM size must be in [2, 8192] rows, got {S}")
     stage("synthesis")
@@ -529,7 +544,7 @@ def prefilter(
         "F_rho": orders.F,
         "P_rho": orders.P,
         "F_L": scene.F_L,
-        "orders_message": orders.message,
+        "orders_message": "; ".join(m for m in (orders.message, size_note) if m),
         "timings": timings,
         "shrmkit_version": __version__,
         "frame": "z-up; lat-long pixel centres theta=(i+1/2)pi/H, phi=2pi(j+1/2)/W",

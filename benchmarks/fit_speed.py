@@ -154,18 +154,19 @@ def run_cornell(console: Console, quick: bool) -> None:
     console.print(bands_table)
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="fewer cases")
     parser.add_argument("--no-cornell", action="store_true", help="skip the Cornell data")
     parser.add_argument("--no-roundtrip", action="store_true", help="skip the MERL round trips")
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     console = Console(width=140)
     if not args.no_roundtrip:
         run_roundtrips(console, args.quick)
     if not args.no_cornell:
         run_cornell(console, args.quick)
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())

@@ -43,11 +43,11 @@ def synthetic_shrm(P: int, H: int, W: int) -> SHRM:
     return SHRM(F=4, P=P, coeffs=c)
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="only 512², 100k triangles")
     ap.add_argument("--frames", type=int, default=20)
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     shrm = synthetic_shrm(P=3, H=111, W=222)
     base = Camera.looking_at(view=(1.0, 0.3, 0.4))
 
@@ -88,7 +88,8 @@ def main() -> None:
                     first = time.perf_counter() - t0
                     fps = r.frames_per_second(base, args.frames)
                 print(f"{label:>5} {mesh.n_triangles:>9} {size:>5} {mode:>9} {first:>13.3f} {fps:>6.1f}")
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())

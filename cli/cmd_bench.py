@@ -12,10 +12,7 @@ others still run (exit status 1 if any failed).
 from __future__ import annotations
 
 import argparse
-import contextlib
 import importlib.util
-import inspect
-import sys
 import time
 from pathlib import Path
 
@@ -54,16 +51,6 @@ def _load(path: Path):
     return module
 
 
-@contextlib.contextmanager
-def _argv(args: list[str]):
-    saved = sys.argv
-    sys.argv = [saved[0], *args]
-    try:
-        yield
-    finally:
-        sys.argv = saved
-
-
 def run_benchmark(path: Path, quick: bool) -> None:
     """Load a benchmark script and call its ``main`` (with ``--quick`` if asked)."""
     args = ["--quick"] if quick else []
@@ -71,9 +58,7 @@ def run_benchmark(path: Path, quick: bool) -> None:
     main = getattr(module, "main", None)
     if main is None:
         raise RuntimeError(f"{path.name} has no main() entry point")
-    takes_argv = bool(inspect.signature(main).parameters)
-    with _argv(args):
-        rc = main(args) if takes_argv else main()
+    rc = main(args)
     if isinstance(rc, int) and rc != 0:
         raise RuntimeError(f"{path.name} exited with status {rc}")
 

@@ -266,3 +266,11 @@ def test_lean_global_path_matches_full_local_rotation():
 def test_forced_orders_skip_the_search():
     m = shrmkit.prefilter("builtin:sky,height=32", "microfacet:sigma=0.3", eps=0.03, F=9, P=3)
     assert (m.F, m.P) == (9, 3) and "orders given" in m.meta["orders_message"]
+
+
+def test_default_size_follows_10F_within_the_memory_budget():
+    from shrmkit.analysis.shrm import DEFAULT_MAP_BUDGET_BYTES, default_size
+
+    assert default_size(23, 2) == 230 and default_size(2, 0) == 32 and default_size(300, 0) == 1024
+    S = default_size(63, 16)
+    assert S < 630 and 17**2 * S * 2 * S * 3 * 4 <= DEFAULT_MAP_BUDGET_BYTES

@@ -67,14 +67,14 @@ def test_bench_reports_missing_folder(tmp_path, capsys):
 
 
 def test_bench_runs_a_script_entry_point(tmp_path, capsys):
-    """A script whose main() takes no arguments gets --quick in sys.argv; a failing one gives exit 1."""
+    """Each script's main(argv) gets --quick; a failing one gives exit 1."""
     (tmp_path / "fit_speed.py").write_text(
-        "import sys\ndef main():\n    print('FIT TABLE', sys.argv[1:])\n")
+        "def main(argv=None):\n    print('FIT TABLE', argv)\n    return 0\n")
     (tmp_path / "prefilter_speed.py").write_text(
         "def main(argv=None):\n    print('PREFILTER TABLE', argv)\n    return 0\n")
     assert main(["bench", "--quick", "--only", "fit", "prefilter", "--benchmarks", str(tmp_path)]) == 0
     out = capsys.readouterr().out
     assert "FIT TABLE ['--quick']" in out and "PREFILTER TABLE ['--quick']" in out
-    (tmp_path / "fit_speed.py").write_text("def main():\n    raise RuntimeError('boom')\n")
+    (tmp_path / "fit_speed.py").write_text("def main(argv=None):\n    raise RuntimeError('boom')\n")
     assert main(["bench", "--only", "fit", "--benchmarks", str(tmp_path)]) == 1
     assert "FAILED: RuntimeError: boom" in capsys.readouterr().out
