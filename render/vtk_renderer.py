@@ -2,7 +2,8 @@
 
 One :class:`SHRMRenderer` holds a float-framebuffer offscreen window (see ``offscreen``)
 and any number of objects, each a mesh with its own SHRM (its material under its lighting)
-and mode (``distant`` or ``perpixel``, see ``shader``). Rendering returns linear radiance
+and mode (``distant`` or ``perpixel``, see ``shader``), or, in mode ``gaussian-lobes``, a
+``GaussianLobeRenderer`` (Green et al. 2007 lobes + SG mip stack, see ``gaussian_shader``). Rendering returns linear radiance
 read back as float32, never clamped or quantized.
 
 Frame: VTK world coordinates are the z-up math frame (``camera`` module docstring); meshes
@@ -17,10 +18,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..analysis.sh import real_sph_harm
+from ..analysis.compare.gaussian_lobes import GaussianLobeRenderer
 from ..analysis.shrm import SHRM
 from .camera import Camera, orbit_camera
 from .mesh import Mesh
 from .offscreen import make_render_window, read_rgba_float
+from .gaussian_shader import (
+    N_VIS_ATTRIBUTES,
+    gaussian_fragment_replacements,
+    gaussian_vertex_replacements,
+    sg_atlas,
+)
 from .shader import MODES, atlas_layout, fragment_replacements, vertex_replacements
 
 __all__ = ["SHRMRenderer", "RenderResult", "coefficient_atlas", "RENDER_MODES"]
@@ -29,7 +37,9 @@ __all__ = ["SHRMRenderer", "RenderResult", "coefficient_atlas", "RENDER_MODES"]
 #: spherical-barycentric blend of twelve maps made from the SHRM at the icosahedron's
 #: vertices, ``analysis.compare.rsibr``). Kautz–McCool is the SHRM shader fed an
 #: azimuth-free SHRM (``prefilter(..., azimuth_free=True)``), so it needs no mode here.
-RENDER_MODES = MODES + ("rsibr",)
+#: ``gaussian-lobes``: Green, Kautz & Durand 2007 (``analysis.compare.gaussian_lobes``), fed a
+#: ``GaussianLobeRenderer`` in place of the SHRM.
+RENDER_MODES = MODES + ("rsibr", "gaussian-lobes")
 
 #: Largest texture edge we rely on (llvmpipe and current GPUs allow at least 16384).
 MAX_TEXTURE_SIZE = 16384
@@ -90,7 +100,7 @@ def _float_texture(image: np.ndarray):  # -> (vtkTexture, vtkImageData, numpy bu
     return tex, data, buf
 
 
-def _polydata(mesh: Mesh):
+def _polydata(mesh: Mesh, visibility_sh: np.ndarray | None = None):
     from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
     from vtkmodules.vtkCommonCore import vtkPoints
     from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData
@@ -109,13 +119,20 @@ def _polydata(mesh: Mesh):
     normals = numpy_to_vtk(np.ascontiguousarray(mesh.normals, dtype=np.float32), deep=1)
     normals.SetName("Normals")
     poly.GetPointData().SetNormals(normals)
+    if visibility_sh is not None:  # 25 SH-4 coefficients per vertex as 7 vec4 arrays (last padded)
+        padded = np.zeros((mesh.vertices.shape[0], 4 * N_VIS_ATTRIBUTES), dtype=np.float32)
+        padded[:, :visibility_sh.shape[1]] = visibility_sh
+        for i in range(N_VIS_ATTRIBUTES):
+            arr = numpy_to_vtk(np.ascontiguousarray(padded[:, 4 * i:4 * i + 4]), deep=1)
+            arr.SetName(f"glVisArray{i}")
+            poly.GetPointData().AddArray(arr)
     return poly
 
 
 @dataclass(eq=False)
 class _Object:
     mesh: Mesh
-    shrm: SHRM
+    shrm: SHRM | GaussianLobeRenderer
     mode: str
     actor: object
     texture: object
@@ -156,13 +173,38 @@ class SHRMRenderer:
         """The VTK window class in use (e.g. vtkEGLRenderWindow)."""
         return str(self._window.GetClassName())
 
-    def add_object(self, mesh: Mesh, shrm: SHRM, *, mode: str = "distant") -> int:
-        """Add a mesh shaded by ``shrm`` in ``mode``; returns the object's index."""
+    def add_object(
+        self,
+        mesh: Mesh,
+        shrm: SHRM | GaussianLobeRenderer,
+        *,
+        mode: str = "distant",
+        visibility_sh: np.ndarray | None = None,
+        normalized_visibility: bool = True,
+    ) -> int:
+        """Add a mesh shaded by ``shrm`` in ``mode``; returns the object's index.
+
+        For ``mode="gaussian-lobes"`` pass a ``GaussianLobeRenderer`` as ``shrm``; then
+        ``visibility_sh`` (n_vertices, 25), the order-4 SH visibility of each vertex
+        (``analysis.compare.selfshadow.vertex_visibility_sh``), turns on self-shadowing
+        (Green et al. 2007 eq. 7), ``normalized_visibility`` as in ``selfshadow.visibility_at``.
+        """
         from vtkmodules.vtkRenderingCore import vtkActor
         from vtkmodules.vtkRenderingOpenGL2 import vtkOpenGLPolyDataMapper
 
         if mode not in RENDER_MODES:
             raise ValueError(f"mode must be one of {RENDER_MODES}, got {mode!r}")
+        if (mode == "gaussian-lobes") != isinstance(shrm, GaussianLobeRenderer):
+            raise ValueError("mode 'gaussian-lobes' takes a GaussianLobeRenderer, the other modes an SHRM")
+        if visibility_sh is not None:
+            if mode != "gaussian-lobes":
+                raise ValueError("visibility_sh (self-shadowing) is only supported in mode 'gaussian-lobes'")
+            visibility_sh = np.asarray(visibility_sh, dtype=np.float64)
+            if visibility_sh.shape != (mesh.vertices.shape[0], 25) or not np.all(np.isfinite(visibility_sh)):
+                raise ValueError(f"visibility_sh must be finite (n_vertices={mesh.vertices.shape[0]}, 25), "
+                                 f"got shape {visibility_sh.shape}")
+        if mode == "gaussian-lobes":
+            return self._add_gaussian(mesh, shrm, visibility_sh, normalized_visibility)
         rsibr = None
         if mode == "rsibr":
             from ..analysis.compare.rsibr import rsibr_from_shrm
@@ -194,7 +236,10 @@ class SHRMRenderer:
             sp.AddVertexShaderReplacement(tag, True, text, False)
         for tag, text in fragment_replacements("distant" if mode == "rsibr" else mode, shrm.P, h, w):
             sp.AddFragmentShaderReplacement(tag, True, text, False)
-        uni = sp.GetFragmentCustomUniforms()
+        return self._finish_object(mesh, shrm, mode, actor, tex, data, buf, flat, rsibr)
+
+    def _finish_object(self, mesh, shrm, mode, actor, tex, data, buf, flat, rsibr) -> int:
+        uni = actor.GetShaderProperty().GetFragmentCustomUniforms()
         uni.SetUniform3f("shrmEye", [0.0, 0.0, 0.0])
         uni.SetUniform3f("shrmViewDir", [1.0, 0.0, 0.0])
         uni.SetUniformi("shrmOrtho", 0)
@@ -204,6 +249,41 @@ class SHRMRenderer:
         radius = float(np.max(np.linalg.norm(mesh.vertices - center, axis=1)))
         self._objects.append(_Object(mesh, shrm, mode, actor, tex, data, buf, center, radius, flat, rsibr))
         return len(self._objects) - 1
+
+    def _add_gaussian(
+        self, mesh: Mesh, glr: GaussianLobeRenderer, visibility_sh: np.ndarray | None, normalized: bool
+    ) -> int:
+        """Green et al. 2007: mip atlas texture + lobe table compiled into the fragment shader."""
+        from vtkmodules.vtkCommonDataModel import vtkDataObject
+        from vtkmodules.vtkRenderingCore import vtkActor
+        from vtkmodules.vtkRenderingOpenGL2 import vtkOpenGLPolyDataMapper
+
+        image, rows, heights = sg_atlas(glr.stack.levels)
+        if max(image.shape[:2]) > MAX_TEXTURE_SIZE:
+            raise ValueError(f"SG mip atlas {image.shape[0]}x{image.shape[1]} exceeds {MAX_TEXTURE_SIZE}")
+        tex, data, buf = _float_texture(image)
+        shadow = visibility_sh is not None
+        mapper = vtkOpenGLPolyDataMapper()
+        mapper.SetInputData(_polydata(mesh, visibility_sh))
+        mapper.SetVBOShiftScaleMethod(0)  # DISABLE_SHIFT_SCALE: vertexMC must be world coordinates
+        mapper.ScalarVisibilityOff()
+        if shadow:
+            for i in range(N_VIS_ATTRIBUTES):
+                mapper.MapDataArrayToVertexAttribute(
+                    f"glVis{i}", f"glVisArray{i}", vtkDataObject.FIELD_ASSOCIATION_POINTS, -1
+                )
+        actor = vtkActor()
+        actor.SetMapper(mapper)
+        actor.GetProperty().SetTexture("shrmTex", tex)
+        sp = actor.GetShaderProperty()
+        for tag, text in gaussian_vertex_replacements(shadow):
+            sp.AddVertexShaderReplacement(tag, True, text, False)
+        frag = gaussian_fragment_replacements(
+            glr.lobes, glr.stack.sigmas, rows, heights, shadow=shadow, normalized=normalized
+        )
+        for tag, text in frag:
+            sp.AddFragmentShaderReplacement(tag, True, text, False)
+        return self._finish_object(mesh, glr, "gaussian-lobes", actor, tex, data, buf, None, None)
 
     def update_view_maps(self, camera: Camera) -> None:
         """Recompute each distant-mode object's map Σ B̃_pq Y^r_pq(Ṽ) (RH02 eq. 12) and mark it for upload.
