@@ -31,9 +31,16 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--env", default="builtin:sky", help="environment map spec or file (default builtin:sky)")
     p.add_argument("--brdf", default="microfacet:sigma=0.2", help="BRDF spec or file (default microfacet:sigma=0.2)")
     p.add_argument("--eps", type=float, default=0.03, help="SHRM tolerance epsilon (default 0.03)")
-    p.add_argument("--mode", choices=("distant", "perpixel", "rsibr", "kautz-mccool"), default="distant",
+    p.add_argument("--mode", choices=("distant", "perpixel", "rsibr", "kautz-mccool", "gaussian-lobes"),
+                   default="distant",
                    help="distant viewer (RH02 eq. 12), per-pixel view direction, Cabral et al. 1999 (12 "
-                        "blended maps) or Kautz-McCool 2000 (q = 0 SHRM, per pixel) (default distant)")
+                        "blended maps), Kautz-McCool 2000 (q = 0 SHRM, per pixel) or Green et al. 2007 "
+                        "(K Gaussian lobes per view elevation over an SG mip stack) (default distant)")
+    p.add_argument("--lobes", type=int, default=3, help="gaussian-lobes: lobes per elevation K (default 3)")
+    p.add_argument("--elevations", type=int, default=15,
+                   help="gaussian-lobes: fitted view elevations (default 15)")
+    p.add_argument("--self-shadow", action="store_true",
+                   help="gaussian-lobes: per-vertex self-shadowing by ray casting (Green et al. 2007 eq. 7)")
     p.add_argument("--size", type=int, default=512, help="image width and height in pixels (default 512)")
     p.add_argument("--camera", choices=("perspective", "ortho"), default="perspective")
     p.add_argument("--view", default="1,0,0", help="direction from the object toward the camera, z-up frame")
@@ -70,6 +77,9 @@ def run(args: argparse.Namespace) -> int:
         raise BadInputError(args.output, "output must be a .png file")
     if args.exr and Path(args.exr).suffix.lower() != ".exr":
         raise BadInputError(args.exr, "--exr must name a .exr file")
+    if not 1 <= args.lobes <= 8 or not 1 <= args.elevations <= 90:
+        raise BadInputError(None, f"--lobes must be in [1, 8] and --elevations in [1, 90], got "
+                                  f"{args.lobes}, {args.elevations}")
     view, up = _vector(args.view, "--view"), _vector(args.up, "--up")
     try:
         camera = Camera.looking_at(view=view, up=up, projection=args.camera)
@@ -79,18 +89,41 @@ def run(args: argparse.Namespace) -> int:
     mesh = load_mesh(args.mesh)
     env = load_env(args.env)
     brdf = load_brdf(args.brdf)
-    t0 = time.perf_counter()
-    shrm = prefilter(env, brdf, eps=args.eps, azimuth_free=args.mode == "kautz-mccool")
-    render_mode = "perpixel" if args.mode == "kautz-mccool" else args.mode
-    t_prefilter = time.perf_counter() - t0
     print(f"mesh {mesh.name}: {mesh.n_triangles} triangles")
-    print(f"SHRM F={shrm.F} P={shrm.P} on {shrm.height}x{shrm.width} (eps {args.eps:g})")
-    print(f"prefilter: {t_prefilter:.3f} s")
+    if args.self_shadow and args.mode != "gaussian-lobes":
+        raise BadInputError(None, "--self-shadow needs --mode gaussian-lobes")
+    visibility = None
+    if args.mode == "gaussian-lobes":
+        from ..analysis.compare.gaussian_lobes import GaussianLobeRenderer, fit_gaussian_lobes, sg_mip_stack
+
+        lobes = fit_gaussian_lobes(brdf, K=args.lobes, n_elevations=args.elevations)
+        stack = sg_mip_stack(env)
+        shrm = GaussianLobeRenderer(lobes, stack)
+        render_mode = "gaussian-lobes"
+        print(f"Gaussian lobes K={lobes.K} at {lobes.theta_v.size} elevations, max relative fit error "
+              f"{float(lobes.residual.max()):.3g}")
+        print(f"fit: {lobes.meta['seconds']:.3f} s")
+        print(f"SG mip stack: {len(stack.levels)} levels, sigma {stack.sigmas[0]:.4g}..{stack.sigmas[-1]:.4g} rad, "
+              f"{stack.seconds:.3f} s")
+        if args.self_shadow:
+            from ..analysis.compare.selfshadow import vertex_visibility_sh
+
+            t0 = time.perf_counter()
+            visibility = vertex_visibility_sh(mesh)
+            print(f"self-shadowing: order-4 SH visibility of {len(mesh.vertices)} vertices, "
+                  f"{time.perf_counter() - t0:.3f} s")
+    else:
+        t0 = time.perf_counter()
+        shrm = prefilter(env, brdf, eps=args.eps, azimuth_free=args.mode == "kautz-mccool")
+        render_mode = "perpixel" if args.mode == "kautz-mccool" else args.mode
+        t_prefilter = time.perf_counter() - t0
+        print(f"SHRM F={shrm.F} P={shrm.P} on {shrm.height}x{shrm.width} (eps {args.eps:g})")
+        print(f"prefilter: {t_prefilter:.3f} s")
 
     cameras = turntable_cameras(camera, args.turntable) if args.turntable else [camera]
     frames, timings = render_frames(
         mesh, shrm, cameras, size=args.size, mode=render_mode, env_radiance=env.radiance,
-        background=args.background, fps_frames=args.fps_frames,
+        background=args.background, fps_frames=args.fps_frames, visibility_sh=visibility,
     )
     print(f"renderer: {timings.backend}, mode {args.mode}, {args.size}x{args.size}, {args.camera}")
     print(f"first frame: {timings.first_frame_s:.3f} s")

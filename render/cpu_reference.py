@@ -20,18 +20,24 @@ import numpy as np
 from .camera import Camera
 from .mesh import Mesh
 
-__all__ = ["Geometry", "sphere_geometry", "mesh_geometry", "shade"]
+__all__ = ["Geometry", "sphere_geometry", "mesh_geometry", "shade", "interpolate_vertex_data"]
 
 
 @dataclass(frozen=True, eq=False)
 class Geometry:
-    """Per-pixel surface geometry, arrays (H, W, ...); N, V, R are zero where ``hit`` is False."""
+    """Per-pixel surface geometry, arrays (H, W, ...); N, V, R are zero where ``hit`` is False.
+
+    ``face`` (H, W) triangle index (−1 on misses) and ``bary`` (H, W, 3) barycentric weights of
+    its three vertices are set by :func:`mesh_geometry` only (None for the analytic sphere).
+    """
 
     hit: np.ndarray
     position: np.ndarray
     N: np.ndarray
     V: np.ndarray
     R: np.ndarray
+    face: np.ndarray | None = None
+    bary: np.ndarray | None = None
 
 
 def _finish(hit: np.ndarray, pos: np.ndarray, normal: np.ndarray, dirs: np.ndarray) -> Geometry:
@@ -102,7 +108,24 @@ def mesh_geometry(camera: Camera, width: int, height: int, mesh: Mesh, *, chunk:
     normal[back] *= -1.0
     pos = o + np.where(hit, best_t, 0.0)[:, None] * d
     shape = (height, width)
-    return _finish(hit.reshape(shape), pos.reshape(shape + (3,)), normal.reshape(shape + (3,)), dirs)
+    geom = _finish(hit.reshape(shape), pos.reshape(shape + (3,)), normal.reshape(shape + (3,)), dirs)
+    bary = np.where(hit[:, None], np.concatenate([1.0 - w1 - w2, w1, w2], axis=1), 0.0)
+    return Geometry(geom.hit, geom.position, geom.N, geom.V, geom.R, best_f.reshape(shape), bary.reshape(shape + (3,)))
+
+
+def interpolate_vertex_data(geometry: Geometry, mesh: Mesh, values: np.ndarray) -> np.ndarray:
+    """Per-vertex ``values`` (n_vertices, C) interpolated barycentrically at the hit pixels: (n_hit, C).
+
+    Rows follow ``geometry.hit`` in C order (as in :func:`shade`); this is what the rasterizer
+    does to a vertex attribute (perspective-correct interpolation = barycentric on the surface).
+    """
+    if geometry.face is None or geometry.bary is None:
+        raise ValueError("interpolate_vertex_data needs the geometry of mesh_geometry (faces and barycentrics)")
+    m = geometry.hit
+    f = mesh.faces[geometry.face[m]]
+    b = geometry.bary[m]
+    values = np.asarray(values, dtype=np.float64)
+    return b[:, 0:1] * values[f[:, 0]] + b[:, 1:2] * values[f[:, 1]] + b[:, 2:3] * values[f[:, 2]]
 
 
 def shade(geometry: Geometry, radiance: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> np.ndarray:

@@ -24,8 +24,9 @@ Storage (all float32, no 8-bit data anywhere):
 Optional self-shadowing (Green et al. 2007 eq. 7, :mod:`shrmkit.analysis.compare.selfshadow`):
 25 order-4 SH visibility coefficients per vertex arrive as seven ``vec4`` vertex attributes
 ``glVis0..6`` (the last padded), are interpolated to the fragment, and each lobe is multiplied
-by V(d_nk) = clamp(Σ c_i Y^r_i(d_nk), 0, 1), optionally divided by the SH-4 projection of the
-unoccluded hemisphere about N (``normalized``; see ``selfshadow.visibility_at``).
+by V(d_nk) = clamp(Σ c_i Y^r_i(d_nk), 0, 1), or (``normalized``) the attributes hold the
+occlusion coefficients o = step(n_vertex) − c and V = clamp(1 − Σ o_i Y^r_i(d) / S(max(N·d, 0)), 0, 1)
+with S the SH-4 truncated hemisphere step (``selfshadow.visibility_at``).
 """
 
 from __future__ import annotations
@@ -136,7 +137,7 @@ vec3 sg_lookup(int idx, vec3 d) {
 # SH-4 projection of the unoccluded hemisphere about N, as a function of t = N·d (zonal, closed
 # form): S(t) = Σ_l (2l+1)/2 (∫_0^1 P_l) P_l(t) = 1/2 + 3t/4 − (7/16) P_3(t)   (l = 2, 4 vanish)
 _SHADOW = """
-float gl_visibility(vec3 d, vec3 n) {
+float globe_visibility(vec3 d, vec3 n) {
   float c[28] = float[](glVisF0.x, glVisF0.y, glVisF0.z, glVisF0.w, glVisF1.x, glVisF1.y, glVisF1.z,
     glVisF1.w, glVisF2.x, glVisF2.y, glVisF2.z, glVisF2.w, glVisF3.x, glVisF3.y, glVisF3.z, glVisF3.w,
     glVisF4.x, glVisF4.y, glVisF4.z, glVisF4.w, glVisF5.x, glVisF5.y, glVisF5.z, glVisF5.w,
@@ -146,9 +147,10 @@ float gl_visibility(vec3 d, vec3 n) {
   float v = 0.0;
   for (int i = 0; i < 25; ++i) v += c[i] * Y[i];
 #if GLOBE_NORMALIZED
+  // c holds occlusion coefficients (vertex step - visibility): V = 1 - O(d) / S(n.d)
   float t = max(dot(n, d), 0.0);
   float s = 0.5 + 0.75 * t - 0.4375 * 0.5 * (5.0 * t * t * t - 3.0 * t);
-  v /= s;
+  v = 1.0 - v / s;
 #endif
   return clamp(v, 0.0, 1.0);
 }
@@ -180,7 +182,7 @@ def gaussian_fragment_replacements(
         dec += [f"#define GLOBE_NORMALIZED {1 if normalized else 0}", sh_glsl(4), _SHADOW]
     lobe_value = "sg_lookup(idx, d)"
     if shadow:
-        lobe_value = "sg_lookup(idx, d) * gl_visibility(d, shrmN)"
+        lobe_value = "sg_lookup(idx, d) * globe_visibility(d, shrmN)"
     impl = [
         "  vec3 shrmN = normalize(shrmNormWC);",
         "  if (!gl_FrontFacing) shrmN = -shrmN;",
@@ -198,7 +200,10 @@ def gaussian_fragment_replacements(
         "    if (tv >= glNodes[GLOBE_N - 1]) pos = float(GLOBE_N - 1);",
         "    else if (tv > glNodes[0]) {",
         "      for (int n = 0; n < GLOBE_N - 1; ++n) {",
-        "        if (tv < glNodes[n + 1]) { pos = float(n) + (tv - glNodes[n]) / (glNodes[n + 1] - glNodes[n]); break; }",
+        "        if (tv < glNodes[n + 1]) {",
+        "          pos = float(n) + (tv - glNodes[n]) / (glNodes[n + 1] - glNodes[n]);",
+        "          break;",
+        "        }",
         "      }",
         "    }",
         "  }",

@@ -64,6 +64,7 @@ def render_frames(
     env_radiance: np.ndarray | None = None,
     background: str = "env",
     fps_frames: int = 10,
+    visibility_sh: np.ndarray | None = None,
 ) -> tuple[list[Frame], FrameTimings]:
     """Render ``mesh`` shaded by ``shrm`` from each camera into size × size frames.
 
@@ -74,6 +75,9 @@ def render_frames(
         ``"black"``; ``"transparent"`` (alpha from coverage).
     fps_frames
         Repeated frames for the frames-per-second figure (0 skips it; fps is then NaN).
+    visibility_sh
+        ``gaussian-lobes`` mode only: per-vertex order-4 SH visibility
+        (``analysis.compare.selfshadow.vertex_visibility_sh``) for self-shadowing.
     """
     if background not in BACKGROUNDS:
         raise ValueError(f"background must be one of {BACKGROUNDS}, got {background!r}")
@@ -81,7 +85,10 @@ def render_frames(
         raise ValueError("background 'env' needs env_radiance")
     t0 = time.perf_counter()
     with SHRMRenderer(size, size) as renderer:
-        renderer.add_object(mesh, shrm, mode=mode)
+        if visibility_sh is None:
+            renderer.add_object(mesh, shrm, mode=mode)
+        else:
+            renderer.add_object(mesh, shrm, mode=mode, visibility_sh=visibility_sh)
         results = [renderer.render(cameras[0])]
         first = time.perf_counter() - t0
         results += [renderer.render(cam) for cam in cameras[1:]]

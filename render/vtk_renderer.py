@@ -3,8 +3,8 @@
 One :class:`SHRMRenderer` holds a float-framebuffer offscreen window (see ``offscreen``)
 and any number of objects, each a mesh with its own SHRM (its material under its lighting)
 and mode (``distant`` or ``perpixel``, see ``shader``), or, in mode ``gaussian-lobes``, a
-``GaussianLobeRenderer`` (Green et al. 2007 lobes + SG mip stack, see ``gaussian_shader``). Rendering returns linear radiance
-read back as float32, never clamped or quantized.
+``GaussianLobeRenderer`` (Green et al. 2007 lobes + SG mip stack, see ``gaussian_shader``).
+Rendering returns linear radiance read back as float32, never clamped or quantized.
 
 Frame: VTK world coordinates are the z-up math frame (``camera`` module docstring); meshes
 are uploaded in world coordinates with an identity actor matrix.
@@ -17,18 +17,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..analysis.sh import real_sph_harm
 from ..analysis.compare.gaussian_lobes import GaussianLobeRenderer
+from ..analysis.sh import real_sph_harm
 from ..analysis.shrm import SHRM
 from .camera import Camera, orbit_camera
-from .mesh import Mesh
-from .offscreen import make_render_window, read_rgba_float
 from .gaussian_shader import (
     N_VIS_ATTRIBUTES,
     gaussian_fragment_replacements,
     gaussian_vertex_replacements,
     sg_atlas,
 )
+from .mesh import Mesh
+from .offscreen import make_render_window, read_rgba_float
 from .shader import MODES, atlas_layout, fragment_replacements, vertex_replacements
 
 __all__ = ["SHRMRenderer", "RenderResult", "coefficient_atlas", "RENDER_MODES"]
@@ -204,6 +204,11 @@ class SHRMRenderer:
                 raise ValueError(f"visibility_sh must be finite (n_vertices={mesh.vertices.shape[0]}, 25), "
                                  f"got shape {visibility_sh.shape}")
         if mode == "gaussian-lobes":
+            if visibility_sh is not None and normalized_visibility:
+                from ..analysis.compare.selfshadow import hemisphere_step_sh
+
+                # the shader gets occlusion coefficients: unoccluded vertex step − visibility
+                visibility_sh = hemisphere_step_sh(mesh.normals, 4) - visibility_sh
             return self._add_gaussian(mesh, shrm, visibility_sh, normalized_visibility)
         rsibr = None
         if mode == "rsibr":

@@ -85,6 +85,7 @@ def test_turntable_transparent(offscreen, tmp_path: Path) -> None:
         (["builtin:sphere", "--view", "0,0,1"], "parallel"),
         (["builtin:sphere", "--size", "4"], "--size"),
         (["builtin:sphere", "--eps", "2"], "--eps"),
+        (["builtin:sphere", "--self-shadow"], "--self-shadow needs --mode gaussian-lobes"),
     ],
 )
 def test_bad_input_exits_2_without_output(tmp_path: Path, capsys, monkeypatch, args, message) -> None:
