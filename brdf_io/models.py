@@ -60,6 +60,11 @@ def _fmt(a: np.ndarray) -> str:
     return "/".join(f"{v:.9g}" for v in a)
 
 
+def _with_scale(spec: str, ks: np.ndarray) -> str:
+    """Append ``,ks=...`` to a spec unless the scale is the default 1."""
+    return spec if np.all(ks == 1.0) else f"{spec},ks={_fmt(ks)}"
+
+
 def _safe_pow(base: np.ndarray, exponent: np.ndarray) -> np.ndarray:
     """max(base, 0) ** exponent without overflow warnings for huge exponents."""
     with np.errstate(divide="ignore", over="ignore", under="ignore"):
@@ -116,8 +121,7 @@ class PhongLobe(_Analytic):
         return _rho_from_rho_hat(self, L, V)
 
     def to_spec(self) -> str:
-        spec = f"phong:s={self.s:.9g}"
-        return spec if np.all(self.ks == 1.0) else spec + f",ks={_fmt(self.ks)}"
+        return _with_scale(f"phong:s={self.s:.9g}", self.ks)
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -139,8 +143,7 @@ class SimplifiedMicrofacet(_Analytic):
         return _rho_from_rho_hat(self, L, V)
 
     def to_spec(self) -> str:
-        spec = f"microfacet:sigma={self.sigma:.9g}"
-        return spec if np.all(self.ks == 1.0) else spec + f",ks={_fmt(self.ks)}"
+        return _with_scale(f"microfacet:sigma={self.sigma:.9g}", self.ks)
 
 
 @dataclass(frozen=True, eq=False, repr=False)

@@ -6,6 +6,8 @@ from pathlib import Path
 
 import pytest
 
+from shrmkit.render.offscreen import probe_offscreen
+
 SHARED_DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 
 
@@ -15,3 +17,18 @@ def shared_data() -> Path:
     if not SHARED_DATA.is_dir():
         pytest.skip(f"real data folder {SHARED_DATA} not present (only in the project workspace)")
     return SHARED_DATA
+
+
+_PROBE: list[tuple[bool, str]] = []
+
+
+@pytest.fixture(scope="session")
+def offscreen() -> str:
+    """The VTK window class in use; skips the test when no offscreen float context can be made
+    (probed once, in a subprocess)."""
+    if not _PROBE:
+        _PROBE.append(probe_offscreen())
+    ok, message = _PROBE[0]
+    if not ok:
+        pytest.skip(message)
+    return message

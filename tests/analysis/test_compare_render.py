@@ -18,23 +18,9 @@ from shrmkit.brdf_io.specs import load_brdf
 from shrmkit.render.camera import Camera
 from shrmkit.render.cpu_reference import shade, sphere_geometry
 from shrmkit.render.mesh import load_mesh
-from shrmkit.render.offscreen import probe_offscreen
 from shrmkit.render.vtk_renderer import SHRMRenderer
 
 pytestmark = pytest.mark.render
-_PROBE: list[tuple[bool, str]] = []
-
-
-@pytest.fixture(scope="module")
-def offscreen() -> str:
-    if not _PROBE:
-        _PROBE.append(probe_offscreen())
-    ok, message = _PROBE[0]
-    if not ok:
-        pytest.skip(message)
-    return message
-
-
 @pytest.mark.parametrize("vertex_view", [True, False])
 def test_rsibr_mode_matches_cpu_reconstruction(offscreen, vertex_view: bool) -> None:
     env = load_env("builtin:studio,height=16")

@@ -14,19 +14,6 @@ import pytest
 from PIL import Image
 
 from shrmkit.cli.main import main
-from shrmkit.render.offscreen import probe_offscreen
-
-_PROBE: list[tuple[bool, str]] = []
-
-
-@pytest.fixture(scope="module")
-def offscreen() -> str:
-    if not _PROBE:
-        _PROBE.append(probe_offscreen())
-    ok, message = _PROBE[0]
-    if not ok:
-        pytest.skip(message)
-    return message
 
 
 def _read_exr(path: Path) -> tuple[np.ndarray, np.ndarray]:
