@@ -59,6 +59,16 @@ def _atomic_path(path: Path) -> Iterator[Path]:
         yield tmp
 
 
+def _read_bytes(path: Path) -> bytes:
+    """The whole file, or a BadInputError naming it when it is missing or unreadable."""
+    if not path.is_file():
+        raise BadInputError(path, "no such file")
+    try:
+        return path.read_bytes()
+    except OSError as err:
+        raise BadInputError(path, f"cannot read ({err.strerror or err})") from None
+
+
 def _check_rgb(path: Path, image: np.ndarray) -> np.ndarray:
     image = np.asarray(image)
     if image.ndim != 3 or image.shape[2] != 3 or image.shape[0] < 1 or image.shape[1] < 1:
@@ -268,9 +278,7 @@ def read_hdr(path: str | Path) -> np.ndarray:
         ``(H, W, 3)`` float32, row 0 at the top.
     """
     path = Path(path)
-    if not path.is_file():
-        raise BadInputError(path, "no such file")
-    data = path.read_bytes()
+    data = _read_bytes(path)
     height, width, flip_rows, flip_cols, exposure, pos = _parse_hdr_header(path, data)
     n_bytes = height * width * 4
     is_rle = (
@@ -376,9 +384,7 @@ def read_pfm(path: str | Path) -> np.ndarray:
         ``(H, W, 3)`` float32, row 0 at the top.
     """
     path = Path(path)
-    if not path.is_file():
-        raise BadInputError(path, "no such file")
-    data = path.read_bytes()
+    data = _read_bytes(path)
     tokens: list[bytes] = []
     pos = 0
     # three whitespace-separated header tokens: magic, "W H" (two tokens), scale; one
