@@ -207,7 +207,7 @@ def global_shrm_latlong(
     *,
     nthreads: int = 1,
     azimuth_free: bool = False,
-    rows_per_block: int = 64,
+    rows_per_block: int = 128,
 ) -> np.ndarray:
     """Global SHRM on a lat-long grid, one view order p at a time (memory-lean path).
 
@@ -222,7 +222,9 @@ def global_shrm_latlong(
     out = np.zeros(((P + 1) ** 2, height, width, 3), dtype=np.float32)
     root2 = np.sqrt(2.0)
     for p in range(P + 1):
-        neg = np.zeros((p + 1, height, width, 3), dtype=np.complex128)  # neg[s] = B_{p,−s}
+        # real and imaginary parts of B_{p,−s}, s = 0..p, laid out (row, s, column, channel)
+        re = np.zeros((height, p + 1, width, 3))
+        im = np.zeros((height, p + 1, width, 3))
         for _, s, c, alm, lmax in _spin_terms(lighting, coefficients, F, P, only_p=p):
             if azimuth_free and s > 0:
                 continue
@@ -230,27 +232,35 @@ def global_shrm_latlong(
                 alm=alm[None, :], spin=s, lmax=lmax, geometry="F1", ntheta=height, nphi=width,
                 phi0=np.pi / width, nthreads=nthreads, mode="STANDARD" if s == 0 else "GRAD_ONLY",
             )
-            neg[s, ..., c] = field[0] if s == 0 else field[0] + 1j * field[1]
+            re[:, s, :, c] = field[0]
+            if s:
+                im[:, s, :, c] = field[1]
+        if p == 0:
+            out[0] = re[:, 0]
+            continue
+        # Σ_q B_pq d̃_sq with B_{p,q>0} = (−1)^q conj(B_{p,−q}): the q > 0 columns fold onto the
+        # q < 0 ones, + for the real part and − for the imaginary part
         d = wigner_d_tilde(p, theta)[:, p:, :]  # (H, s = 0..p, q = −p..p)
-        d_neg = np.ascontiguousarray(d[:, :, p::-1])  # columns q = 0, −1, ..., −p: multiply neg[0..p]
-        d_pos = np.ascontiguousarray(d[:, :, p + 1 :] * np.where(np.arange(1, p + 1) % 2, -1.0, 1.0))  # × conj(neg[q])
-        phase = np.exp(-1j * np.arange(p + 1)[:, None] * phi[None, :])  # (s, W)
+        d_neg = d[:, :, p::-1]  # q = 0, −1, ..., −p
+        d_pos = d[:, :, p + 1 :] * np.where(np.arange(1, p + 1) % 2, -1.0, 1.0)  # q = 1..p
+        fold_re = d_neg.copy()
+        fold_re[:, :, 1:] += d_pos
+        fold_im = d_neg.copy()
+        fold_im[:, :, 1:] -= d_pos
+        s_idx = np.arange(p + 1)[:, None]
+        cos_sb, sin_sb = np.cos(s_idx * phi[None, :]), np.sin(s_idx * phi[None, :])  # (s, W)
         for r0 in range(0, height, rows_per_block):
             r1 = min(height, r0 + rows_per_block)
-            rows = neg[:, r0:r1].reshape(p + 1, r1 - r0, -1).transpose(1, 0, 2)  # (h, s', W*3)
-            # real BLAS products on contiguous parts (conj(neg) flips the sign of the imaginary part)
-            re, im = np.ascontiguousarray(rows.real), np.ascontiguousarray(rows.imag)
-            t_re, t_im = np.matmul(d_neg[r0:r1], re), np.matmul(d_neg[r0:r1], im)
-            if p:
-                t_re += np.matmul(d_pos[r0:r1], np.ascontiguousarray(re[:, 1:]))
-                t_im -= np.matmul(d_pos[r0:r1], np.ascontiguousarray(im[:, 1:]))
-            tilde = (t_re + 1j * t_im).reshape(r1 - r0, p + 1, width, 3).transpose(1, 0, 2, 3)
-            tilde = tilde * phase[:, None, :, None]
-            out[real_index(p, 0), r0:r1] = tilde[0].real
+            t_re = np.matmul(fold_re[r0:r1], re[r0:r1].reshape(r1 - r0, p + 1, -1)).reshape(r1 - r0, p + 1, width, 3)
+            t_im = np.matmul(fold_im[r0:r1], im[r0:r1].reshape(r1 - r0, p + 1, -1)).reshape(r1 - r0, p + 1, width, 3)
+            # times e^{−isβ}
+            value_re = t_re * cos_sb[None, :, :, None] + t_im * sin_sb[None, :, :, None]
+            value_im = t_im * cos_sb[None, :, :, None] - t_re * sin_sb[None, :, :, None]
+            out[real_index(p, 0), r0:r1] = value_re[:, 0]
             for s in range(1, p + 1):
                 sign = -1.0 if s % 2 else 1.0
-                out[real_index(p, s), r0:r1] = root2 * sign * tilde[s].real
-                out[real_index(p, -s), r0:r1] = -root2 * sign * tilde[s].imag
+                out[real_index(p, s), r0:r1] = root2 * sign * value_re[:, s]
+                out[real_index(p, -s), r0:r1] = -root2 * sign * value_im[:, s]
     return out
 
 
