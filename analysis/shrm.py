@@ -11,6 +11,7 @@ with the real basis of ``analysis.sh`` at flat index p² + p + q.
 
 from __future__ import annotations
 
+import itertools
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -207,36 +208,37 @@ def global_shrm_latlong(
     *,
     nthreads: int = 1,
     azimuth_free: bool = False,
-    rows_per_block: int = 128,
 ) -> np.ndarray:
     """Global SHRM on a lat-long grid, one view order p at a time (memory-lean path).
 
     Same result as :func:`global_from_local` of :func:`local_shrm_fast`, but only the
     q <= 0 half of one p-block of the local SHRM is held at a time (B_{p,q} =
-    (−1)^q conj(B_{p,−q})), and the rotation B̃_ps = e^{−isβ} Σ_q B_pq d̃^p_sq(α) runs in
-    row blocks. ``azimuth_free`` keeps only q = 0 (Kautz & McCool 2000).
+    (−1)^q conj(B_{p,−q})), in real arithmetic, and the rotation
+    B̃_ps = e^{−isβ} Σ_q B_pq d̃^p_sq(α) is done one output order s at a time.
+    ``azimuth_free`` keeps only q = 0 (Kautz & McCool 2000).
 
     Returns float32 ((P+1)², H, W, 3), real basis.
     """
     theta, phi = pixel_angles(height, width)
     out = np.zeros(((P + 1) ** 2, height, width, 3), dtype=np.float32)
     root2 = np.sqrt(2.0)
-    for p in range(P + 1):
-        # real and imaginary parts of B_{p,−s}, s = 0..p, laid out (row, s, column, channel)
-        re = np.zeros((height, p + 1, width, 3))
-        im = np.zeros((height, p + 1, width, 3))
-        for _, s, c, alm, lmax in _spin_terms(lighting, coefficients, F, P, only_p=p):
+    terms = itertools.groupby(_spin_terms(lighting, coefficients, F, P), key=lambda term: term[0])
+    for p, p_terms in terms:
+        # real and imaginary parts of B_{p,−s}, s = 0..p, laid out (s, row, column, channel)
+        re = np.zeros((p + 1, height, width, 3))
+        im = np.zeros((p + 1, height, width, 3))
+        for _, s, c, alm, lmax in p_terms:
             if azimuth_free and s > 0:
                 continue
             field = ducc0.sht.experimental.synthesis_2d(
                 alm=alm[None, :], spin=s, lmax=lmax, geometry="F1", ntheta=height, nphi=width,
                 phi0=np.pi / width, nthreads=nthreads, mode="STANDARD" if s == 0 else "GRAD_ONLY",
             )
-            re[:, s, :, c] = field[0]
+            re[s, ..., c] = field[0]
             if s:
-                im[:, s, :, c] = field[1]
+                im[s, ..., c] = field[1]
         if p == 0:
-            out[0] = re[:, 0]
+            out[0] = re[0]
             continue
         # Σ_q B_pq d̃_sq with B_{p,q>0} = (−1)^q conj(B_{p,−q}): the q > 0 columns fold onto the
         # q < 0 ones, + for the real part and − for the imaginary part
@@ -247,20 +249,29 @@ def global_shrm_latlong(
         fold_re[:, :, 1:] += d_pos
         fold_im = d_neg.copy()
         fold_im[:, :, 1:] -= d_pos
-        s_idx = np.arange(p + 1)[:, None]
-        cos_sb, sin_sb = np.cos(s_idx * phi[None, :]), np.sin(s_idx * phi[None, :])  # (s, W)
-        for r0 in range(0, height, rows_per_block):
-            r1 = min(height, r0 + rows_per_block)
-            t_re = np.matmul(fold_re[r0:r1], re[r0:r1].reshape(r1 - r0, p + 1, -1)).reshape(r1 - r0, p + 1, width, 3)
-            t_im = np.matmul(fold_im[r0:r1], im[r0:r1].reshape(r1 - r0, p + 1, -1)).reshape(r1 - r0, p + 1, width, 3)
-            # times e^{−isβ}
-            value_re = t_re * cos_sb[None, :, :, None] + t_im * sin_sb[None, :, :, None]
-            value_im = t_im * cos_sb[None, :, :, None] - t_re * sin_sb[None, :, :, None]
-            out[real_index(p, 0), r0:r1] = value_re[:, 0]
-            for s in range(1, p + 1):
-                sign = -1.0 if s % 2 else 1.0
-                out[real_index(p, s), r0:r1] = root2 * sign * value_re[:, s]
-                out[real_index(p, -s), r0:r1] = -root2 * sign * value_im[:, s]
+        # flat (row, column·channel) views: broadcasting then runs over long contiguous rows
+        re_flat = re.reshape(p + 1, height, width * 3)
+        im_flat = im.reshape(p + 1, height, width * 3)
+        for s in range(p + 1):
+            # one row-scaled sum over q per output order s: for small p plain broadcasting
+            # beats a batched product of (p+1)×(p+1) matrices
+            t_re = fold_re[:, s, 0, None] * re_flat[0]
+            t_im = np.zeros_like(t_re)
+            for q in range(1, p + 1):
+                t_re += fold_re[:, s, q, None] * re_flat[q]
+                t_im += fold_im[:, s, q, None] * im_flat[q]
+            cos_sb = np.repeat(np.cos(s * phi), 3)[None, :]  # e^{−isβ}, per column·channel
+            sin_sb = np.repeat(np.sin(s * phi), 3)[None, :]
+            value_re = t_re * cos_sb
+            value_re += t_im * sin_sb
+            if s == 0:
+                out[real_index(p, 0)] = value_re.reshape(height, width, 3)
+                continue
+            value_im = t_im * cos_sb
+            value_im -= t_re * sin_sb
+            sign = -1.0 if s % 2 else 1.0
+            out[real_index(p, s)] = (root2 * sign * value_re).reshape(height, width, 3)
+            out[real_index(p, -s)] = (-root2 * sign * value_im).reshape(height, width, 3)
     return out
 
 

@@ -39,7 +39,7 @@ from shrmkit.analysis.latlong import pixel_angles, pixel_directions
 from shrmkit.analysis.lighting import lighting_coefficients
 from shrmkit.analysis.orders import choose_orders
 from shrmkit.analysis.reference import reference_radiance
-from shrmkit.analysis.shrm import SHRM, default_size, global_from_local, local_shrm_fast, prefilter
+from shrmkit.analysis.shrm import SHRM, default_size, global_shrm_latlong, local_shrm_fast, prefilter
 from shrmkit.brdf_io.envmap import EnvironmentMap, load_env
 from shrmkit.brdf_io.specs import load_brdf
 
@@ -312,10 +312,8 @@ def table_sweep(
             )
     console.print(table)
     console.print("  ε_B is an energy fraction; the RMS radiance error it predicts is √ε_B (plus the bilinear")
-    console.print("  interpolation of the S×2S SHRM, which the prediction does not include). S is capped because the")
-    console.print(
-        "  synthesis holds a complex (P+1)(2P+1)·S·2S·3 array: at P = 16, S = 470 (the default 10F) it needs ~12 GB."
-    )
+    console.print("  interpolation of the S×2S SHRM, which the prediction does not include). S is capped here to keep")
+    console.print("  the sweep short: at P = 16 the stored SHRM alone is 289 maps of S×2S×3 float32.")
 
 
 def scene_F(env: EnvironmentMap, brdf: Any, tol: float) -> int:
@@ -334,12 +332,11 @@ def table_targets(repeats: int, quick: bool) -> None:
     orders = choose_orders(brdf, 0.03)
     env = load_env("builtin:sky,height=512")  # 512 rows × 1024 columns
     lighting = lighting_coefficients(env.radiance, orders.F)
-    theta, phi = pixel_angles(128, 256)
     for nthreads in (1, 2):
 
         def synth(nthreads: int = nthreads) -> np.ndarray:
-            local = local_shrm_fast(lighting, orders.coefficients, orders.F, orders.P, 128, 256, nthreads=nthreads)
-            return global_from_local(local, theta[:, None], phi[None, :]).astype(np.float32)
+            # the production path of prefilter(): spin SHTs + global rotation, one p-block at a time
+            return global_shrm_latlong(lighting, orders.coefficients, orders.F, orders.P, 128, 256, nthreads=nthreads)
 
         t_local, _ = timed(
             lambda n=nthreads: local_shrm_fast(lighting, orders.coefficients, orders.F, orders.P, 128, 256, nthreads=n),

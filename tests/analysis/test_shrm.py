@@ -244,7 +244,7 @@ def test_cube_map_matches_explicit_path_and_latlong(tmp_path):
 
 
 def test_lean_global_path_matches_full_local_rotation():
-    """global_shrm_latlong (q <= 0 storage, row blocks) equals global_from_local of the full
+    """global_shrm_latlong (q <= 0 storage, real arithmetic) equals global_from_local of the full
     local SHRM, including the azimuth-free variant."""
     from shrmkit.analysis.shrm import global_shrm_latlong
 
@@ -255,7 +255,7 @@ def test_lean_global_path_matches_full_local_rotation():
     theta, phi = pixel_angles(20, 40)
     local = local_shrm_fast(lc, o.coefficients, 10, P, 20, 40)
     full = global_from_local(local, theta[:, None], phi[None, :])
-    lean = global_shrm_latlong(lc, o.coefficients, 10, P, 20, 40, rows_per_block=7)
+    lean = global_shrm_latlong(lc, o.coefficients, 10, P, 20, 40)
     np.testing.assert_allclose(lean, full, atol=1e-5 * np.abs(full).max())
     local[:, np.arange(2 * P + 1) != P] = 0.0
     q0 = global_from_local(local, theta[:, None], phi[None, :])
