@@ -164,12 +164,16 @@ def choose_orders(
     t0 = time.perf_counter()
     notes: list[str] = []
     F_goal, P_goal = min(start_F, max_F), min(start_P, max_P)
-    for _ in range(16):
+    for _ in range(24):
         grid = ReparamGrid.for_orders(F_goal, P_goal)
         coefficients, missing = _coefficients_on(brdf, grid, max_F, max_P)
+        at_caps = coefficients.F0 >= max_F and coefficients.P0 >= max_P
+        if not np.any(coefficients.energy > 0) and not at_caps:
+            # a lobe far sharper than this grid (Phong s = 1e6) can fall between its nodes
+            F_goal, P_goal = min(2 * F_goal, max_F), min(P_goal + 4, max_P)
+            continue
         table = eps_table(coefficients)
         F, P, capped = choose_from_table(table, eps)
-        at_caps = coefficients.F0 >= max_F and coefficients.P0 >= max_P
         if capped and not at_caps:
             F_goal, P_goal = min(2 * F_goal, max_F), min(P_goal + 4, max_P)
         elif F > F_goal or P > P_goal:

@@ -50,10 +50,15 @@ class SceneOrders:
     tolerance: float
 
 
-def _brdf_band_energies(coefficients: BRDFCoefficients, P: int) -> tuple[np.ndarray, np.ndarray]:
-    """r_l within p <= P and beyond p > P, per channel: two arrays (F0+1, 3)."""
-    terms = coefficients.parseval_terms().sum(axis=2)  # (F0+1, P0+1, 3)
-    return terms[:, : P + 1].sum(axis=1), terms[:, P + 1 :].sum(axis=1)
+def _brdf_band_energies(
+    coefficients: BRDFCoefficients, P: int, q_max: int | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """r_l kept (p <= P, |q| <= q_max) and not kept, per channel: two arrays (F0+1, 3)."""
+    terms = coefficients.parseval_terms()  # (F0+1, P0+1, P0+1 over q, 3)
+    total = terms.sum(axis=(1, 2))
+    q_stop = None if q_max is None else q_max + 1
+    kept = terms[:, : P + 1, :q_stop].sum(axis=(1, 2))
+    return kept, total - kept
 
 
 def reflected_error(
@@ -62,15 +67,18 @@ def reflected_error(
     F: int,
     P: int,
     window: np.ndarray | None = None,
+    *,
+    q_max: int | None = None,
 ) -> float:
     """Relative energy error ε_B of truncating B to l <= F, p <= P, against all the
     coefficients available (l <= min(F0, lmax), p <= P0); worst channel.
 
     With a ``window`` σ_l (l = 0..F) multiplying the kept coefficients, the kept bands
     contribute their attenuation Σ Λ_l² a_l r_l (1 − σ_l)² to the error as well.
+    ``q_max=0`` keeps only the azimuth-free terms (Kautz & McCool 2000).
     """
     a = lighting.band_energy()
-    r_in, r_out = _brdf_band_energies(coefficients, P)
+    r_in, r_out = _brdf_band_energies(coefficients, P, q_max)
     n = min(a.shape[0], r_in.shape[0])
     lam2 = Lambda(np.arange(n))[:, None] ** 2
     full = lam2 * a[:n] * (r_in[:n] + r_out[:n])

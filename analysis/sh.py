@@ -53,10 +53,9 @@ def legendre_f(lmax: int, mmax: int, cos_theta: np.ndarray) -> np.ndarray:
     """
     x = np.asarray(cos_theta, dtype=np.float64)
     s = np.sqrt(np.clip(1.0 - x * x, 0.0, None))
-    mmax = min(mmax, lmax)
     out = np.zeros((lmax + 1, mmax + 1) + x.shape)
     fmm = np.full(x.shape, 1.0 / np.sqrt(4.0 * np.pi))
-    for m in range(mmax + 1):
+    for m in range(min(mmax, lmax) + 1):
         if m > 0:
             fmm = -np.sqrt((2.0 * m + 1.0) / (2.0 * m)) * s * fmm
         out[m, m] = fmm

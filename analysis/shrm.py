@@ -43,6 +43,18 @@ __all__ = [
 ]
 
 
+def _unit_rows(vectors: np.ndarray, name: str) -> np.ndarray:
+    """(n, 3) float64 unit vectors; BadInputError for a wrong shape, zero or non-finite rows."""
+    v = np.atleast_2d(np.asarray(vectors, dtype=np.float64))
+    if v.ndim != 2 or v.shape[1] != 3:
+        raise BadInputError(None, f"{name} must have shape (n, 3), got {np.shape(vectors)}")
+    norm = np.linalg.norm(v, axis=1, keepdims=True)
+    bad = ~np.isfinite(norm[:, 0]) | (norm[:, 0] == 0)
+    if np.any(bad):
+        raise BadInputError(None, f"{name} has {int(bad.sum())} zero or non-finite direction(s)")
+    return v / norm
+
+
 @dataclass(frozen=True, eq=False)
 class SHRM:
     """A global SHRM on a lat-long grid.
@@ -97,11 +109,14 @@ class SHRM:
         Parameters
         ----------
         R, V
-            Unit reflection and view directions (n, 3) in the global z-up frame; the
-            surface normal is normalize(R + V).
+            Reflection and view directions (n, 3) in the global z-up frame, normalized
+            here (zero or non-finite rows are refused); the surface normal is
+            normalize(R + V).
         """
-        R = np.atleast_2d(np.asarray(R, dtype=np.float64))
-        V = np.atleast_2d(np.asarray(V, dtype=np.float64))
+        R = _unit_rows(R, "R")
+        V = _unit_rows(V, "V")
+        if R.shape != V.shape:
+            raise BadInputError(None, f"R and V must have the same shape (n, 3), got {R.shape} and {V.shape}")
         maps = np.moveaxis(self.coeffs, 0, 2)  # (H, W, n_coef, 3)
         at_r = bilinear_lookup(maps, R)  # (n, n_coef, 3)
         basis = real_sph_harm(self.P, V)  # (n, n_coef)
@@ -527,10 +542,16 @@ def prefilter(
         raise BadInputError(None, f"SHRM size must be in [2, 8192] rows, got {S}")
     stage("synthesis")
     t0 = time.perf_counter()
-    coeffs = global_shrm_latlong(
-        lighting, coefficients, F_B, P_B, S, 2 * S, nthreads=nthreads, azimuth_free=azimuth_free
-    )
+    with np.errstate(over="ignore", invalid="ignore"):  # overflow is checked (and reported) below
+        coeffs = global_shrm_latlong(
+            lighting, coefficients, F_B, P_B, S, 2 * S, nthreads=nthreads, azimuth_free=azimuth_free
+        )
     timings["synthesis"] = time.perf_counter() - t0
+    if not np.all(np.isfinite(coeffs)):
+        raise BadInputError(
+            getattr(env, "source", None) or env.name,
+            "the prefiltered radiance overflows float32 maps (radiance values near 1e38?): rescale the map",
+        )
     cube_coeffs = None
     if cube:
         stage("cube map")
@@ -552,7 +573,7 @@ def prefilter(
     eps_info = {
         "brdf": float(orders.table[min(F_B, orders.F0), P_B]),
         "lighting": float(lighting.eps()[min(F_B, lighting.lmax)]),
-        "reflected": reflected_error(lighting, orders.coefficients, F_B, P_B, sigma),
+        "reflected": reflected_error(lighting, orders.coefficients, F_B, P_B, sigma, q_max=0 if azimuth_free else None),
         "bound": residual_bound(lighting, orders.coefficients, F_B, P_B),
         "gibbs_negative": gibbs_negative(coeffs, P_B),
     }

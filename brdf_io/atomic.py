@@ -12,7 +12,9 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
-__all__ = ["atomic_path"]
+from .errors import BadInputError
+
+__all__ = ["atomic_path", "check_writable"]
 
 
 @contextlib.contextmanager
@@ -29,8 +31,13 @@ def atomic_path(path: str | os.PathLike[str], suffix: str | None = None) -> Iter
     """
     target = Path(path)
     folder = target.parent if str(target.parent) else Path(".")
-    folder.mkdir(parents=True, exist_ok=True)
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=suffix or "".join(target.suffixes), dir=folder)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        fd, tmp_name = tempfile.mkstemp(
+            prefix=f".{target.name}.", suffix=suffix or "".join(target.suffixes), dir=folder
+        )
+    except OSError as err:
+        raise BadInputError(target, f"cannot write here ({err.strerror or err})") from None
     os.close(fd)
     tmp = Path(tmp_name)
     try:
@@ -38,7 +45,29 @@ def atomic_path(path: str | os.PathLike[str], suffix: str | None = None) -> Iter
         umask = os.umask(0)
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)  # mkstemp creates 0600; give the file normal permissions
-        os.replace(tmp, target)
+        try:
+            os.replace(tmp, target)
+        except OSError as err:
+            raise BadInputError(target, f"cannot write here ({err.strerror or err})") from None
     finally:
         if tmp.exists():
             tmp.unlink()
+
+
+def check_writable(path: str | os.PathLike[str]) -> Path:
+    """Fail early, before any long computation, if ``path`` cannot be written.
+
+    Creates the parent folder if needed (as :func:`atomic_path` would), checks that a file can
+    be created there and that ``path`` is not an existing folder.
+    """
+    target = Path(path)
+    if target.is_dir():
+        raise BadInputError(target, "is a folder, not a file name")
+    folder = target.parent if str(target.parent) else Path(".")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=folder):
+            pass
+    except OSError as err:
+        raise BadInputError(target, f"cannot write here ({err.strerror or err})") from None
+    return target

@@ -149,7 +149,7 @@ def _cook_torrance(p: _Params) -> BRDF:
     return CookTorrance(
         kd=p.color("kd", 0.0, 0.0, 1.0),
         ks=p.color("ks", 1.0, 0.0),
-        alpha=p.scalar("alpha", None, 0.0, 4.0, lo_open=True),
+        alpha=p.scalar("alpha", None, 1e-4, 4.0),
         f0=p.color("f0", 0.04, 0.0, 1.0),
         distribution=p.choice("dist", "beckmann", ("beckmann", "ggx")),
     )

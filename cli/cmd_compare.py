@@ -16,8 +16,9 @@ from pathlib import Path
 from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
+from ..brdf_io.atomic import check_writable
 from ..brdf_io.errors import BadInputError
-from .common import number_in, print_json, stderr, stdout, tolerance
+from .common import add_env_orientation, load_env_arg, number_in, print_json, stderr, stdout, tolerance
 
 HELP = "compare the SHRM with Kautz-McCool, Cabral (12 maps) and Gaussian-lobe representations"
 
@@ -25,9 +26,7 @@ HELP = "compare the SHRM with Kautz-McCool, Cabral (12 maps) and Gaussian-lobe r
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("brdf", metavar="BRDF", help="BRDF file (.binary, .npz, .json) or spec string")
     parser.add_argument("--env", required=True, help="environment map spec or file")
-    parser.add_argument("--up", choices=("z", "y"), help="lat-long file convention (see shrm render); "
-                        "the Grace probe needs --up y --flip")
-    parser.add_argument("--flip", action="store_true", help="reverse the rows of a lat-long file first")
+    add_env_orientation(parser)
     parser.add_argument("--env-height", type=number_in(8, 512, integer=True), default=64,
                         help="resample the environment to this many rows (default 64; the reference is O(W S_L^2))")
     parser.add_argument("--mesh", help="mesh for the image strip (default: a sphere); brute-force ray casting, "
@@ -67,7 +66,6 @@ def _lobes(text: str) -> tuple[int, ...]:
 
 def run(args: argparse.Namespace) -> int:
     from ..analysis.compare import compare
-    from ..brdf_io.envmap import load_env
     from ..brdf_io.specs import load_brdf
 
     lobes = _lobes(args.lobes)
@@ -79,7 +77,10 @@ def run(args: argparse.Namespace) -> int:
 
         mesh = load_mesh(args.mesh)
     brdf = load_brdf(args.brdf)
-    env = load_env(args.env, up=args.up, flip=args.flip)
+    for path in (args.strip, args.markdown):
+        if path:
+            check_writable(path)
+    env = load_env_arg(args.env, args)
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=stderr,
                   disable=args.json) as bar:
         task = bar.add_task("comparing", total=None)

@@ -9,7 +9,7 @@ from rich.table import Table
 
 from ..analysis.orders import DEFAULT_MAX_F, DEFAULT_MAX_P, choose_orders
 from ..brdf_io.specs import load_brdf
-from .common import print_json, stderr, stdout, tolerance
+from .common import add_env_orientation, load_env_arg, print_json, stderr, stdout, tolerance
 
 HELP = "choose the SH orders (F, P) a BRDF needs at a tolerance eps (RH02 §5.1)"
 
@@ -21,6 +21,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--max-P", type=int, default=DEFAULT_MAX_P, help=f"cap on P (default {DEFAULT_MAX_P})")
     parser.add_argument("--env", help="environment (builtin:sky or a map file): also report F_L, F_B and the bound")
     parser.add_argument("--json", action="store_true", help="print one JSON object instead of tables")
+    add_env_orientation(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -42,9 +43,7 @@ def run(args: argparse.Namespace) -> int:
     if args.env:
         from ..analysis.lighting import lighting_coefficients
         from ..analysis.scene import scene_orders
-        from ..brdf_io.envmap import load_env
-
-        env = load_env(args.env)
+        env = load_env_arg(args.env, args)
         lmax = int(min(max(2 * orders.F, orders.F + 16), env.radiance.shape[0] - 1, orders.coefficients.F0))
         scene = scene_orders(orders, lighting_coefficients(env.radiance, lmax, name=env.name))
         doc.update(

@@ -10,10 +10,10 @@ from rich.table import Table
 
 from ..analysis.orders import DEFAULT_MAX_F, DEFAULT_MAX_P
 from ..analysis.shrm import prefilter
-from ..brdf_io.envmap import load_env
+from ..brdf_io.atomic import check_writable
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.specs import load_brdf
-from .common import stderr, stdout, tolerance
+from .common import add_env_orientation, load_env_arg, stderr, stdout, tolerance
 
 HELP = "prefilter an environment map with a BRDF into a global SHRM file (.shrm.npz)"
 
@@ -29,13 +29,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--cube-size", type=int, help="cube face size S (default: rows // 2)")
     parser.add_argument("--window", choices=("none", "lanczos"), default="none", help="Lanczos damping of ringing")
     parser.add_argument("-o", "--output", required=True, help="output path, e.g. sky.shrm.npz")
+    add_env_orientation(parser)
 
 
 def run(args: argparse.Namespace) -> int:
     out = Path(args.output)
     if not out.name.endswith(".npz"):
         raise BadInputError(out, "the SHRM output must end in .shrm.npz (or .npz)")
-    env = load_env(args.env)
+    if args.cube_size is not None and not args.cube:
+        raise BadInputError(None, "--cube-size needs --cube")
+    check_writable(out)
+    env = load_env_arg(args.env, args)
     brdf = load_brdf(args.brdf)
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=stderr) as bar:
         task = bar.add_task("prefiltering", total=None)
@@ -57,6 +61,9 @@ def run(args: argparse.Namespace) -> int:
     stdout.print(table)
     if shrm.cube is not None:
         stdout.print(f"cube map: 6 x {shrm.cube.shape[2]}^2 texels, {t['cube']:.3f} s")
+    if args.window == "lanczos":
+        stdout.print(f"note: the Lanczos window blurs: reported energy error {shrm.eps['reflected']:.3g} "
+                     f"(tolerance {args.eps:g})")
     if shrm.eps.get("gibbs_negative", 0) > 0.01:
         stdout.print(f"[yellow]note:[/yellow] ringing: negative lobes down to {shrm.eps['gibbs_negative']:.1%} of the "
                      "peak (try --window lanczos)")

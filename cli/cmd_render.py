@@ -8,7 +8,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..brdf_io.atomic import check_writable
 from ..brdf_io.errors import BadInputError
+from .common import add_env_orientation, load_env_arg
 
 HELP = "render a mesh shaded by the SHRM of ENV and BRDF to PNG (and linear EXR), offscreen"
 
@@ -53,12 +55,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="render N frames around the z axis to OUT_0000.png ... and OUT.gif")
     p.add_argument("--fps-frames", type=int, default=10, help="repeated frames for the fps figure (default 10)")
     p.add_argument("-o", "--output", required=True, help="output PNG")
+    add_env_orientation(p)
     p.add_argument("--exr", help="also write linear radiance (before tone mapping) to this EXR")
 
 
 def run(args: argparse.Namespace) -> int:
     from ..analysis.shrm import prefilter
-    from ..brdf_io.envmap import load_env
     from ..brdf_io.specs import load_brdf
     from ..render.camera import Camera
     from ..render.mesh import load_mesh
@@ -86,8 +88,11 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as err:
         raise BadInputError(None, f"--view/--up: {err}") from None
 
+    for path in (args.output, args.exr):
+        if path:
+            check_writable(path)
     mesh = load_mesh(args.mesh)
-    env = load_env(args.env)
+    env = load_env_arg(args.env, args)
     brdf = load_brdf(args.brdf)
     print(f"mesh {mesh.name}: {mesh.n_triangles} triangles")
     if args.self_shadow and args.mode != "gaussian-lobes":

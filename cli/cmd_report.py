@@ -11,7 +11,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from .common import stderr, stdout, tolerance
+from .common import add_env_orientation, stderr, stdout, tolerance
 
 HELP = "accuracy reports (orders, scene errors, fits, speed vs error, preview) for BRDFs, with a summary"
 
@@ -63,6 +63,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--max-F", type=_positive_int, default=None, help="cap on F (default 256, quick 96)")
     p.add_argument("--fit-samples", type=_positive_int, default=None, help="fit samples (default 16384, quick 4096)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_env_orientation(p)
     p.epilog = "exit status: 0 all reports made, 1 some BRDFs failed (see summary), 2 bad usage"
 
 
@@ -70,7 +71,8 @@ def options_from_args(args: argparse.Namespace):
     """ReportOptions from the parsed arguments (the quick profile when ``--quick``)."""
     from ..analysis.report.options import profile
 
-    changes = {"eps": args.eps, "lobes": args.lobes, "preview": args.preview, "seed": args.seed, "mesh": args.mesh}
+    changes = {"eps": args.eps, "lobes": args.lobes, "preview": args.preview, "seed": args.seed, "mesh": args.mesh,
+               "env_up": args.env_up, "env_flip": args.env_flip, "env_azimuth": args.env_azimuth}
     for key, value in (("tolerances", args.tolerances), ("envs", tuple(args.env) if args.env else None),
                        ("env_height", args.env_height), ("models", args.models), ("n_pairs", args.pairs),
                        ("max_F", args.max_F), ("fit_samples", args.fit_samples)):
@@ -110,6 +112,7 @@ def say(text: str) -> None:
 
 def run(args: argparse.Namespace) -> int:
     options = options_from_args(args)
+    _check_shared_inputs(options)
     t0 = time.perf_counter()
     result = run_with_progress(list(args.brdfs), args.out, options, workers=args.workers,
                                scheduler=args.dask_scheduler, show=not args.no_progress)
@@ -123,3 +126,16 @@ def run(args: argparse.Namespace) -> int:
     say(f"{len(result.rows) - result.n_failed} of {len(result.rows)} reports made in "
                  f"{time.perf_counter() - t0:.1f} s ({result.engine})")
     return 0 if result.ok else 1
+
+
+def _check_shared_inputs(options) -> None:
+    """Inputs every BRDF of the batch uses (environments, mesh) are checked once, up front:
+    a bad one is a usage error (exit 2), not one failure per BRDF."""
+    from ..analysis.report.options import load_report_env
+
+    for spec in options.envs:
+        load_report_env(spec, options)
+    if options.mesh:
+        from ..render.mesh import load_mesh
+
+        load_mesh(options.mesh)

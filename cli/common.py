@@ -10,9 +10,16 @@ from typing import Any
 import numpy as np
 from rich.console import Console
 
+from ..brdf_io.errors import BadInputError
 from ..brdf_io.jsonutil import to_jsonable
 
-__all__ = ["stdout", "stderr", "number_in", "positive_float", "tolerance", "print_json", "to_jsonable"]
+__all__ = [
+    "add_env_orientation",
+    "env_orientation",
+    "load_env_arg",
+    "stdout",
+    "stderr",
+    "number_in", "positive_float", "tolerance", "print_json", "to_jsonable"]
 
 stdout = Console(highlight=False)
 stderr = Console(stderr=True, highlight=False)
@@ -48,3 +55,30 @@ positive_float = number_in(0.0, np.inf, lo_open=True)
 def print_json(doc: dict[str, Any]) -> None:
     """One JSON object on stdout."""
     sys.stdout.write(json.dumps(to_jsonable(doc)) + "\n")
+
+
+def add_env_orientation(parser: argparse.ArgumentParser) -> None:
+    """``--env-up``, ``--env-flip``, ``--env-azimuth``: how a lat-long *file* is oriented
+    (data_specs/environment_maps.md; the shared Grace probe needs ``--env-up y --env-flip``)."""
+    group = parser.add_argument_group("environment file orientation (ignored for builtin: maps)")
+    group.add_argument("--env-up", choices=("z", "y"), default=None,
+                       help="lat-long file convention: z (top row = zenith, default) or y (y-up files)")
+    group.add_argument("--env-flip", action="store_true", help="reverse the rows of a lat-long file first")
+    group.add_argument("--env-azimuth", type=float, default=0.0, metavar="DEG",
+                       help="rotate the map about the up axis by this many degrees")
+
+
+def env_orientation(args: argparse.Namespace) -> dict[str, Any]:
+    """Keyword arguments of ``load_env`` from :func:`add_env_orientation`'s options."""
+    return {"up": args.env_up, "flip": args.env_flip, "azimuth": args.env_azimuth}
+
+
+def load_env_arg(spec: str, args: argparse.Namespace, **kwargs: Any):
+    """``load_env(spec)`` with the orientation options applied to files (not to built-ins)."""
+    from ..brdf_io.envmap import load_env
+
+    if spec.strip().startswith("builtin:"):
+        if args.env_up or args.env_flip:
+            raise BadInputError(spec, "--env-up/--env-flip apply to map files, not to built-in environments")
+        return load_env(spec, azimuth=args.env_azimuth, **kwargs)
+    return load_env(spec, **env_orientation(args), **kwargs)

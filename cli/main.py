@@ -2,8 +2,8 @@
 
 Each verb lives in a module ``cli/cmd_<verb>.py`` that defines ``HELP`` (one line),
 ``add_arguments(parser)`` and ``run(args) -> int``; they are discovered here, so adding a
-verb touches no other file. A :class:`~shrmkit.brdf_io.errors.BadInputError` becomes one
-line on stderr and exit code 2.
+verb touches no other file. A :class:`~shrmkit.brdf_io.errors.BadInputError` (or an
+``OSError`` from the file system) becomes one line on stderr and exit code 2.
 """
 
 from __future__ import annotations
@@ -52,6 +52,10 @@ def main(argv: list[str] | None = None) -> int:
         return int(args._run(args) or 0)
     except ShrmError as err:
         print(f"shrm {args.verb}: error: {err}", file=sys.stderr)
+        return 2
+    except OSError as err:  # a file system refusal the verb did not turn into a BadInputError
+        where = f"{err.filename}: " if err.filename else ""
+        print(f"shrm {args.verb}: error: {where}{err.strerror or err}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print(f"shrm {args.verb}: interrupted", file=sys.stderr)

@@ -34,10 +34,9 @@ import numpy as np
 
 from ..._version import __version__
 from ...brdf_io.brdf import BRDF
-from ...brdf_io.envmap import load_env
 from ...brdf_io.errors import BadInputError
 from .checks import RECIPROCITY_TOLERANCE, data_checks
-from .options import ReportOptions
+from .options import ReportOptions, load_report_env
 from .preview import PREVIEW_DISABLED, PreviewImage, render_previews
 
 __all__ = [
@@ -252,7 +251,7 @@ def _environments(brdf: BRDF, options: ReportOptions, progress: Progress | None)
     R, V = random_pairs(options.n_pairs, options.seed)
     env_entries, speed_rows, main_shrms = [], [], []
     for spec in options.envs:
-        env = load_env(spec, height=options.env_height)
+        env = load_report_env(spec, options)
         _stage(progress, f"reference {env.name}")
         t0 = time.perf_counter()
         reference = reference_radiance(env, brdf, R, V)

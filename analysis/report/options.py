@@ -33,6 +33,9 @@ class ReportOptions:
         Tolerances of the order table and the speed-against-error rows (``eps`` is added).
     envs
         Environment specs or files (``shrmkit.load_env``).
+    env_up, env_flip, env_azimuth
+        Orientation of environment *files* (``load_env``'s ``up``, ``flip``, ``azimuth``);
+        built-in environments only take the azimuth.
     env_height
         Environments are area-resampled to ``env_height`` × 2·``env_height``: the angular
         reference sums every pixel for every (R, V) pair, so keep it small.
@@ -59,6 +62,9 @@ class ReportOptions:
     tolerances: tuple[float, ...] = DEFAULT_TOLERANCES
     envs: tuple[str, ...] = ("builtin:sky",)
     env_height: int = 64
+    env_up: str | None = None
+    env_flip: bool = False
+    env_azimuth: float = 0.0
     models: tuple[str, ...] = DEFAULT_MODELS
     lobes: int = 1
     fit_samples: int = 16384
@@ -89,6 +95,10 @@ class ReportOptions:
             raise BadInputError(None, f"preview_size must be in [16, 2048], got {self.preview_size!r}")
         if not self.envs:
             raise BadInputError(None, "at least one environment is needed")
+        if self.env_up not in (None, "z", "y"):
+            raise BadInputError(None, f"env_up must be 'z', 'y' or None, got {self.env_up!r}")
+        if not math.isfinite(self.env_azimuth):
+            raise BadInputError(None, f"env_azimuth must be finite, got {self.env_azimuth!r}")
         if self.albedo_nodes < 8:
             raise BadInputError(None, f"albedo_nodes must be >= 8, got {self.albedo_nodes!r}")
         from ..fit.models_param import MODELS
@@ -131,3 +141,13 @@ def profile(name: str = "full", **changes: Any) -> ReportOptions:
         base.update(changes)
         return ReportOptions(**base)
     raise BadInputError(None, f"unknown report profile {name!r}; choose 'quick' or 'full'")
+
+
+def load_report_env(spec: str, options: ReportOptions):  # -> EnvironmentMap
+    """Load one of ``options.envs`` at ``env_height`` rows with the orientation options."""
+    from ...brdf_io.envmap import load_env
+
+    if spec.strip().startswith("builtin:"):
+        return load_env(spec, azimuth=options.env_azimuth, height=options.env_height)
+    return load_env(spec, up=options.env_up, flip=options.env_flip, azimuth=options.env_azimuth,
+                    height=options.env_height)

@@ -113,3 +113,18 @@ def test_merl_tabulated_cook_torrance_keeps_its_orders(tmp_path):
                                  eps=0.05, max_F=64, max_P=10)
     assert not direct.capped and not merl.capped
     assert abs(direct.F - merl.F) <= 1 and abs(direct.P - merl.P) <= 1
+
+
+def test_cap_on_F_below_cap_on_P_is_reported_not_a_crash():
+    """max_F < max_P (e.g. --max-F 8): capped result, no IndexError (review finding)."""
+    o = shrmkit.choose_orders(shrmkit.load_brdf("phong:s=32"), eps=0.03, max_F=8)
+    assert o.capped and o.F == 8 and "not met" in o.message
+    assert np.all(np.isfinite(o.table))
+
+
+def test_lobe_sharper_than_the_first_grid_is_not_called_zero():
+    """Phong s = 1e6 falls between the first grid's nodes: grow to the caps, report capped,
+    with ε(512, ·) close to the closed form exp(−F²/s)."""
+    o = shrmkit.choose_orders(shrmkit.load_brdf("phong:s=1e6"), eps=0.03)
+    assert o.capped and o.F == 512
+    assert o.eps == pytest.approx(np.exp(-(512**2) / 1e6), abs=0.15)

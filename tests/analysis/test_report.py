@@ -28,7 +28,8 @@ OPT_STR = (str, type(None))
 # key -> type, tuple of types, nested dict, or [item schema] for arrays.
 RGB = [NUM]
 OPTIONS = {
-    "eps": NUM, "tolerances": [NUM], "envs": [STR], "env_height": int, "models": [STR], "lobes": int,
+    "eps": NUM, "tolerances": [NUM], "envs": [STR], "env_height": int, "env_up": OPT_STR, "env_flip": bool,
+    "env_azimuth": NUM, "models": [STR], "lobes": int,
     "fit_samples": int, "fit_starts": int, "n_pairs": int, "seed": int, "max_F": int, "max_P": int,
     "preview": STR, "preview_size": int, "mesh": OPT_STR, "albedo_nodes": int, "profile": STR,
 }

@@ -274,3 +274,33 @@ def test_default_size_follows_10F_within_the_memory_budget():
     assert default_size(23, 2) == 230 and default_size(2, 0) == 32 and default_size(300, 0) == 1024
     S = default_size(63, 16)
     assert S < 630 and 17**2 * S * 2 * S * 3 * 4 <= DEFAULT_MAP_BUDGET_BYTES
+
+
+def test_radiance_normalizes_and_refuses_zero_directions():
+    m = shrmkit.prefilter("builtin:studio,height=16", "microfacet:sigma=0.4", eps=0.1, size=16)
+    R, V = _pairs(5, seed=12)
+    np.testing.assert_allclose(m.radiance(3 * R, 0.5 * V), m.radiance(R, V), rtol=1e-6)
+    with pytest.raises(BadInputError, match="zero or non-finite"):
+        m.radiance(np.zeros((1, 3)), V[:1])
+    with pytest.raises(BadInputError, match="same shape"):
+        m.radiance(R, V[:2])
+
+
+def test_radiance_beyond_float32_is_a_clear_error():
+    from shrmkit.brdf_io.envmap import EnvironmentMap
+
+    env = EnvironmentMap(np.full((4, 8, 3), 3e38), "huge", "test")
+    with pytest.raises(BadInputError, match="float32"):
+        shrmkit.prefilter(env, "phong:s=8", eps=0.1)
+
+
+def test_azimuth_free_reports_its_own_error():
+    """Kautz–McCool drops q ≠ 0 terms: the reported ε must include that loss (review finding)."""
+    env = shrmkit.load_env("builtin:studio,height=32")
+    full = shrmkit.prefilter(env, "lambert:albedo=0.5", eps=0.03)
+    q0 = shrmkit.prefilter(env, "lambert:albedo=0.5", eps=0.03, azimuth_free=True)
+    assert q0.eps["reflected"] > 5 * full.eps["reflected"]
+    R, V = _pairs(300, seed=13)
+    ref = reference_radiance(env, shrmkit.load_brdf("lambert:albedo=0.5"), R, V)
+    measured = _rel_rms(q0.radiance(R, V), ref)
+    assert 0.5 * np.sqrt(q0.eps["reflected"]) < measured < 1.5 * np.sqrt(q0.eps["reflected"])
