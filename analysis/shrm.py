@@ -185,6 +185,15 @@ def _store_spin_field(out: np.ndarray, p: int, s: int, c: int, P: int, field: np
         out[p, P + s, ..., c] = ((-1.0) ** s) * np.conj(neg)
 
 
+def _synthesize_latlong(alm: np.ndarray, spin: int, lmax: int, height: int, width: int, nthreads: int) -> np.ndarray:
+    """One ducc0 synthesis on the pixel-centred lat-long grid (F1 rings, phi0 = π/W): the real
+    map (spin 0) or Q, U of a gradient-only spin field, shape (1 or 2, H, W)."""
+    return ducc0.sht.experimental.synthesis_2d(
+        alm=alm[None, :], spin=spin, lmax=lmax, geometry="F1", ntheta=height, nphi=width,
+        phi0=np.pi / width, nthreads=nthreads, mode="STANDARD" if spin == 0 else "GRAD_ONLY",
+    )
+
+
 def local_shrm_fast(
     lighting: LightingCoefficients,
     coefficients: BRDFCoefficients,
@@ -205,11 +214,7 @@ def local_shrm_fast(
     """
     out = np.zeros((P + 1, 2 * P + 1, height, width, 3), dtype=np.complex128)
     for p, s, c, alm, lmax in _spin_terms(lighting, coefficients, F, P):
-        field = ducc0.sht.experimental.synthesis_2d(
-            alm=alm[None, :], spin=s, lmax=lmax, geometry="F1", ntheta=height, nphi=width,
-            phi0=np.pi / width, nthreads=nthreads, mode="STANDARD" if s == 0 else "GRAD_ONLY",
-        )
-        _store_spin_field(out, p, s, c, P, field)
+        _store_spin_field(out, p, s, c, P, _synthesize_latlong(alm, s, lmax, height, width, nthreads))
     return out
 
 
@@ -245,10 +250,7 @@ def global_shrm_latlong(
         for _, s, c, alm, lmax in p_terms:
             if azimuth_free and s > 0:
                 continue
-            field = ducc0.sht.experimental.synthesis_2d(
-                alm=alm[None, :], spin=s, lmax=lmax, geometry="F1", ntheta=height, nphi=width,
-                phi0=np.pi / width, nthreads=nthreads, mode="STANDARD" if s == 0 else "GRAD_ONLY",
-            )
+            field = _synthesize_latlong(alm, s, lmax, height, width, nthreads)
             re[s, ..., c] = field[0]
             if s:
                 im[s, ..., c] = field[1]
