@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .shader import sh_glsl
+from .shader import LATLONG_GLSL, sh_glsl
 
 __all__ = ["sg_atlas", "gaussian_vertex_replacements", "gaussian_fragment_replacements", "N_VIS_ATTRIBUTES"]
 
@@ -98,32 +98,12 @@ def _lobe_tables(lobes, sigmas: np.ndarray) -> list[str]:
     ]
 
 
-_LEVEL = """
+_LEVEL = LATLONG_GLSL + """
 vec3 sg_level(int j, vec3 d) {
-  const float PI = 3.14159265358979;
-  int H = sgH[j];
-  int W = 2 * H;
-  int row = sgRow[j];
-  float rxy = length(d.xy);
-  float theta = atan(rxy, d.z);
-  float phi = (rxy > 0.0) ? atan(d.y, d.x) : 0.0;
-  if (phi < 0.0) phi += 2.0 * PI;
-  float yy = clamp(theta * float(H) / PI - 0.5, 0.0, float(H) - 1.0);
-  float xx = phi * float(W) / (2.0 * PI) - 0.5;
-  float y0f = min(floor(yy), float(max(H - 2, 0)));
-  float x0f = floor(xx);
-  int x0 = int(x0f);
-  x0 = x0 - W * int(floor(float(x0) / float(W)));
-  int x1 = x0 + 1;
-  if (x1 >= W) x1 -= W;
-  int y0 = int(y0f);
-  int y1 = min(y0 + 1, H - 1);
-  float fx = xx - x0f, fy = yy - y0f;
-  vec3 t00 = texelFetch(shrmTex, ivec2(x0, row + y0), 0).rgb;
-  vec3 t01 = texelFetch(shrmTex, ivec2(x1, row + y0), 0).rgb;
-  vec3 t10 = texelFetch(shrmTex, ivec2(x0, row + y1), 0).rgb;
-  vec3 t11 = texelFetch(shrmTex, ivec2(x1, row + y1), 0).rgb;
-  return (t00 * (1.0 - fx) + t01 * fx) * (1.0 - fy) + (t10 * (1.0 - fx) + t11 * fx) * fy;
+  ivec4 idx;
+  vec2 f;
+  latlong_setup(d, sgH[j], 2 * sgH[j], idx, f);
+  return shrm_fetch(ivec2(0, sgRow[j]), idx, f);
 }
 vec3 sg_lookup(int idx, vec3 d) {
   int j0 = glLev[idx];

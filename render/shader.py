@@ -93,27 +93,30 @@ def vertex_replacements() -> list[tuple[str, str]]:
     ]
 
 
-_LOOKUP = """
-// bilinear lat-long lookup set-up (analysis.latlong.bilinear_lookup): texel columns x0, x1,
-// rows y0, y1 within a tile, weights f = (fx, fy)
-void shrm_setup(vec3 d, out ivec4 idx, out vec2 f) {
+LATLONG_GLSL = """
+// bilinear lat-long lookup set-up (analysis.latlong.bilinear_lookup) on an H x W tile:
+// texel columns x0, x1 (phi wraps), rows y0, y1 (theta clamped to the first/last row centre),
+// weights f = (fx, fy)
+void latlong_setup(vec3 d, int H, int W, out ivec4 idx, out vec2 f) {
   const float PI = 3.14159265358979;
-  float theta = atan(length(d.xy), d.z);
-  float phi = atan(d.y, d.x);
+  float rxy = length(d.xy);
+  float theta = atan(rxy, d.z);
+  float phi = (rxy > 0.0) ? atan(d.y, d.x) : 0.0;
   if (phi < 0.0) phi += 2.0 * PI;
-  float yy = clamp(theta * float(SHRM_H) / PI - 0.5, 0.0, float(SHRM_H) - 1.0);
-  float xx = phi * float(SHRM_W) / (2.0 * PI) - 0.5;
-  float y0f = min(floor(yy), float(max(SHRM_H - 2, 0)));
+  float yy = clamp(theta * float(H) / PI - 0.5, 0.0, float(H) - 1.0);
+  float xx = phi * float(W) / (2.0 * PI) - 0.5;
+  float y0f = min(floor(yy), float(max(H - 2, 0)));
   float x0f = floor(xx);
   int x0 = int(x0f);
-  x0 = x0 - SHRM_W * int(floor(float(x0) / float(SHRM_W)));
+  x0 = x0 - W * int(floor(float(x0) / float(W)));
   int x1 = x0 + 1;
-  if (x1 >= SHRM_W) x1 -= SHRM_W;
+  if (x1 >= W) x1 -= W;
   int y0 = int(y0f);
-  int y1 = min(y0 + 1, SHRM_H - 1);
+  int y1 = min(y0 + 1, H - 1);
   idx = ivec4(x0, x1, y0, y1);
   f = vec2(xx - x0f, yy - y0f);
 }
+// bilinear fetch from shrmTex at tile offset o (texel units)
 vec3 shrm_fetch(ivec2 o, ivec4 idx, vec2 f) {
   vec3 t00 = texelFetch(shrmTex, o + ivec2(idx.x, idx.z), 0).rgb;
   vec3 t01 = texelFetch(shrmTex, o + ivec2(idx.y, idx.z), 0).rgb;
@@ -122,6 +125,12 @@ vec3 shrm_fetch(ivec2 o, ivec4 idx, vec2 f) {
   vec3 top = t00 * (1.0 - f.x) + t01 * f.x;
   vec3 bottom = t10 * (1.0 - f.x) + t11 * f.x;
   return top * (1.0 - f.y) + bottom * f.y;
+}
+"""
+
+_LOOKUP = LATLONG_GLSL + """
+void shrm_setup(vec3 d, out ivec4 idx, out vec2 f) {
+  latlong_setup(d, SHRM_H, SHRM_W, idx, f);
 }
 """
 
