@@ -87,6 +87,18 @@ def sg_eval(cos_gamma: np.ndarray, sigma: np.ndarray) -> np.ndarray:
     return np.exp((cos_gamma - 1.0) / sigma**2) / sg_norm(sigma)
 
 
+
+
+def _node_weights(pos: np.ndarray, n: int):
+    """Linear-interpolation weights of fractional node positions ``pos`` (in [0, n−1]) over
+    ``n`` nodes: yields (node, weights) for every node some position uses."""
+    i0 = np.minimum(np.floor(pos).astype(np.int64), max(n - 2, 0))
+    f = pos - i0
+    for node in range(n):
+        w = np.where(i0 == node, 1.0 - f, 0.0) + np.where(i0 + 1 == node, f, 0.0)
+        if np.any(w > 0):
+            yield node, w
+
 @dataclass(frozen=True, eq=False)
 class SGMipStack:
     """The environment convolved with normalized spherical Gaussians of doubling widths.
@@ -116,14 +128,10 @@ class SGMipStack:
         sigma = np.broadcast_to(np.asarray(sigma, dtype=np.float64), dirs.shape[:1])
         J = len(self.levels)
         t = np.clip(np.log2(np.maximum(sigma, 1e-300) / self.sigmas[0]), 0.0, J - 1.0)
-        j0 = np.minimum(np.floor(t).astype(np.int64), max(J - 2, 0))
-        f = t - j0
         out = np.zeros((dirs.shape[0], 3))
-        for j in range(J):
-            w = np.where(j0 == j, 1.0 - f, 0.0) + np.where(j0 + 1 == j, f, 0.0)
+        for j, w in _node_weights(t, J):
             sel = w > 0
-            if sel.any():
-                out[sel] += w[sel, None] * bilinear_lookup(self.levels[j], dirs[sel])
+            out[sel] += w[sel, None] * bilinear_lookup(self.levels[j], dirs[sel])
         return out
 
 
@@ -410,14 +418,9 @@ class GaussianLobeRenderer:
         nodes = self.lobes.theta_v
         N = nodes.size
         pos = np.interp(tv, nodes, np.arange(N)) if N > 1 else np.zeros_like(tv)
-        n0 = np.minimum(np.floor(pos).astype(np.int64), max(N - 2, 0))
-        f = pos - n0
         out = np.zeros((R.shape[0], 3))
-        for n in range(N):
-            a = np.where(n0 == n, 1.0 - f, 0.0) + np.where(n0 + 1 == n, f, 0.0)
+        for n, a in _node_weights(pos, N):
             sel = a > 0
-            if not sel.any():
-                continue
             for k in range(self.lobes.K):
                 m = self.lobes.mu[n, k]
                 d = np.cos(m) * R[sel] + np.sin(m) * t[sel]
