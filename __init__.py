@@ -27,7 +27,7 @@ _LAZY = {
     "ShrmError": "shrmkit.brdf_io.errors",
     "choose_orders": "shrmkit.analysis.orders",
     "prefilter": "shrmkit.analysis.shrm",
-    "load_shrm": "shrmkit.analysis.shrm_file",
+    "load_shrm": "shrmkit.analysis.shrm",
     "SHRM": "shrmkit.analysis.shrm",
     "fit_brdf": "shrmkit.analysis.fit",
     "compare": "shrmkit.analysis.compare",

@@ -21,7 +21,7 @@ import ducc0
 import numpy as np
 
 from ..brdf_io.errors import BadInputError
-from .latlong import row_solid_angles
+from ..brdf_io.latlong import row_solid_angles
 
 __all__ = ["LightingCoefficients", "lighting_coefficients", "alm_index", "area_downsample", "eps_lighting"]
 

@@ -27,6 +27,7 @@ from ..brdf_io.brdf import BRDF
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.reparam import ReparamBRDF, ReparamGrid, reparameterize
 from .brdf_coeffs import BRDFCoefficients, rho_lpq
+from .tolerance import DEFAULT_EPS, check_eps
 
 __all__ = [
     "OrderChoice",
@@ -126,8 +127,7 @@ def _coefficients_on(brdf: BRDF, grid: ReparamGrid, max_F: int, max_P: int) -> t
 
 
 def _validate(tolerance: float, max_F: int, max_P: int) -> None:
-    if not (0.0 < tolerance < 1.0):
-        raise BadInputError(None, f"eps must be in (0, 1), got {tolerance!r}")
+    check_eps(tolerance)
     if int(max_F) < 1 or int(max_F) > 2000:
         raise BadInputError(None, f"max_F must be in [1, 2000], got {max_F!r}")
     if int(max_P) < 0 or int(max_P) > 64:
@@ -136,8 +136,8 @@ def _validate(tolerance: float, max_F: int, max_P: int) -> None:
 
 def choose_orders(
     brdf: BRDF,
-    eps: float = 0.03,
     *,
+    eps: float = DEFAULT_EPS,
     max_F: int = DEFAULT_MAX_F,
     max_P: int = DEFAULT_MAX_P,
     start_F: int = 24,
@@ -221,7 +221,7 @@ def choose_orders(
     )
 
 
-def orders_on_grid_for(brdf: BRDF, eps: float, F: int, P: int) -> OrderChoice:
+def orders_on_grid_for(brdf: BRDF, F: int, P: int, *, eps: float = DEFAULT_EPS) -> OrderChoice:
     """ρ̂_lpq and ε(F, P) on one quadrature grid sized for given orders (no search).
 
     For callers that force (F, P): the RH02 choice on this grid is still reported in

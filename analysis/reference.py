@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..brdf_io.brdf import BRDF
-from .latlong import pixel_directions, row_solid_angles
+from ..brdf_io.latlong import pixel_directions, row_solid_angles
 
 __all__ = ["reference_radiance", "reference_map", "local_frames"]
 

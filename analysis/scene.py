@@ -27,12 +27,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..brdf_io.envmap import EnvironmentMap
 from .brdf_coeffs import BRDFCoefficients
-from .lighting import LightingCoefficients
+from .lighting import LightingCoefficients, lighting_coefficients
 from .orders import OrderChoice
 from .sh import Lambda
 
-__all__ = ["SceneOrders", "scene_orders", "reflected_error", "residual_bound", "lanczos_window"]
+__all__ = [
+    "SceneOrders", "scene_orders", "scene_for", "lighting_lmax", "reflected_error", "residual_bound", "lanczos_window",
+]
 
 
 @dataclass(frozen=True)
@@ -135,3 +138,21 @@ def scene_orders(orders: OrderChoice, lighting: LightingCoefficients) -> SceneOr
         bound=bound,
         tolerance=tol,
     )
+
+
+def lighting_lmax(orders: OrderChoice, env_height: int, F: int | None = None) -> int:
+    """The lighting order computed for a scene: beyond F_ρ (max(2F_ρ, F_ρ + 16), or a forced
+    ``F``), so that the achieved error and the bound see the residual energy, but never above
+    what the map resolves (rows − 1) or what the BRDF coefficients hold (F0)."""
+    return int(min(max(2 * orders.F, orders.F + 16, F or 0), env_height - 1, orders.coefficients.F0))
+
+
+def scene_for(
+    env: EnvironmentMap, orders: OrderChoice, *, F: int | None = None, nthreads: int = 0
+) -> tuple[LightingCoefficients, SceneOrders]:
+    """The lighting coefficients to :func:`lighting_lmax` and the scene orders of ``env`` with
+    a BRDF's ``orders``: the one rule used by ``prefilter``, ``shrm orders --env`` and
+    ``shrm report``."""
+    lmax = lighting_lmax(orders, env.radiance.shape[0], F)
+    lighting = lighting_coefficients(env.radiance, lmax, name=env.name, nthreads=nthreads)
+    return lighting, scene_orders(orders, lighting)

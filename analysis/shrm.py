@@ -20,17 +20,23 @@ from typing import Any
 import ducc0
 import numpy as np
 
+from .._version import __version__
+from ..brdf_io.envmap import EnvironmentMap, load_env
 from ..brdf_io.errors import BadInputError
+from ..brdf_io.latlong import bilinear_lookup, pixel_angles, pixel_directions
+from ..brdf_io.specs import load_brdf
 from .brdf_coeffs import BRDFCoefficients
-from .latlong import bilinear_lookup, pixel_angles, pixel_directions
-from .lighting import LightingCoefficients, alm_index, lighting_coefficients
+from .lighting import LightingCoefficients, alm_index
 from .orders import DEFAULT_MAX_F, DEFAULT_MAX_P, choose_orders, orders_on_grid_for
-from .scene import lanczos_window, reflected_error, residual_bound, scene_orders
+from .scene import lanczos_window, reflected_error, residual_bound, scene_for
 from .sh import Lambda, real_index, real_sph_harm
+from .shrm_file import read_shrm_fields, save_shrm
+from .tolerance import DEFAULT_EPS, check_eps
 from .wigner import rotation_D, wigner_d_tilde
 
 __all__ = [
     "SHRM",
+    "load_shrm",
     "prefilter",
     "local_shrm_fast",
     "local_shrm_at",
@@ -124,8 +130,6 @@ class SHRM:
 
     def save(self, path: str | Path) -> Path:
         """Write the SHRM to a ``.shrm.npz`` file (atomic; see ``data_specs/shrm_file.md``)."""
-        from .shrm_file import save_shrm
-
         return save_shrm(path, self)
 
     def view_map(self, view: np.ndarray) -> np.ndarray:
@@ -140,6 +144,18 @@ class SHRM:
 # ----------------------------------------------------------------------------------------
 # Prefiltering: local SHRM by spin-weighted SHT, rotation to the global SHRM (DESIGN §5–6)
 # ----------------------------------------------------------------------------------------
+
+
+def load_shrm(path: str | Path) -> SHRM:
+    """Read an SHRM written by :meth:`SHRM.save` (``data_specs/shrm_file.md``).
+
+    Raises
+    ------
+    BadInputError
+        Missing or unreadable file, wrong format or version, inconsistent shapes,
+        non-finite coefficients.
+    """
+    return SHRM(**read_shrm_fields(path))
 
 
 def _full_m_lighting(lighting: LightingCoefficients, l: int) -> np.ndarray:
@@ -446,8 +462,8 @@ def default_size(F: int, P: int = 0, budget_bytes: int = DEFAULT_MAP_BUDGET_BYTE
 def prefilter(
     env: Any,
     brdf: Any,
-    eps: float = 0.03,
     *,
+    eps: float = DEFAULT_EPS,
     size: int | None = None,
     F: int | None = None,
     P: int | None = None,
@@ -497,9 +513,7 @@ def prefilter(
     SHRM
         float32 global SHRM with orders, achieved errors, timings in ``meta``.
     """
-    from .._version import __version__
-    from ..brdf_io.envmap import EnvironmentMap, load_env
-    from ..brdf_io.specs import load_brdf
+    eps = check_eps(eps)
 
     def stage(name: str) -> None:
         if progress is not None:
@@ -514,19 +528,15 @@ def prefilter(
     stage("orders")
     t0 = time.perf_counter()
     if F is not None and P is not None:
-        orders = orders_on_grid_for(brdf, eps, int(F), int(P))
+        orders = orders_on_grid_for(brdf, int(F), int(P), eps=eps)
     else:
-        orders = choose_orders(brdf, eps, max_F=max_F, max_P=max_P)
+        orders = choose_orders(brdf, eps=eps, max_F=max_F, max_P=max_P)
     timings["orders"] = time.perf_counter() - t0
     stage("lighting")
     t0 = time.perf_counter()
-    height = env.radiance.shape[0]
-    # lighting beyond F_ρ too, so the achieved error and the bound see the residual energy
-    lmax_light = int(min(max(2 * orders.F, orders.F + 16, F or 0), height - 1, orders.coefficients.F0))
-    lighting = lighting_coefficients(env.radiance, lmax_light, name=env.name, nthreads=nthreads)
+    lighting, scene = scene_for(env, orders, F=F, nthreads=nthreads)
     timings["lighting"] = time.perf_counter() - t0
-    scene = scene_orders(orders, lighting)
-    F_B = scene.F_B if F is None else int(min(F, lmax_light))
+    F_B = scene.F_B if F is None else int(min(F, lighting.lmax))
     P_B = scene.P_B if P is None else int(min(P, orders.coefficients.P0))
     if window not in ("none", "lanczos"):
         raise BadInputError(None, f"window={window!r}: choose 'none' or 'lanczos'")

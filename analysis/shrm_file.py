@@ -14,23 +14,24 @@ from __future__ import annotations
 import json
 import zipfile
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from ..brdf_io.atomic import atomic_path
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.jsonutil import to_jsonable
-from .shrm import SHRM
 
-__all__ = ["save_shrm", "load_shrm", "FORMAT", "VERSION"]
+__all__ = ["save_shrm", "read_shrm_fields", "FORMAT", "VERSION"]
 
 FORMAT = "shrmkit-shrm"
 VERSION = 1
 ORIENTATION = "z-up; row i at theta=(i+1/2)pi/H, column j at phi=2pi(j+1/2)/W from +x toward +y"
 
 
-def save_shrm(path: str | Path, shrm: SHRM) -> Path:
-    """Write ``shrm`` to ``path`` (``.shrm.npz``) atomically; returns the path."""
+def save_shrm(path: str | Path, shrm: Any) -> Path:
+    """Write ``shrm`` (an :class:`~shrmkit.analysis.shrm.SHRM`: ``F``, ``P``, ``coeffs``, ``tolerance``,
+    ``eps``, ``meta``, ``cube``) to ``path`` (``.shrm.npz``) atomically; returns the path."""
     path = Path(path)
     header = {
         "format": FORMAT,
@@ -53,8 +54,9 @@ def save_shrm(path: str | Path, shrm: SHRM) -> Path:
     return path
 
 
-def load_shrm(path: str | Path) -> SHRM:
-    """Read an SHRM written by :func:`save_shrm`.
+def read_shrm_fields(path: str | Path) -> dict[str, Any]:
+    """Read and validate a file written by :func:`save_shrm`; returns the keyword arguments of
+    :class:`~shrmkit.analysis.shrm.SHRM` (``shrmkit.load_shrm`` builds the object).
 
     Raises
     ------
@@ -84,6 +86,5 @@ def load_shrm(path: str | Path) -> SHRM:
     for name, array in (("coefficients", coeffs), ("cube coefficients", cube)):
         if array is not None and not np.all(np.isfinite(array)):
             raise BadInputError(path, f"{int(np.count_nonzero(~np.isfinite(array)))} non-finite {name}")
-    return SHRM(
-        F=F, P=P, coeffs=coeffs, tolerance=float(header["tolerance"]), eps=header["eps"], meta=header["meta"], cube=cube
-    )
+    return {"F": F, "P": P, "coeffs": coeffs, "tolerance": float(header["tolerance"]), "eps": header["eps"],
+            "meta": header["meta"], "cube": cube}

@@ -10,7 +10,7 @@ Reads two files of the shared data folder (never copied into the repository):
 
 builds :class:`shrmkit.brdf_io.models.Lafortune` models from them, runs
 ``choose_orders(eps)`` (default caps) on each and prints one row per material plus a
-summary of the (F, P) distribution. RH02 §7.1 reports P = 4 for a Lafortune skin fit at
+summary of the (F, eps=P) distribution. RH02 §7.1 reports P = 4 for a Lafortune skin fit at
 eps < 0.03; the pbrt ``skin`` row is printed next to that.
 
 Run:  .venv/bin/python benchmarks/orders_published_fits.py [--limit N] [--eps 0.03]
@@ -132,7 +132,7 @@ def run(materials: list[Material], eps: float) -> list[Row]:
         row = Row(mat)
         t0 = time.perf_counter()
         try:
-            oc = choose_orders(mat.brdf, eps)
+            oc = choose_orders(mat.brdf, eps=eps)
         except Exception as exc:  # a benchmark reports every failure instead of stopping
             row.error = f"{type(exc).__name__}: {exc}"
         else:

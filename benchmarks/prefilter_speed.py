@@ -35,12 +35,12 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
-from shrmkit.analysis.latlong import pixel_angles, pixel_directions
 from shrmkit.analysis.lighting import lighting_coefficients
 from shrmkit.analysis.orders import choose_orders
 from shrmkit.analysis.reference import reference_radiance
 from shrmkit.analysis.shrm import SHRM, default_size, global_shrm_latlong, local_shrm_fast, prefilter
 from shrmkit.brdf_io.envmap import EnvironmentMap, load_env
+from shrmkit.brdf_io.latlong import pixel_angles, pixel_directions
 from shrmkit.brdf_io.specs import load_brdf
 
 __all__ = ["main"]
@@ -294,7 +294,7 @@ def table_sweep(
         t_ref, ref = timed(lambda R=R, V=V, brdf=brdf: reference_radiance(env, brdf, R, V))
         for tol in tolerances:
             F = scene_F(env, brdf, tol)
-            shrm = prefilter(env, brdf, tol, size=min(default_size(F), max_size))
+            shrm = prefilter(env, brdf, eps=tol, size=min(default_size(F), max_size))
             err = relative_rms(shrm.radiance(R, V), ref)
             table.add_row(
                 spec,
@@ -318,7 +318,7 @@ def table_sweep(
 
 def scene_F(env: EnvironmentMap, brdf: Any, tol: float) -> int:
     """F_B that prefilter() will choose at ``tol`` (a cheap size-2 prefilter)."""
-    return prefilter(env, brdf, tol, size=2).F
+    return prefilter(env, brdf, eps=tol, size=2).F
 
 
 # ----------------------------------------------------------------------------------------
@@ -329,7 +329,7 @@ def table_targets(repeats: int, quick: bool) -> None:
     for col in ("what", "orders (F, P)", "nthreads", "measured", "target", "met"):
         table.add_column(col, justify="right")
     brdf = load_brdf("microfacet:sigma=0.1")
-    orders = choose_orders(brdf, 0.03)
+    orders = choose_orders(brdf, eps=0.03)
     env = load_env("builtin:sky,height=512")  # 512 rows × 1024 columns
     lighting = lighting_coefficients(env.radiance, orders.F)
     for nthreads in (1, 2):
@@ -357,7 +357,7 @@ def table_targets(repeats: int, quick: bool) -> None:
         sources.append(("grace_latlong.exr 1024×512 (flip)", load_env(GRACE, flip=True)))
     for label, source in sources:
         for nthreads in (1, 2):
-            t_total, shrm = timed(lambda s=source, n=nthreads: prefilter(s, brdf, 0.03, nthreads=n), repeats)
+            t_total, shrm = timed(lambda s=source, n=nthreads: prefilter(s, brdf, eps=0.03, nthreads=n), repeats)
             tm = shrm.meta["timings"]
             table.add_row(
                 f"full prefilter microfacet σ=0.1, {label}, S={shrm.height}",

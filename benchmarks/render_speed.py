@@ -22,9 +22,9 @@ import time
 
 import numpy as np
 
-from shrmkit.analysis.latlong import pixel_directions
 from shrmkit.analysis.sh import real_sph_harm
 from shrmkit.analysis.shrm import SHRM
+from shrmkit.brdf_io.latlong import pixel_directions
 from shrmkit.render.camera import Camera, orbit_camera
 from shrmkit.render.mesh import load_mesh
 from shrmkit.render.vtk_renderer import SHRMRenderer

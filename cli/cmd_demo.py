@@ -2,7 +2,7 @@
 
 Tabulates two built-in analytic materials into MERL files, chooses their orders, fits a
 model, prefilters an SHRM, renders a preview and writes reports with a summary table,
-printing where each output went (``analysis/report/demo.py``).
+printing where each output went (``cli/report/demo.py``).
 """
 
 from __future__ import annotations
@@ -26,8 +26,8 @@ def _say(text: str) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..analysis.report.demo import run_demo
     from ..brdf_io.errors import BadInputError
+    from .report.demo import run_demo
 
     if not 32 <= args.size <= 2048:
         raise BadInputError(None, f"--size must be in [32, 2048], got {args.size}")

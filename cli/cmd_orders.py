@@ -8,6 +8,7 @@ import numpy as np
 from rich.table import Table
 
 from ..analysis.orders import DEFAULT_MAX_F, DEFAULT_MAX_P, choose_orders
+from ..analysis.scene import scene_for
 from ..brdf_io.specs import load_brdf
 from .common import add_env_orientation, load_env_arg, print_json, stderr, stdout, tolerance
 
@@ -27,7 +28,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     brdf = load_brdf(args.brdf)
     with stderr.status(f"choosing orders for {brdf.name} ...", spinner="dots") if not args.json else _null():
-        orders = choose_orders(brdf, args.eps, max_F=args.max_F, max_P=args.max_P)
+        orders = choose_orders(brdf, eps=args.eps, max_F=args.max_F, max_P=args.max_P)
     doc = {
         "brdf": brdf.name,
         "F": orders.F,
@@ -41,11 +42,8 @@ def run(args: argparse.Namespace) -> int:
         "table": orders.table,
     }
     if args.env:
-        from ..analysis.lighting import lighting_coefficients
-        from ..analysis.scene import scene_orders
         env = load_env_arg(args.env, args)
-        lmax = int(min(max(2 * orders.F, orders.F + 16), env.radiance.shape[0] - 1, orders.coefficients.F0))
-        scene = scene_orders(orders, lighting_coefficients(env.radiance, lmax, name=env.name))
+        _, scene = scene_for(env, orders)
         doc.update(
             environment=env.name, F_L=scene.F_L, F_B=scene.F_B, P_B=scene.P_B, eps_L=scene.eps_L,
             lighting_capped=scene.lighting_capped, bound=scene.bound,

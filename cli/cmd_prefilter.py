@@ -44,7 +44,7 @@ def run(args: argparse.Namespace) -> int:
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=stderr) as bar:
         task = bar.add_task("prefiltering", total=None)
         shrm = prefilter(
-            env, brdf, args.eps, size=args.size, max_F=args.max_F, max_P=args.max_P, cube=args.cube,
+            env, brdf, eps=args.eps, size=args.size, max_F=args.max_F, max_P=args.max_P, cube=args.cube,
             cube_size=args.cube_size, window=args.window,
             progress=lambda stage: bar.update(task, description=f"prefiltering: {stage}"),
         )

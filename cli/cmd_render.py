@@ -99,11 +99,11 @@ def run(args: argparse.Namespace) -> int:
         raise BadInputError(None, "--self-shadow needs --mode gaussian-lobes")
     visibility = None
     if args.mode == "gaussian-lobes":
-        from ..analysis.compare.gaussian_lobes import GaussianLobeRenderer, fit_gaussian_lobes, sg_mip_stack
+        from ..analysis.baselines.gaussian_lobes import GaussianLobeModel, fit_gaussian_lobes, sg_mip_stack
 
         lobes = fit_gaussian_lobes(brdf, K=args.lobes, n_elevations=args.elevations)
         stack = sg_mip_stack(env)
-        shrm = GaussianLobeRenderer(lobes, stack)
+        shrm = GaussianLobeModel(lobes, stack)
         render_mode = "gaussian-lobes"
         print(f"Gaussian lobes K={lobes.K} at {lobes.theta_v.size} elevations, max relative fit error "
               f"{float(lobes.residual.max()):.3g}")
@@ -111,7 +111,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"SG mip stack: {len(stack.levels)} levels, sigma {stack.sigmas[0]:.4g}..{stack.sigmas[-1]:.4g} rad, "
               f"{stack.seconds:.3f} s")
         if args.self_shadow:
-            from ..analysis.compare.selfshadow import vertex_visibility_sh
+            from ..analysis.baselines.selfshadow import vertex_visibility_sh
 
             t0 = time.perf_counter()
             visibility = vertex_visibility_sh(mesh)

@@ -69,7 +69,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def options_from_args(args: argparse.Namespace):
     """ReportOptions from the parsed arguments (the quick profile when ``--quick``)."""
-    from ..analysis.report.options import profile
+    from .report.options import profile
 
     changes = {"eps": args.eps, "lobes": args.lobes, "preview": args.preview, "seed": args.seed, "mesh": args.mesh,
                "env_up": args.env_up, "env_flip": args.env_flip, "env_azimuth": args.env_azimuth}
@@ -86,7 +86,7 @@ def run_with_progress(sources: list[str], out: str, options, *, workers: int = 1
     """Run the batch with a rich progress bar on stderr; returns the BatchResult."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-    from ..analysis.report.batch import run_batch
+    from .report.batch import run_batch
 
     columns = (TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                TextColumn("{task.fields[stage]}"))
@@ -131,7 +131,7 @@ def run(args: argparse.Namespace) -> int:
 def _check_shared_inputs(options) -> None:
     """Inputs every BRDF of the batch uses (environments, mesh) are checked once, up front:
     a bad one is a usage error (exit 2), not one failure per BRDF."""
-    from ..analysis.report.options import load_report_env
+    from .report.options import load_report_env
 
     for spec in options.envs:
         load_report_env(spec, options)

@@ -1,7 +1,7 @@
 """GLSL for Green, Kautz & Durand 2007 Gaussian-lobe shading (render mode ``gaussian-lobes``).
 
-The fragment shader evaluates exactly what :meth:`shrmkit.analysis.compare.gaussian_lobes.
-GaussianLobeRenderer.radiance` computes on the CPU:
+The fragment shader evaluates exactly what :meth:`shrmkit.analysis.baselines.gaussian_lobes.
+GaussianLobeModel.radiance` computes on the CPU:
 
     B(R, V) = Σ_n a_n Σ_k w_nk (G_σnk * L)(d_nk),   d_nk = cos θ_μ,nk R + sin θ_μ,nk t,
 
@@ -15,13 +15,13 @@ Storage (all float32, no 8-bit data anywhere):
 
 - the mip stack is one atlas texture (:func:`sg_atlas`): level j (H_j × 2H_j) occupies rows
   [row_j, row_j + H_j) and columns [0, 2H_j), levels stacked top to bottom; each level is
-  read with the bilinear lat-long rule of ``analysis.latlong.bilinear_lookup`` by four
+  read with the bilinear lat-long rule of ``brdf_io.latlong.bilinear_lookup`` by four
   ``texelFetch``es (φ wraps, θ clamped to the first/last row centres), as in ``shader``;
 - the lobe table (N elevations × K lobes: cos θ_μ, sin θ_μ, RGB weight, level, level weight)
   and the elevation nodes are compiled into the shader as ``const`` arrays (one shader per
   object; float literals with 9 significant digits are exact in float32).
 
-Optional self-shadowing (Green et al. 2007 eq. 7, :mod:`shrmkit.analysis.compare.selfshadow`):
+Optional self-shadowing (Green et al. 2007 eq. 7, :mod:`shrmkit.analysis.baselines.selfshadow`):
 25 order-4 SH visibility coefficients per vertex arrive as seven ``vec4`` vertex attributes
 ``glVis0..6`` (the last padded), are interpolated to the fragment, and each lobe is multiplied
 by V(d_nk) = clamp(Σ c_i Y^r_i(d_nk), 0, 1), or (``normalized``) the attributes hold the

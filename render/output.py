@@ -27,8 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..analysis.latlong import bilinear_lookup
 from ..brdf_io.atomic import atomic_path
+from ..brdf_io.latlong import bilinear_lookup
 from .camera import Camera
 
 __all__ = [

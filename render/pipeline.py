@@ -77,7 +77,7 @@ def render_frames(
         Repeated frames for the frames-per-second figure (0 skips it; fps is then NaN).
     visibility_sh
         ``gaussian-lobes`` mode only: per-vertex order-4 SH visibility
-        (``analysis.compare.selfshadow.vertex_visibility_sh``) for self-shadowing.
+        (``analysis.baselines.selfshadow.vertex_visibility_sh``) for self-shadowing.
     """
     if background not in BACKGROUNDS:
         raise ValueError(f"background must be one of {BACKGROUNDS}, got {background!r}")

@@ -12,7 +12,7 @@ mesh is uploaded in world coordinates so model coordinates are world coordinates
   maps tiled in one float texture (tile c at column (c mod cols)·W, row (c div cols)·H) and
   Y^r_pq(V) evaluated in the shader.
 
-Lat-long lookup is the bilinear interpolation of :func:`shrmkit.analysis.latlong.bilinear_lookup`
+Lat-long lookup is the bilinear interpolation of :func:`shrmkit.brdf_io.latlong.bilinear_lookup`
 done with ``texelFetch`` (four exact float texels, weights in float32): φ wraps around with no
 seam, θ is clamped to the first and last row centres; θ = atan2(|R_xy|, R_z) stays accurate
 at the poles. No hardware filtering or mipmapping is involved, so there is no seam from
@@ -94,7 +94,7 @@ def vertex_replacements() -> list[tuple[str, str]]:
 
 
 LATLONG_GLSL = """
-// bilinear lat-long lookup set-up (analysis.latlong.bilinear_lookup) on an H x W tile:
+// bilinear lat-long lookup set-up (brdf_io.latlong.bilinear_lookup) on an H x W tile:
 // texel columns x0, x1 (phi wraps), rows y0, y1 (theta clamped to the first/last row centre),
 // weights f = (fx, fy)
 void latlong_setup(vec3 d, int H, int W, out ivec4 idx, out vec2 f) {

@@ -3,7 +3,7 @@
 One :class:`SHRMRenderer` holds a float-framebuffer offscreen window (see ``offscreen``)
 and any number of objects, each a mesh with its own SHRM (its material under its lighting)
 and mode (``distant`` or ``perpixel``, see ``shader``), or, in mode ``gaussian-lobes``, a
-``GaussianLobeRenderer`` (Green et al. 2007 lobes + SG mip stack, see ``gaussian_shader``).
+``GaussianLobeModel`` (Green et al. 2007 lobes + SG mip stack, see ``gaussian_shader``).
 Rendering returns linear radiance read back as float32, never clamped or quantized.
 
 Frame: VTK world coordinates are the z-up math frame (``camera`` module docstring); meshes
@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..analysis.compare.gaussian_lobes import GaussianLobeRenderer
+from ..analysis.baselines.gaussian_lobes import GaussianLobeModel
 from ..analysis.sh import real_sph_harm
 from ..analysis.shrm import SHRM
 from .camera import Camera, orbit_camera
@@ -35,10 +35,10 @@ __all__ = ["SHRMRenderer", "RenderResult", "coefficient_atlas", "RENDER_MODES"]
 
 #: Shader modes plus ``rsibr`` (Cabral et al. 1999: the distant-mode shader fed, per frame, the
 #: spherical-barycentric blend of twelve maps made from the SHRM at the icosahedron's
-#: vertices, ``analysis.compare.rsibr``). Kautz–McCool is the SHRM shader fed an
+#: vertices, ``analysis.baselines.rsibr``). Kautz–McCool is the SHRM shader fed an
 #: azimuth-free SHRM (``prefilter(..., azimuth_free=True)``), so it needs no mode here.
-#: ``gaussian-lobes``: Green, Kautz & Durand 2007 (``analysis.compare.gaussian_lobes``), fed a
-#: ``GaussianLobeRenderer`` in place of the SHRM.
+#: ``gaussian-lobes``: Green, Kautz & Durand 2007 (``analysis.baselines.gaussian_lobes``), fed a
+#: ``GaussianLobeModel`` in place of the SHRM.
 RENDER_MODES = MODES + ("rsibr", "gaussian-lobes")
 
 #: Largest texture edge we rely on (llvmpipe and current GPUs allow at least 16384).
@@ -132,7 +132,7 @@ def _polydata(mesh: Mesh, visibility_sh: np.ndarray | None = None):
 @dataclass(eq=False)
 class _Object:
     mesh: Mesh
-    shrm: SHRM | GaussianLobeRenderer
+    shrm: SHRM | GaussianLobeModel
     mode: str
     actor: object
     texture: object
@@ -176,7 +176,7 @@ class SHRMRenderer:
     def add_object(
         self,
         mesh: Mesh,
-        shrm: SHRM | GaussianLobeRenderer,
+        shrm: SHRM | GaussianLobeModel,
         *,
         mode: str = "distant",
         visibility_sh: np.ndarray | None = None,
@@ -184,9 +184,9 @@ class SHRMRenderer:
     ) -> int:
         """Add a mesh shaded by ``shrm`` in ``mode``; returns the object's index.
 
-        For ``mode="gaussian-lobes"`` pass a ``GaussianLobeRenderer`` as ``shrm``; then
+        For ``mode="gaussian-lobes"`` pass a ``GaussianLobeModel`` as ``shrm``; then
         ``visibility_sh`` (n_vertices, 25), the order-4 SH visibility of each vertex
-        (``analysis.compare.selfshadow.vertex_visibility_sh``), turns on self-shadowing
+        (``analysis.baselines.selfshadow.vertex_visibility_sh``), turns on self-shadowing
         (Green et al. 2007 eq. 7), ``normalized_visibility`` as in ``selfshadow.visibility_at``.
         """
         from vtkmodules.vtkRenderingCore import vtkActor
@@ -194,8 +194,8 @@ class SHRMRenderer:
 
         if mode not in RENDER_MODES:
             raise ValueError(f"mode must be one of {RENDER_MODES}, got {mode!r}")
-        if (mode == "gaussian-lobes") != isinstance(shrm, GaussianLobeRenderer):
-            raise ValueError("mode 'gaussian-lobes' takes a GaussianLobeRenderer, the other modes an SHRM")
+        if (mode == "gaussian-lobes") != isinstance(shrm, GaussianLobeModel):
+            raise ValueError("mode 'gaussian-lobes' takes a GaussianLobeModel, the other modes an SHRM")
         if visibility_sh is not None:
             if mode != "gaussian-lobes":
                 raise ValueError("visibility_sh (self-shadowing) is only supported in mode 'gaussian-lobes'")
@@ -205,14 +205,14 @@ class SHRMRenderer:
                                  f"got shape {visibility_sh.shape}")
         if mode == "gaussian-lobes":
             if visibility_sh is not None and normalized_visibility:
-                from ..analysis.compare.selfshadow import hemisphere_step_sh
+                from ..analysis.baselines.selfshadow import hemisphere_step_sh
 
                 # the shader gets occlusion coefficients: unoccluded vertex step − visibility
                 visibility_sh = hemisphere_step_sh(mesh.normals, 4) - visibility_sh
             return self._add_gaussian(mesh, shrm, visibility_sh, normalized_visibility)
         rsibr = None
         if mode == "rsibr":
-            from ..analysis.compare.rsibr import rsibr_from_shrm
+            from ..analysis.baselines.rsibr import rsibr_from_shrm
 
             rsibr = rsibr_from_shrm(shrm)
         n, h, w, _ = shrm.coeffs.shape
@@ -256,7 +256,7 @@ class SHRMRenderer:
         return len(self._objects) - 1
 
     def _add_gaussian(
-        self, mesh: Mesh, glr: GaussianLobeRenderer, visibility_sh: np.ndarray | None, normalized: bool
+        self, mesh: Mesh, glr: GaussianLobeModel, visibility_sh: np.ndarray | None, normalized: bool
     ) -> int:
         """Green et al. 2007: mip atlas texture + lobe table compiled into the fragment shader."""
         from vtkmodules.vtkCommonDataModel import vtkDataObject

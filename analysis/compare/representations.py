@@ -19,9 +19,9 @@ from typing import Any
 import numpy as np
 
 from ...brdf_io.brdf import BRDF
+from ..baselines.gaussian_lobes import GaussianLobeModel, fit_gaussian_lobes, sg_mip_stack, transfer_samples
+from ..baselines.rsibr import RSIBRMaps, rsibr_from_shrm, rsibr_reference
 from ..shrm import SHRM, prefilter
-from .gaussian_lobes import GaussianLobeRenderer, fit_gaussian_lobes, sg_mip_stack, transfer_samples
-from .rsibr import RSIBRMaps, rsibr_from_shrm, rsibr_reference
 
 __all__ = ["Representation", "build_representations", "time_update"]
 
@@ -116,15 +116,15 @@ def build_representations(
     view = view / np.linalg.norm(view)
     reps: list[Representation] = []
     stage("SHRM")
-    shrm, t_shrm = _timed(lambda: prefilter(env, brdf, eps))
+    shrm, t_shrm = _timed(lambda: prefilter(env, brdf, eps=eps))
     reps.append(_shrm_rep("shrm", f"SHRM F={shrm.F} P={shrm.P}", shrm, t_shrm, view))
     p_low = max(shrm.P - 2, 0) if lower_P is None else int(lower_P)
     if p_low < shrm.P:
         stage(f"SHRM P={p_low}")
-        low, t_low = _timed(lambda: prefilter(env, brdf, eps, F=shrm.F, P=p_low, size=shrm.height))
+        low, t_low = _timed(lambda: prefilter(env, brdf, eps=eps, F=shrm.F, P=p_low, size=shrm.height))
         reps.append(_shrm_rep("shrm_low_p", f"SHRM F={low.F} P={low.P}", low, t_low, view))
     stage("Kautz-McCool")
-    km, t_km = _timed(lambda: prefilter(env, brdf, eps, F=shrm.F, P=shrm.P, size=shrm.height, azimuth_free=True))
+    km, t_km = _timed(lambda: prefilter(env, brdf, eps=eps, F=shrm.F, P=shrm.P, size=shrm.height, azimuth_free=True))
     # Kautz & McCool store the P+1 local maps B_p0(α, β); the renderer is fed the global SHRM
     km_storage = (km.P + 1) * km.height * km.width * 3 * 4
     reps.append(_shrm_rep("kautz_mccool", f"Kautz-McCool q=0 P={km.P}", km, t_km, view, storage=km_storage,
@@ -145,7 +145,7 @@ def build_representations(
         for K in lobes:
             stage(f"Gaussian lobes K={K}")
             fit = fit_gaussian_lobes(brdf, K, samples=samples)
-            model = GaussianLobeRenderer(fit, stack)
+            model = GaussianLobeModel(fit, stack)
             params = {"K": K, "elevations": n_elevations, "levels": len(stack.sigmas),
                       "sigma0": float(stack.sigmas[0]), "fit_residual_max": float(fit.residual.max()),
                       "fit_s": fit.meta["seconds"] + t_samples, "mip_stack_s": stack.seconds}

@@ -155,7 +155,7 @@ def compare(
         "shrmkit_version": __version__,
     }
     if strip is not None:
-        from .strip import write_strip
+        from ...render.strip import write_strip
 
         stage("image strip")
         result["strip"] = write_strip(strip, reps, env, brdf, size=strip_size, mesh=mesh)

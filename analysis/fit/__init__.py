@@ -10,6 +10,6 @@ colour parameterizations and physical bounds), ``objective`` (variable projectio
 
 from .fit_file import fit_document, write_fit_json
 from .optimize import FitResult, fit_brdf
-from .report import BandError, band_errors
+from .summary import BandError, band_errors
 
 __all__ = ["fit_brdf", "FitResult", "BandError", "band_errors", "fit_document", "write_fit_json"]

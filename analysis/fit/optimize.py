@@ -36,8 +36,8 @@ from ...brdf_io.errors import BadInputError
 from .metrics import METRICS, error_metrics
 from .models_param import MODELS, ModelParam, make_param
 from .objective import ProjectedObjective
-from .report import BandError, band_errors
 from .sampling import FitSamples, collect_samples
+from .summary import BandError, band_errors
 
 __all__ = ["FitResult", "fit_brdf", "STATUS_NAMES"]
 

@@ -63,7 +63,7 @@ def test_rotating_the_environment_rotates_the_map(shift, seed):
     rng = np.random.default_rng(seed)
     img = rng.uniform(size=(16, 32, 3))
     rolled = np.roll(img, shift, axis=1)  # feature at column j moves to j + shift: φ += 2π shift/32
-    o = shrmkit.choose_orders(shrmkit.load_brdf("microfacet:sigma=0.4"), 0.05)
+    o = shrmkit.choose_orders(shrmkit.load_brdf("microfacet:sigma=0.4"), eps=0.05)
     a = global_shrm_latlong(lighting_coefficients(img, 8), o.coefficients, 8, o.P, 16, 32)
     b = global_shrm_latlong(lighting_coefficients(rolled, 8), o.coefficients, 8, o.P, 16, 32)
     angle = 2 * np.pi * shift / 32

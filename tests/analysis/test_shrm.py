@@ -6,13 +6,13 @@ import numpy as np
 import pytest
 
 import shrmkit
-from shrmkit.analysis.latlong import pixel_angles
 from shrmkit.analysis.lighting import alm_index, area_downsample, lighting_coefficients
 from shrmkit.analysis.reference import reference_radiance
 from shrmkit.analysis.scene import reflected_error, residual_bound
 from shrmkit.analysis.sh import complex_sph_harm
 from shrmkit.analysis.shrm import global_from_local, local_shrm_direct, local_shrm_fast
 from shrmkit.brdf_io.errors import BadInputError
+from shrmkit.brdf_io.latlong import pixel_angles
 
 
 def _pairs(n: int, seed: int = 0, max_view_deg: float = 80.0) -> tuple[np.ndarray, np.ndarray]:
@@ -44,7 +44,7 @@ def test_lighting_coefficients_match_direct_sum():
     img = rng.uniform(size=(16, 32, 3))
     lc = lighting_coefficients(img, 6)
     theta, phi = pixel_angles(16, 32)
-    from shrmkit.analysis.latlong import pixel_directions, row_solid_angles
+    from shrmkit.brdf_io.latlong import pixel_directions, row_solid_angles
 
     Y = complex_sph_harm(6, pixel_directions(16, 32))
     direct = np.einsum("hwc,hwk,h->ck", img, np.conj(Y), row_solid_angles(16, 32))
@@ -53,7 +53,7 @@ def test_lighting_coefficients_match_direct_sum():
 
 
 def test_area_downsample_preserves_integral():
-    from shrmkit.analysis.latlong import row_solid_angles
+    from shrmkit.brdf_io.latlong import row_solid_angles
 
     img = np.random.default_rng(1).uniform(size=(32, 64, 3))
     small = area_downsample(img, 4)
@@ -65,7 +65,7 @@ def test_fast_local_shrm_matches_explicit_wigner_sum():
     """Spin-weighted SHT path vs explicit Σ L_lm ρ̂_lpq 𝒟^l_mq (Wigner-d reference)."""
     img = np.random.default_rng(2).uniform(size=(24, 48, 3))
     lc = lighting_coefficients(img, 12)
-    o = shrmkit.choose_orders(shrmkit.load_brdf("cook-torrance:alpha=0.35,kd=0.2,dist=ggx"), 0.05)
+    o = shrmkit.choose_orders(shrmkit.load_brdf("cook-torrance:alpha=0.35,kd=0.2,dist=ggx"), eps=0.05)
     P = min(3, o.coefficients.P0)
     fast = local_shrm_fast(lc, o.coefficients, 12, P, 24, 48)
     theta, phi = pixel_angles(24, 48)
@@ -79,7 +79,7 @@ def test_global_shrm_matches_local_expansion():
     """Eq. 8: Σ B̃_pq(R) Y^r_pq(V) = Σ B_pq(R) Y_pq(R⁻¹V) evaluated directly at pixel centres."""
     img = np.random.default_rng(3).uniform(size=(16, 32, 3))
     lc = lighting_coefficients(img, 8)
-    o = shrmkit.choose_orders(shrmkit.load_brdf("microfacet:sigma=0.3"), 0.05)
+    o = shrmkit.choose_orders(shrmkit.load_brdf("microfacet:sigma=0.3"), eps=0.05)
     P = 2
     theta, phi = pixel_angles(16, 32)
     local = local_shrm_fast(lc, o.coefficients, 8, P, 16, 32)
@@ -143,7 +143,7 @@ def test_residual_bound_is_never_below_true_error():
     rng = np.random.default_rng(8)
     cases = 0
     for spec in ("phong:s=16", "microfacet:sigma=0.25", "lafortune:kd=0.3,n=8", "cook-torrance:alpha=0.5,kd=0.2"):
-        o = shrmkit.choose_orders(shrmkit.load_brdf(spec), 0.05)
+        o = shrmkit.choose_orders(shrmkit.load_brdf(spec), eps=0.05)
         for _ in range(3):
             img = rng.uniform(size=(32, 64, 3)) ** rng.uniform(1, 12)  # from smooth to spiky
             lc = lighting_coefficients(img, min(31, o.coefficients.F0))
@@ -201,7 +201,7 @@ def test_lanczos_window_damps_ringing_and_reports_its_cost():
     assert damped.eps["gibbs_negative"] < 0.2 * plain.eps["gibbs_negative"]
     assert damped.eps["reflected"] > plain.eps["reflected"]
     # the reported negative lobe is the real one: direct check of B(R, R) at the pixel centres
-    from shrmkit.analysis.latlong import pixel_directions
+    from shrmkit.brdf_io.latlong import pixel_directions
 
     R = pixel_directions(plain.height, plain.width).reshape(-1, 3)
     B = plain.radiance(R, R)
@@ -225,7 +225,7 @@ def test_cube_map_matches_explicit_path_and_latlong(tmp_path):
     np.testing.assert_allclose(dirs[:, 5:7, 5:7].mean(axis=(1, 2)) / 0.99, np.array(
         [[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]]), atol=0.02)
     lc = lighting_coefficients(env.radiance, m.F)
-    o = shrmkit.choose_orders(brdf, 0.05)
+    o = shrmkit.choose_orders(brdf, eps=0.05)
     picks = [(0, 3, 4), (2, 0, 11), (4, 6, 6), (5, 11, 0)]
     d = np.array([dirs[f, i, j] for f, i, j in picks])
     alpha, beta = np.arccos(d[:, 2]), np.arctan2(d[:, 1], d[:, 0])
@@ -250,7 +250,7 @@ def test_lean_global_path_matches_full_local_rotation():
 
     img = np.random.default_rng(11).uniform(size=(20, 40, 3))
     lc = lighting_coefficients(img, 10)
-    o = shrmkit.choose_orders(shrmkit.load_brdf("cook-torrance:alpha=0.4,kd=0.1,dist=ggx"), 0.05)
+    o = shrmkit.choose_orders(shrmkit.load_brdf("cook-torrance:alpha=0.4,kd=0.1,dist=ggx"), eps=0.05)
     P = min(4, o.coefficients.P0)
     theta, phi = pixel_angles(20, 40)
     local = local_shrm_fast(lc, o.coefficients, 10, P, 20, 40)

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 import shrmkit
-from shrmkit.analysis.report.demo import DEMO_MATERIALS
 from shrmkit.cli.main import main
+from shrmkit.cli.report.demo import DEMO_MATERIALS
 
 
 @pytest.mark.slow

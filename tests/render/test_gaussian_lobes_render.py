@@ -1,8 +1,8 @@
 """Render mode ``gaussian-lobes`` (Green, Kautz & Durand 2007) in the GLSL shader.
 
-References: the numpy path ``GaussianLobeRenderer.radiance`` evaluated on the CPU reference
+References: the numpy path ``GaussianLobeModel.radiance`` evaluated on the CPU reference
 renderer's geometry (analytic ray–sphere or Möller–Trumbore ray casting), with and without
-the self-shadowing hook of ``analysis.compare.selfshadow``; and a closed form (constant
+the self-shadowing hook of ``analysis.baselines.selfshadow``; and a closed form (constant
 environment: every normalized SG convolution is the constant, so B = c Σ_k w_k(θ_v) with
 θ_v = angle(N, V) interpolated linearly between the fitted elevations).
 """
@@ -12,9 +12,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from shrmkit.analysis.compare.gaussian_lobes import GaussianLobeRenderer, GaussianLobes, sg_mip_stack
-from shrmkit.analysis.compare.selfshadow import hemisphere_step_sh, vertex_visibility_sh, visibility_hook
-from shrmkit.analysis.latlong import pixel_directions
+from shrmkit.analysis.baselines.gaussian_lobes import GaussianLobeModel, GaussianLobes, sg_mip_stack
+from shrmkit.analysis.baselines.selfshadow import hemisphere_step_sh, vertex_visibility_sh, visibility_hook
+from shrmkit.brdf_io.latlong import pixel_directions
 from shrmkit.render.camera import Camera
 from shrmkit.render.cpu_reference import interpolate_vertex_data, mesh_geometry, shade, sphere_geometry
 from shrmkit.render.mesh import load_mesh
@@ -35,10 +35,10 @@ def random_lobes(seed: int = 1, N: int = 7, K: int = 3) -> GaussianLobes:
 
 
 @pytest.fixture(scope="module")
-def glr() -> GaussianLobeRenderer:
+def glr() -> GaussianLobeModel:
     d = pixel_directions(64, 128)
     env = (1.0 + 0.8 * d[..., 2:3]) * np.array([1.0, 0.8, 0.6]) + 3.0 * np.maximum(d[..., 0:1], 0.0) ** 8
-    return GaussianLobeRenderer(random_lobes(), sg_mip_stack(env))
+    return GaussianLobeModel(random_lobes(), sg_mip_stack(env))
 
 
 @pytest.fixture(scope="module")
@@ -52,7 +52,7 @@ def rel_rms(a: np.ndarray, b: np.ndarray) -> float:
 
 @pytest.mark.parametrize("projection", ["ortho", "perspective"])
 def test_shader_matches_cpu_lobes_on_sphere(offscreen, sphere, glr, projection) -> None:
-    """Per pixel, shader = GaussianLobeRenderer.radiance within 2 % relative RMS (measured ~5e-4)."""
+    """Per pixel, shader = GaussianLobeModel.radiance within 2 % relative RMS (measured ~5e-4)."""
     cam = Camera.looking_at(view=(1.0, 0.4, 0.3), projection=projection)
     with SHRMRenderer(96, 96) as r:
         r.add_object(sphere, glr, mode="gaussian-lobes")
@@ -75,7 +75,7 @@ def test_constant_environment_closed_form(offscreen, sphere) -> None:
     stack = sg_mip_stack(np.broadcast_to(c, (32, 64, 3)).copy())
     cam = Camera.looking_at(view=(0.2, -1.0, 0.5), projection="perspective")
     with SHRMRenderer(64, 64) as r:
-        r.add_object(sphere, GaussianLobeRenderer(lobes, stack), mode="gaussian-lobes")
+        r.add_object(sphere, GaussianLobeModel(lobes, stack), mode="gaussian-lobes")
         res = r.render(cam)
     geom = sphere_geometry(cam, 64, 64)
     m = geom.hit & (res.alpha > 0.5) & (np.sum(geom.N * geom.V, -1) > 0.2)
@@ -124,7 +124,7 @@ def test_self_shadowed_shader_matches_cpu(offscreen, glr, normalized) -> None:
 
 def test_add_object_checks_representation(offscreen, sphere, glr) -> None:
     with SHRMRenderer(16, 16) as r:
-        with pytest.raises(ValueError, match="GaussianLobeRenderer"):
+        with pytest.raises(ValueError, match="GaussianLobeModel"):
             r.add_object(sphere, glr, mode="distant")
         with pytest.raises(ValueError, match="visibility_sh"):
             r.add_object(sphere, glr, mode="gaussian-lobes", visibility_sh=np.zeros((3, 25)))
@@ -134,7 +134,7 @@ def test_cli_render_gaussian_lobes(offscreen, tmp_path, capsys) -> None:
     """``shrm render --mode gaussian-lobes``: fit time printed; EXR = CPU render of the same fit."""
     import OpenEXR
 
-    from shrmkit.analysis.compare.gaussian_lobes import fit_gaussian_lobes
+    from shrmkit.analysis.baselines.gaussian_lobes import fit_gaussian_lobes
     from shrmkit.brdf_io.envmap import load_env
     from shrmkit.brdf_io.specs import load_brdf
     from shrmkit.cli.main import main
@@ -150,7 +150,7 @@ def test_cli_render_gaussian_lobes(offscreen, tmp_path, capsys) -> None:
     with OpenEXR.File(str(exr), separate_channels=True) as f:
         ch = {k: np.asarray(v.pixels) for k, v in f.channels().items()}
     rad, alpha = np.stack([ch["R"], ch["G"], ch["B"]], -1), ch["A"]
-    glr = GaussianLobeRenderer(fit_gaussian_lobes(load_brdf("phong:s=8"), K=3, n_elevations=4),
+    glr = GaussianLobeModel(fit_gaussian_lobes(load_brdf("phong:s=8"), K=3, n_elevations=4),
                                sg_mip_stack(load_env("builtin:studio")))
     cam = Camera.looking_at(view=(0, 1, 0.5), projection="ortho")
     geom = sphere_geometry(cam, 40, 40)

@@ -11,9 +11,9 @@ import numpy as np
 import OpenEXR
 import pytest
 
-from shrmkit.analysis.latlong import pixel_directions
 from shrmkit.analysis.sh import real_sph_harm
 from shrmkit.analysis.shrm import SHRM
+from shrmkit.brdf_io.latlong import pixel_directions
 from shrmkit.render.camera import Camera
 from shrmkit.render.cpu_reference import mesh_geometry, shade, sphere_geometry
 from shrmkit.render.mesh import load_mesh

@@ -48,7 +48,7 @@ def test_table_rows_json_and_independent_numbers(small) -> None:
     keys = [r["key"] for r in result["rows"]]
     assert keys == ["shrm", "shrm_low_p", "kautz_mccool", "cabral_shrm", "cabral_reference", "gaussian_k1"]
     rows = {r["key"]: r for r in result["rows"]}
-    shrm = prefilter(env, load_brdf("microfacet:sigma=0.3"), 0.03)
+    shrm = prefilter(env, load_brdf("microfacet:sigma=0.3"), eps=0.03)
     p = rows["shrm"]["params"]
     assert (p["F"], p["P"]) == (shrm.F, shrm.P)
     assert rows["shrm"]["storage_bytes"] == (shrm.P + 1) ** 2 * shrm.height * shrm.width * 3 * 4

@@ -35,9 +35,9 @@ import numpy as np
 from ..._version import __version__
 from ...brdf_io.brdf import BRDF
 from ...brdf_io.errors import BadInputError
+from ...render.preview import PREVIEW_DISABLED, PreviewImage, render_previews
 from .checks import RECIPROCITY_TOLERANCE, data_checks
 from .options import ReportOptions, load_report_env
-from .preview import PREVIEW_DISABLED, PreviewImage, render_previews
 
 __all__ = [
     "REPORT_FORMAT",
@@ -143,7 +143,7 @@ def _fit_entry(result: Any) -> dict[str, Any]:
 
 
 def _fits(brdf: BRDF, options: ReportOptions) -> tuple[list[dict[str, Any]], list[Any]]:
-    from ..fit import fit_brdf
+    from ...analysis.fit import fit_brdf
 
     entries, results = [], []
     for model in options.models:
@@ -214,11 +214,11 @@ def _slices(brdf: BRDF, fitted: list[Any], models: tuple[str, ...]) -> dict[str,
 
 
 def _orders(brdf: BRDF, options: ReportOptions) -> tuple[list[dict[str, Any]], dict[str, Any], Any]:
-    from ..orders import choose_orders
+    from ...analysis.orders import choose_orders
 
     rows, choices = [], []
     for tol in options.all_tolerances:
-        choice = choose_orders(brdf, tol, max_F=options.max_F, max_P=options.max_P)
+        choice = choose_orders(brdf, eps=tol, max_F=options.max_F, max_P=options.max_P)
         choices.append(choice)
         rows.append({
             "tolerance": tol,
@@ -244,9 +244,9 @@ def _orders(brdf: BRDF, options: ReportOptions) -> tuple[list[dict[str, Any]], d
 
 
 def _environments(brdf: BRDF, options: ReportOptions, progress: Progress | None):
-    from ..lighting import lighting_coefficients
-    from ..reference import reference_radiance
-    from ..shrm import prefilter
+    from ...analysis.lighting import lighting_coefficients
+    from ...analysis.reference import reference_radiance
+    from ...analysis.shrm import prefilter
 
     R, V = random_pairs(options.n_pairs, options.seed)
     env_entries, speed_rows, main_shrms = [], [], []
@@ -390,7 +390,7 @@ def collect_report(
     source
         BRDF file or spec string (``shrmkit.load_brdf``).
     options
-        :class:`~shrmkit.analysis.report.options.ReportOptions`.
+        :class:`~shrmkit.cli.report.options.ReportOptions`.
     name
         Report name (default: the BRDF's name).
     preview_mode
@@ -410,7 +410,7 @@ def collect_report(
         Unreadable BRDF, or nothing to analyse.
     """
     from ...brdf_io.specs import load_brdf
-    from .preview import resolve_preview_mode
+    from ...render.preview import resolve_preview_mode
 
     t_start = time.perf_counter()
     _stage(progress, "load")

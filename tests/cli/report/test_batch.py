@@ -9,10 +9,10 @@ import json
 import numpy as np
 import pytest
 
-from shrmkit.analysis.report.batch import report_names, run_batch
-from shrmkit.analysis.report.collect import strip_timings
-from shrmkit.analysis.report.options import profile
-from shrmkit.analysis.report.writer import write_folder
+from shrmkit.cli.report.batch import report_names, run_batch
+from shrmkit.cli.report.collect import strip_timings
+from shrmkit.cli.report.options import profile
+from shrmkit.cli.report.writer import write_folder
 
 GOOD = ["lafortune:kd=0.2,n=30,ks=2", "lambert:albedo=0.5"]
 

@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from ..reference import reference_radiance
+from ..analysis.reference import reference_radiance
 
 __all__ = ["strip_images", "write_strip"]
 
@@ -28,8 +28,8 @@ def strip_images(
     reps: Sequence[Any], env: Any, brdf: Any, *, size: int = 64, mesh: Any = None, view: Sequence[float] = STRIP_VIEW
 ) -> tuple[np.ndarray, list[tuple[str, np.ndarray]], np.ndarray]:
     """(reference image, [(label, image)], hit mask): linear float64 (size, size, 3) images."""
-    from ...render.camera import Camera
-    from ...render.cpu_reference import mesh_geometry, shade, sphere_geometry
+    from .camera import Camera
+    from .cpu_reference import mesh_geometry, shade, sphere_geometry
 
     if mesh is None:
         cam = Camera.looking_at(view=np.asarray(view, float), projection="ortho", margin=1.05)
@@ -76,9 +76,9 @@ def write_strip(
     Layout: top row reference, then one column per representation; bottom row the
     difference images |B − B_ref| (same exposure, not amplified).
     """
-    from ...brdf_io.errors import BadInputError
-    from ...render.output import to_8bit, write_png
-    from .table import relative_rms
+    from ..analysis.compare.table import relative_rms
+    from ..brdf_io.errors import BadInputError
+    from .output import to_8bit, write_png
 
     path = Path(path)
     if path.suffix.lower() != ".png":

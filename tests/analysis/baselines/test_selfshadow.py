@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from shrmkit.analysis.compare.gaussian_lobes import GaussianLobeRenderer, fit_gaussian_lobes, sg_mip_stack
-from shrmkit.analysis.compare.selfshadow import (
+from shrmkit.analysis.baselines.gaussian_lobes import GaussianLobeModel, fit_gaussian_lobes, sg_mip_stack
+from shrmkit.analysis.baselines.selfshadow import (
     hemisphere_step_sh,
     hemisphere_step_zonal,
     vertex_visibility_sh,
@@ -98,7 +98,7 @@ def torus_renders():
     without and with self-shadowing (normalized and plain SH visibility)."""
     torus = load_mesh("builtin:torus:segments=48,sides=16")
     lobes = fit_gaussian_lobes(load_brdf("phong:s=8"), K=3, n_elevations=8, n_theta=48, n_psi=24)
-    glr = GaussianLobeRenderer(lobes, sg_mip_stack(np.ones((32, 64, 3))))
+    glr = GaussianLobeModel(lobes, sg_mip_stack(np.ones((32, 64, 3))))
     coeffs = vertex_visibility_sh(torus, n_dirs=512)
     cam = Camera.looking_at(view=(0.5, -0.3, 1.0), projection="perspective")
     geom = mesh_geometry(cam, 56, 56, torus)

@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 
 import shrmkit
-from shrmkit.analysis.report.checks import directional_albedo, reciprocity_check, scattered_reciprocity
-from shrmkit.analysis.report.collect import collect_report, jsonable, random_pairs, relative_rms, strip_timings
-from shrmkit.analysis.report.options import profile
+from shrmkit.cli.report.checks import directional_albedo, reciprocity_check, scattered_reciprocity
+from shrmkit.cli.report.collect import collect_report, jsonable, random_pairs, relative_rms, strip_timings
+from shrmkit.cli.report.options import profile
 
 NUM = (int, float)
 OPT_NUM = (int, float, type(None))

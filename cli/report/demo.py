@@ -47,7 +47,7 @@ def _render_preview(shrm: Any, env: Any, path: Path, size: int) -> str:
     import numpy as np
 
     from ...render.output import to_8bit, write_png
-    from .preview import PREVIEW_VIEW, cpu_sphere_image, preview_exposure, resolve_preview_mode, unit_mesh
+    from ...render.preview import PREVIEW_VIEW, cpu_sphere_image, preview_exposure, resolve_preview_mode, unit_mesh
 
     mode, note = resolve_preview_mode("auto")
     exposure = preview_exposure(env)
@@ -72,10 +72,10 @@ def run_demo(out_dir: str | Path = "shrm-demo", *, progress: Callable[[str], Non
     """Run the demo into ``out_dir`` (see module docstring); returns the steps in order."""
     import shrmkit
 
+    from ...analysis.fit import fit_brdf, write_fit_json
+    from ...analysis.orders import choose_orders
+    from ...analysis.shrm import prefilter
     from ...brdf_io.merl import write_merl
-    from ..fit import fit_brdf, write_fit_json
-    from ..orders import choose_orders
-    from ..shrm import prefilter
     from .batch import run_batch
     from .options import profile
 
@@ -97,7 +97,7 @@ def run_demo(out_dir: str | Path = "shrm-demo", *, progress: Callable[[str], Non
 
     t = begin("orders")
     brdf = shrmkit.load_brdf(plastic)
-    orders = choose_orders(brdf, DEMO_EPS)
+    orders = choose_orders(brdf, eps=DEMO_EPS)
     steps.append(DemoStep("orders", (plastic,), f"{plastic.stem}: F={orders.F}, P={orders.P} at eps {DEMO_EPS:g} "
                           f"(eps(F,P)={orders.eps:.3g})", time.perf_counter() - t,
                           {"F": orders.F, "P": orders.P}))

@@ -9,11 +9,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from shrmkit.analysis.compare.icosahedron import barycentric_weights, icosahedron, spherical_excess
-from shrmkit.analysis.compare.rsibr import rsibr_reference, warp_normal
-from shrmkit.analysis.latlong import pixel_directions
+from shrmkit.analysis.baselines.icosahedron import barycentric_weights, icosahedron, spherical_excess
+from shrmkit.analysis.baselines.rsibr import rsibr_reference, warp_normal
 from shrmkit.analysis.reference import reference_radiance
 from shrmkit.brdf_io.envmap import load_env
+from shrmkit.brdf_io.latlong import pixel_directions
 from shrmkit.brdf_io.specs import load_brdf
 
 

@@ -101,7 +101,7 @@ class ReportOptions:
             raise BadInputError(None, f"env_azimuth must be finite, got {self.env_azimuth!r}")
         if self.albedo_nodes < 8:
             raise BadInputError(None, f"albedo_nodes must be >= 8, got {self.albedo_nodes!r}")
-        from ..fit.models_param import MODELS
+        from ...analysis.fit.models_param import MODELS
 
         for model in self.models:
             if model not in MODELS:

@@ -14,8 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...brdf_io.envmap import EnvironmentMap
-from ..shrm import SHRM
+from ..analysis.shrm import SHRM
+from ..brdf_io.envmap import EnvironmentMap
 
 __all__ = [
     "PREVIEW_DISABLED", "PREVIEW_VIEW", "PreviewImage", "png_bytes", "render_previews", "resolve_preview_mode",
@@ -54,7 +54,7 @@ def resolve_preview_mode(mode: str) -> tuple[str, str]:
     """
     if mode != "auto":
         return mode, ""
-    from ...render.offscreen import probe_offscreen
+    from .offscreen import probe_offscreen
 
     ok, message = probe_offscreen(timeout=60.0)
     if ok:
@@ -64,15 +64,15 @@ def resolve_preview_mode(mode: str) -> tuple[str, str]:
 
 def preview_camera():  # -> render.camera.Camera
     """The preview camera: frames the unit sphere from :data:`PREVIEW_VIEW`."""
-    from ...render.camera import Camera
+    from .camera import Camera
 
     return Camera.looking_at(view=np.array(PREVIEW_VIEW), up=(0.0, 0.0, 1.0), margin=1.15)
 
 
 def cpu_sphere_image(shrm: SHRM, env: EnvironmentMap, size: int) -> np.ndarray:
     """Linear (size, size, 3) image of the unit sphere shaded by ``shrm`` over ``env`` (numpy only)."""
-    from ...render.cpu_reference import shade, sphere_geometry
-    from ...render.output import composite, environment_background
+    from .cpu_reference import shade, sphere_geometry
+    from .output import composite, environment_background
 
     camera = preview_camera()
     geometry = sphere_geometry(camera, size, size)
@@ -98,7 +98,7 @@ def render_previews(
     """
     import time
 
-    from ...render.output import to_8bit
+    from .output import to_8bit
 
     if mode == "none":
         return [], [PREVIEW_DISABLED]
@@ -113,8 +113,8 @@ def render_previews(
         if mesh:
             notes.append(f"mesh preview of {mesh} needs OpenGL (CPU preview renders the sphere only)")
         return images, notes
-    from ...render.mesh import load_mesh
-    from ...render.pipeline import render_frames
+    from .mesh import load_mesh
+    from .pipeline import render_frames
 
     targets = [("sphere", "builtin:sphere")] + ([("mesh", mesh)] if mesh else [])
     camera = preview_camera()

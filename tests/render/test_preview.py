@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import shrmkit
-from shrmkit.analysis.report.preview import render_previews
+from shrmkit.render.preview import render_previews
 
 
 @pytest.mark.render

@@ -37,7 +37,7 @@ from typing import Any
 
 import numpy as np
 
-from ..latlong import bilinear_lookup
+from ...brdf_io.latlong import bilinear_lookup
 from ..reference import reference_map
 from .icosahedron import barycentric_weights, icosahedron
 

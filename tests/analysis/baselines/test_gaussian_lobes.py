@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from shrmkit.analysis.compare.gaussian_lobes import (
-    GaussianLobeRenderer,
+from shrmkit.analysis.baselines.gaussian_lobes import (
+    GaussianLobeModel,
     fit_gaussian_lobes,
     sg_eval,
     sg_mip_stack,
@@ -20,11 +20,11 @@ from shrmkit.analysis.compare.gaussian_lobes import (
     sg_zonal_factors,
 )
 from shrmkit.analysis.compare.pairs import sample_pairs
-from shrmkit.analysis.latlong import pixel_directions, row_solid_angles
 from shrmkit.analysis.reference import reference_radiance
 from shrmkit.brdf_io.brdf import BRDF
 from shrmkit.brdf_io.envmap import load_env
 from shrmkit.brdf_io.errors import BadInputError
+from shrmkit.brdf_io.latlong import pixel_directions, row_solid_angles
 
 
 class SGLobeBRDF(BRDF):
@@ -108,7 +108,7 @@ def test_gaussian_render_matches_reference_for_gaussian_brdf() -> None:
     fit = fit_gaussian_lobes(brdf, 1, 8, max_theta_v_deg=70.0, n_theta=90, n_psi=45)
     R, V, _ = sample_pairs(300, seed=2, max_view_deg=70.0)
     ref = reference_radiance(env, brdf, R, V)
-    got = GaussianLobeRenderer(fit, stack).radiance(R, V)
+    got = GaussianLobeModel(fit, stack).radiance(R, V)
     assert np.sqrt(np.sum((got - ref) ** 2) / np.sum(ref**2)) < 0.02
 
 

@@ -172,7 +172,7 @@ def run_batch(
     BatchResult
         ``n_failed`` counts the BRDFs whose report failed (they are in the summary).
     """
-    from .preview import resolve_preview_mode
+    from ...render.preview import resolve_preview_mode
 
     if not sources:
         raise BadInputError(None, "no BRDF given")

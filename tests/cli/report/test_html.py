@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import base64
 
-from shrmkit.analysis.report.html import data_uri, index_html, markdown_to_html
-from shrmkit.analysis.report.markdown import fmt, md_table
-from shrmkit.analysis.report.writer import summary_columns
+from shrmkit.cli.report.html import data_uri, index_html, markdown_to_html
+from shrmkit.cli.report.markdown import fmt, md_table
+from shrmkit.cli.report.writer import summary_columns
 
 
 def test_markdown_table_round_trips_to_html():

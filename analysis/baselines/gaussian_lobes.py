@@ -46,8 +46,8 @@ from scipy.special import ive
 
 from ...brdf_io.brdf import BRDF
 from ...brdf_io.errors import BadInputError
+from ...brdf_io.latlong import bilinear_lookup
 from ...brdf_io.reparam import reparam_directions
-from ..latlong import bilinear_lookup
 from ..lighting import lighting_coefficients
 
 __all__ = [
@@ -58,7 +58,7 @@ __all__ = [
     "GaussianLobes",
     "fit_gaussian_lobes",
     "transfer_samples",
-    "GaussianLobeRenderer",
+    "GaussianLobeModel",
 ]
 
 SIGMA_MIN, SIGMA_MAX = 0.01, 4.0
@@ -388,7 +388,7 @@ def fit_gaussian_lobes(
 
 
 @dataclass(frozen=True, eq=False)
-class GaussianLobeRenderer:
+class GaussianLobeModel:
     """Lobes + mip stack: B(R, V) = Σ_k w_k (G_σk * L)(d_k), interpolated in θ_v."""
 
     lobes: GaussianLobes

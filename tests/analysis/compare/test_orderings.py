@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from shrmkit.analysis.baselines.rsibr import rsibr_from_shrm
 from shrmkit.analysis.compare.pairs import sample_pairs
-from shrmkit.analysis.compare.rsibr import rsibr_from_shrm
 from shrmkit.analysis.reference import reference_radiance
 from shrmkit.analysis.shrm import prefilter
 from shrmkit.brdf_io.envmap import load_env
@@ -23,8 +23,8 @@ from shrmkit.brdf_io.specs import load_brdf
 def sharp():
     env = load_env("builtin:studio,height=32")
     brdf = load_brdf("microfacet:sigma=0.15")
-    shrm = prefilter(env, brdf, 0.01, P=5)
-    km = prefilter(env, brdf, 0.01, F=shrm.F, P=shrm.P, size=shrm.height, azimuth_free=True)
+    shrm = prefilter(env, brdf, eps=0.01, P=5)
+    km = prefilter(env, brdf, eps=0.01, F=shrm.F, P=shrm.P, size=shrm.height, azimuth_free=True)
     R, V, tv = sample_pairs(600, seed=3, max_view_deg=85.0)
     ref = reference_radiance(env, brdf, R, V)
     return {"shrm": shrm, "km": km, "R": R, "V": V, "tv": tv, "ref": ref}
@@ -64,8 +64,8 @@ def test_kautz_mccool_equals_shrm_for_phong() -> None:
     match the angular reference."""
     env = load_env("builtin:studio,height=16")
     brdf = load_brdf("phong:s=8")
-    full = prefilter(env, brdf, 0.01, P=3)
-    km = prefilter(env, brdf, 0.01, F=full.F, P=3, size=full.height, azimuth_free=True)
+    full = prefilter(env, brdf, eps=0.01, P=3)
+    km = prefilter(env, brdf, eps=0.01, F=full.F, P=3, size=full.height, azimuth_free=True)
     R, V, _ = sample_pairs(300, seed=5)
     a, b = full.radiance(R, V), km.radiance(R, V)
     np.testing.assert_allclose(b, a, rtol=1e-5, atol=1e-6 * np.abs(a).max())

@@ -185,7 +185,7 @@ def visibility_at(
 def visibility_hook(
     coeffs_per_point: np.ndarray, normals: np.ndarray | None = None, unoccluded: np.ndarray | None = None
 ) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
-    """The ``visibility(dirs, rows)`` hook of ``GaussianLobeRenderer.radiance`` for points with these coefficients."""
+    """The ``visibility(dirs, rows)`` hook of ``GaussianLobeModel.radiance`` for points with these coefficients."""
     coeffs_per_point = np.asarray(coeffs_per_point, dtype=np.float64)
 
     def hook(dirs: np.ndarray, rows: np.ndarray) -> np.ndarray:

@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from shrmkit.analysis.compare.icosahedron import icosahedron
-from shrmkit.analysis.compare.rsibr import rsibr_from_shrm
+from shrmkit.analysis.baselines.icosahedron import icosahedron
+from shrmkit.analysis.baselines.rsibr import rsibr_from_shrm
 from shrmkit.analysis.shrm import prefilter
 from shrmkit.brdf_io.envmap import load_env
 from shrmkit.brdf_io.specs import load_brdf
@@ -24,7 +24,7 @@ pytestmark = pytest.mark.render
 @pytest.mark.parametrize("vertex_view", [True, False])
 def test_rsibr_mode_matches_cpu_reconstruction(offscreen, vertex_view: bool) -> None:
     env = load_env("builtin:studio,height=16")
-    shrm = prefilter(env, load_brdf("microfacet:sigma=0.3"), 0.03)
+    shrm = prefilter(env, load_brdf("microfacet:sigma=0.3"), eps=0.03)
     maps = rsibr_from_shrm(shrm)
     view = icosahedron()[0][3] if vertex_view else np.array([0.9, 0.3, 0.4])
     up = np.array([0.0, 0.0, 1.0]) if abs(view[2]) < 0.9 * np.linalg.norm(view) else np.array([1.0, 0.0, 0.0])

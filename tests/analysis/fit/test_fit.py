@@ -13,8 +13,8 @@ from shrmkit.analysis.fit import fit_brdf
 from shrmkit.analysis.fit.fit_file import write_fit_json
 from shrmkit.analysis.fit.metrics import log_epsilon, log_rms, rel_rms
 from shrmkit.analysis.fit.objective import solve_bounded_lsq
-from shrmkit.analysis.fit.report import band_errors
 from shrmkit.analysis.fit.sampling import FitSamples, collect_samples, sample_halfdiff
+from shrmkit.analysis.fit.summary import band_errors
 from shrmkit.brdf_io.errors import BadInputError
 from shrmkit.brdf_io.models import CookTorrance, Lafortune, LafortuneLobe, Lambert, SimplifiedMicrofacet, rgb
 from shrmkit.brdf_io.specs import load_brdf
