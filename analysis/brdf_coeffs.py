@@ -7,6 +7,9 @@ computed as three separable passes over a :class:`~shrmkit.brdf_io.reparam.Repar
 a cosine transform in φ' (FFT), a Gauss–Legendre sum over θ_o', then one over θ_i'.
 ρ̂_{l,−q,p,−q} = ρ̂_lpq, and Parseval reads
 ∫∫ ρ̂² dω_i dω_o = Σ_{l,p} (ρ̂_lp0² + 2 Σ_{q>=1} ρ̂_lpq²).
+
+Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
+SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
 """
 
 from __future__ import annotations

@@ -11,6 +11,9 @@ rows) — the integral ∫L dω is preserved exactly.
 
 Coefficients are stored in the ducc0/healpy layout (m >= 0 only; index
 m(2 lmax + 1 − m)/2 + l), one row per RGB channel.
+
+Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
+SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
 """
 
 from __future__ import annotations

@@ -14,6 +14,9 @@ orthonormally), so the rule sees all the energy the samples hold. When ε(F0, P0
 the grid is refined (doubled) until the tolerance is met or the caps ``max_F``/``max_P``
 are hit; then the result says so (``capped``) instead of looping. The choice is
 re-checked on a 1.5× finer grid (``converged``).
+
+Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
+SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
 """
 
 from __future__ import annotations

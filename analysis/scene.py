@@ -19,6 +19,9 @@ l <= F, p > P. With C the captured energy (known exactly), the relative error ob
 ε_B = E_err/(C + E_err) <= U/(C + U). (RH02 Appendix B states a bound of this kind; its
 Λ power is fixed here by the normalization ∫|𝒟|² = Λ².) Per RGB channel; the worst
 channel is reported.
+
+Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
+SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
 """
 
 from __future__ import annotations

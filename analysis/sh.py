@@ -9,14 +9,39 @@ Y_lm(θ, φ) = f_lm(θ) e^{imφ}. Real basis (used for stored maps and shaders):
 
 flattened at index l² + l + m. The normalized associated Legendre functions f_lm are
 computed by the standard stable three-term recurrence on normalized functions, tested
-against scipy up to l = 500.
+against scipy up to l = 500 and for orthonormality by Gauss–Legendre quadrature up to
+l = :data:`LEGENDRE_TESTED_LMAX` (2000); beyond that :func:`legendre_f` warns with
+:class:`NumericalLimitWarning`.
+
+Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
+SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
 """
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
-__all__ = ["legendre_f", "real_sph_harm", "real_index", "complex_sph_harm", "Lambda"]
+__all__ = [
+    "NumericalLimitWarning", "LEGENDRE_TESTED_LMAX", "legendre_f", "real_sph_harm", "real_index", "complex_sph_harm",
+    "Lambda", "warn_beyond",
+]
+
+
+#: Largest degree at which the Legendre recurrence is tested (orthonormal to 1e-10 at l = 2000).
+LEGENDRE_TESTED_LMAX = 2000
+
+
+class NumericalLimitWarning(UserWarning):
+    """A routine was asked for a degree beyond the range in which its accuracy is tested."""
+
+
+def warn_beyond(what: str, value: int, tested: int) -> None:
+    """Warn (:class:`NumericalLimitWarning`) when ``value`` exceeds the ``tested`` limit of ``what``."""
+    if value > tested:
+        warnings.warn(f"{what}: degree {value} is beyond the tested range (<= {tested}); accuracy is not verified",
+                      NumericalLimitWarning, stacklevel=3)
 
 
 def Lambda(l: np.ndarray | int) -> np.ndarray:
@@ -51,6 +76,7 @@ def legendre_f(lmax: int, mmax: int, cos_theta: np.ndarray) -> np.ndarray:
     f_lm = a_lm (cos θ f_{l-1,m} - f_{l-2,m} / a_{l-1,m}), a_lm = sqrt((4l²-1)/(l²-m²)).
     Stable to high degree; sin^m θ underflows only for m in the hundreds near the poles.
     """
+    warn_beyond("legendre_f", int(lmax), LEGENDRE_TESTED_LMAX)
     x = np.asarray(cos_theta, dtype=np.float64)
     s = np.sqrt(np.clip(1.0 - x * x, 0.0, None))
     out = np.zeros((lmax + 1, mmax + 1) + x.shape)

@@ -7,6 +7,9 @@ function of the global view direction V,
     B(R, V) = Σ_{p≤P, |q|≤p} B̃_pq(R) Y^r_pq(V)                (RH02 eq. 8)
 
 with the real basis of ``analysis.sh`` at flat index p² + p + q.
+
+Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
+SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ import ducc0
 import numpy as np
 
 from .._version import __version__
+from ..brdf_io.cubemap import cube_map_directions
 from ..brdf_io.envmap import EnvironmentMap, load_env
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.latlong import bilinear_lookup, pixel_angles, pixel_directions
@@ -419,28 +423,10 @@ def gibbs_negative(coeffs: np.ndarray, P: int) -> float:
 
 # Cube faces in the z-up frame with OpenGL's texel axes (OpenGL 4.6 Table 8.19): face ->
 # (major axis, direction of increasing column u, direction of increasing row v).
-CUBE_FACES = ("+x", "-x", "+y", "-y", "+z", "-z")
-CUBE_AXES = (
-    ((1, 0, 0), (0, 0, -1), (0, -1, 0)),
-    ((-1, 0, 0), (0, 0, 1), (0, -1, 0)),
-    ((0, 1, 0), (1, 0, 0), (0, 0, 1)),
-    ((0, -1, 0), (1, 0, 0), (0, 0, -1)),
-    ((0, 0, 1), (1, 0, 0), (0, -1, 0)),
-    ((0, 0, -1), (-1, 0, 0), (0, -1, 0)),
-)
-
-
 def cube_directions(size: int) -> np.ndarray:
-    """Unit texel-centre directions (6, S, S, 3): texel (f, i, j) of face f, row i,
-    column j points along major + u_j·u + v_i·v, u_j = 2(j+½)/S − 1, v_i = 2(i+½)/S − 1."""
-    c = 2.0 * (np.arange(size) + 0.5) / size - 1.0
-    faces = []
-    for major, u_axis, v_axis in CUBE_AXES:
-        d = np.asarray(major, float) + c[None, :, None] * np.asarray(u_axis, float) + c[:, None, None] * np.asarray(
-            v_axis, float
-        )
-        faces.append(d / np.linalg.norm(d, axis=-1, keepdims=True))
-    return np.stack(faces)
+    """Unit texel-centre directions (6, S, S, 3) of the SHRM cube map, faces +x, −x, +y, −y,
+    +z, −z of the z-up frame with OpenGL texel axes (the one table: ``brdf_io.cubemap``)."""
+    return cube_map_directions(size)
 
 
 DEFAULT_MAP_BUDGET_BYTES = 256 << 20

@@ -12,8 +12,9 @@ numerically against the definition of 𝒟 by quadrature in the tests.
 
 d^l(α) is computed from the eigen-decomposition of the angular-momentum matrix J_y
 (tridiagonal, Hermitian, eigenvalues −l..l): d^l(α) = U diag(e^{−iαk}) U†. This is
-numerically stable to high degree (tested to l = 200) — unlike factorial formulas,
-which lose all digits near l ≈ 80.
+numerically stable to high degree (tested to l = :data:`WIGNER_TESTED_LMAX` = 200, beyond
+which :func:`wigner_d_tilde` warns with ``NumericalLimitWarning``) — unlike factorial
+formulas, which lose all digits near l ≈ 80.
 """
 
 from __future__ import annotations
@@ -22,7 +23,12 @@ from functools import lru_cache
 
 import numpy as np
 
-__all__ = ["wigner_d_tilde", "rotation_D"]
+from .sh import warn_beyond
+
+__all__ = ["wigner_d_tilde", "rotation_D", "WIGNER_TESTED_LMAX"]
+
+#: Largest degree at which d̃^l is tested against the ``spherical`` package.
+WIGNER_TESTED_LMAX = 200
 
 
 @lru_cache(maxsize=512)
@@ -48,6 +54,7 @@ def wigner_d_tilde(l: int, alpha: np.ndarray | float) -> np.ndarray:
     alpha
         Polar angle(s) α of the rotation R_{α,β}, any shape.
     """
+    warn_beyond("wigner_d_tilde", int(l), WIGNER_TESTED_LMAX)
     U, k = _jy_eigen(int(l))
     a = np.asarray(alpha, dtype=np.float64)[..., None]
     phase = np.exp(-1j * a * k)  # (..., 2l+1)

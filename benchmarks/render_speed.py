@@ -5,12 +5,12 @@ Measures, on whatever OpenGL the machine offers (Mesa llvmpipe on a CPU-only mac
 - frames per second in ``distant`` and ``perpixel`` modes at 512² and 1024², for a
   ~100k- and a 1M-triangle torus knot (draw only, no readback; every frame moves the
   camera, so distant-mode maps are recomputed and uploaded each frame);
-- the per-frame cost of the distant-mode map Σ B̃_pq Y^r_pq(Ṽ) (RH02 eq. 12) at P = 3 on a
-  lat-long grid of 111 × 222 texels (≈ the 24 576 texels of a 6 × 64² cube): CPU
-  evaluation alone, and evaluation + texture upload (difference of frame times with and
-  without the update).
+- the per-frame cost of the distant-mode map Σ B̃_pq Y^r_pq(Ṽ) (RH02 eq. 12; RH02 =
+  Ramamoorthi & Hanrahan 2002, doi:10.1145/566654.566611) at P = 3 on a lat-long grid of
+  111 × 222 texels (≈ the 24 576 texels of a 6 × 64² cube): CPU evaluation alone, and
+  evaluation + texture upload (difference of frame times with and without the update).
 
-Targets (issue 5): ≥ 10 fps at 512² for 100k triangles; map update ≤ 2 ms.
+Targets: ≥ 10 fps at 512² for 100k triangles; map update ≤ 2 ms.
 
 Usage: ``.venv/bin/python benchmarks/render_speed.py [--quick] [--frames N]``
 """

@@ -34,7 +34,15 @@ from collections.abc import Callable
 import numpy as np
 
 from .errors import BadInputError
-from .probe import latlong_directions, latlong_solid_angles
+from .latlong import (
+    pixel_directions,
+    pixel_index,
+    row_edges_cos,
+    row_solid_angles,
+    subsample_cos_theta,
+    subsample_phi,
+)
+from .spec_params import SpecParams, parse_params
 
 __all__ = ["builtin_radiance", "BUILTIN_NAMES", "BUILTIN_PARAMS", "BUILTIN_PREFIX"]
 
@@ -46,65 +54,15 @@ _AXES = {
 }  # fmt: skip
 
 
-class _Params:
-    """Typed access to the raw ``key=value`` strings of one spec, validated in one place."""
-
-    def __init__(self, spec: str, name: str, raw: dict[str, str]) -> None:
-        self.spec, self.name, self.raw = spec, name, raw
-
-    def _numbers(self, key: str) -> list[float]:
-        text = self.raw[key]
-        try:
-            values = [float(v) for v in text.split("/")]
-        except ValueError:
-            raise BadInputError(self.spec, f"parameter {key}={text!r} is not a number") from None
-        if len(values) not in (1, 3) or not all(np.isfinite(values)):
-            raise BadInputError(self.spec, f"parameter {key}={text!r}: give one finite value or r/g/b")
-        return values
-
-    def _check(self, key: str, values: list[float], lo: float, hi: float, lo_open: bool) -> None:
-        for v in values:
-            if v < lo or v > hi or (lo_open and v == lo):
-                bracket = "(" if lo_open else "["
-                raise BadInputError(self.spec, f"parameter {key}={self.raw[key]} outside {bracket}{lo:g}, {hi:g}]")
-
-    def color(self, key: str, default: float | tuple[float, float, float], lo: float = 0.0,
-              hi: float = np.inf, lo_open: bool = False) -> np.ndarray:
-        if key not in self.raw:
-            return np.broadcast_to(np.asarray(default, dtype=float), (3,)).copy()
-        values = self._numbers(key)
-        self._check(key, values, lo, hi, lo_open)
-        return np.broadcast_to(np.asarray(values, dtype=float), (3,)).copy()
-
-    def scalar(self, key: str, default: float, lo: float = -np.inf, hi: float = np.inf,
-               lo_open: bool = False) -> float:
-        if key not in self.raw:
-            return float(default)
-        values = self._numbers(key)
-        if len(values) != 1:
-            raise BadInputError(self.spec, f"parameter {key} takes one value, not r/g/b")
-        self._check(key, values, lo, hi, lo_open)
-        return values[0]
-
-    def height(self) -> int:
-        value = self.scalar("height", 256, 1, 8192)
-        if value != int(value):
-            raise BadInputError(self.spec, f"parameter height={self.raw['height']} is not an integer")
-        return int(value)
-
-
 def _unit(elevation_deg: float, azimuth_deg: float) -> np.ndarray:
     el, az = np.radians(elevation_deg), np.radians(azimuth_deg)
     return np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
 
 
 def _pixel_of(direction: np.ndarray, height: int) -> tuple[int, int]:
-    """Row and column of the lat-long pixel containing a unit direction."""
-    theta = np.arccos(np.clip(direction[2], -1.0, 1.0))
-    phi = np.arctan2(direction[1], direction[0]) % (2.0 * np.pi)
-    row = min(height - 1, int(theta * height / np.pi))
-    col = min(2 * height - 1, int(phi * height / np.pi))
-    return row, col
+    """Row and column of the pixel of the height × 2·height map containing a unit direction."""
+    row, col = pixel_index(direction, height, 2 * height)
+    return int(row), int(col)
 
 
 def _disc_coverage(height: int, centre: np.ndarray, radius: float, sub: int = 8) -> np.ndarray:
@@ -116,25 +74,23 @@ def _disc_coverage(height: int, centre: np.ndarray, radius: float, sub: int = 8)
     """
     width = 2 * height
     cap_cos = np.cos(radius)
-    edges = np.cos(np.arange(height + 1) * np.pi / height)
-    frac = (np.arange(sub) + 0.5) / sub
     theta_c = np.arccos(np.clip(centre[2], -1.0, 1.0))
     rows = np.flatnonzero(
         (np.arange(height + 1)[1:] * np.pi / height >= theta_c - radius)
         & (np.arange(height) * np.pi / height <= theta_c + radius)
     )
-    phi = 2.0 * np.pi * (np.arange(width)[:, None] + frac[None, :]) / width
+    phi = subsample_phi(width, sub)
     azimuthal = centre[0] * np.cos(phi) + centre[1] * np.sin(phi)  # (W, sub)
     coverage = np.zeros((height, width))
     block = max(1, 2_000_000 // (sub * sub * width))
     for k in range(0, rows.size, block):
         r = rows[k : k + block]
-        cos_t = edges[r, None] - frac[None, :] * (edges[r] - edges[r + 1])[:, None]
+        cos_t = subsample_cos_theta(height, sub, r)
         sin_t = np.sqrt(np.maximum(0.0, 1.0 - cos_t * cos_t))
         # dot(sample, centre) for samples indexed (row, a, col, b)
         dot = sin_t[:, :, None, None] * azimuthal[None, None] + cos_t[:, :, None, None] * centre[2]
         coverage[r] = (dot >= cap_cos).mean(axis=(1, 3))
-    omega = latlong_solid_angles(height, width)
+    omega = row_solid_angles(height, width)
     target = 2.0 * np.pi * (1.0 - cap_cos)
     flux = float((coverage * omega[:, None]).sum())
     if flux == 0.0:  # cap smaller than the sub-sample spacing: all of it in one pixel
@@ -146,7 +102,7 @@ def _disc_coverage(height: int, centre: np.ndarray, radius: float, sub: int = 8)
 
 def _row_mean_sky(height: int, zenith: np.ndarray, horizon: np.ndarray, ground: np.ndarray) -> np.ndarray:
     """Exact solid-angle mean per row of L(μ) = horizon + (zenith − horizon)μ (μ > 0), ground (μ < 0)."""
-    edges = np.cos(np.arange(height + 1) * np.pi / height)
+    edges = row_edges_cos(height)
     top, bottom = edges[:-1], edges[1:]  # μ decreases down the rows
     up_hi, up_lo = np.maximum(top, 0.0), np.maximum(bottom, 0.0)  # sky part of [bottom, top]
     # ∫ (h + (z − h)μ) dμ over [up_lo, up_hi]
@@ -157,10 +113,10 @@ def _row_mean_sky(height: int, zenith: np.ndarray, horizon: np.ndarray, ground: 
     return (sky + down) / (top - bottom)[:, None]
 
 
-def _sky(p: _Params, height: int) -> np.ndarray:
-    zenith = p.color("zenith", (0.3, 0.5, 1.0))
-    horizon = p.color("horizon", (0.8, 0.85, 0.9))
-    ground = p.color("ground", (0.1, 0.09, 0.08))
+def _sky(p: SpecParams, height: int) -> np.ndarray:
+    zenith = p.color("zenith", (0.3, 0.5, 1.0), 0.0)
+    horizon = p.color("horizon", (0.8, 0.85, 0.9), 0.0)
+    ground = p.color("ground", (0.1, 0.09, 0.08), 0.0)
     ratio = p.scalar("sun_ratio", 1e4, 0.0)
     radius = np.radians(p.scalar("sun_radius", 1.0, 0.0, 20.0, lo_open=True))
     sun_dir = _unit(p.scalar("sun_elevation", 45.0, -90.0, 90.0), p.scalar("sun_azimuth", 0.0))
@@ -170,10 +126,10 @@ def _sky(p: _Params, height: int) -> np.ndarray:
     return image
 
 
-def _studio(p: _Params, height: int) -> np.ndarray:
-    background = p.color("background", 0.02)
+def _studio(p: SpecParams, height: int) -> np.ndarray:
+    background = p.color("background", 0.02, 0.0)
     scale = p.scalar("intensity", 1.0, 0.0)
-    dirs = latlong_directions(height, 2 * height)
+    dirs = pixel_directions(height, 2 * height)
     image = np.broadcast_to(background, dirs.shape).copy()
     # (elevation, azimuth, angular width (deg), RGB radiance): key, fill, rim
     lights = ((40.0, 30.0, 12.0, (10.0, 9.5, 9.0)), (15.0, 140.0, 25.0, (2.0, 2.2, 2.5)),
@@ -185,29 +141,26 @@ def _studio(p: _Params, height: int) -> np.ndarray:
     return image
 
 
-def _constant(p: _Params, height: int) -> np.ndarray:
-    return np.broadcast_to(p.color("value", 1.0), (height, 2 * height, 3)).copy()
+def _constant(p: SpecParams, height: int) -> np.ndarray:
+    return np.broadcast_to(p.color("value", 1.0, 0.0), (height, 2 * height, 3)).copy()
 
 
-def _spot(p: _Params, height: int) -> np.ndarray:
-    if "dir" in p.raw:
-        if "elevation" in p.raw or "azimuth" in p.raw:
+def _spot(p: SpecParams, height: int) -> np.ndarray:
+    if p.has("dir"):
+        if p.has("elevation") or p.has("azimuth"):
             raise BadInputError(p.spec, "give either dir= or elevation=/azimuth=, not both")
-        key = p.raw["dir"].strip().lower()
-        if key not in _AXES:
-            raise BadInputError(p.spec, f"parameter dir={p.raw['dir']!r}: choose one of x, -x, y, -y, z, -z")
-        centre = np.asarray(_AXES[key])
+        centre = np.asarray(_AXES[p.choice("dir", None, tuple(_AXES), fold_case=True)])
     else:
         centre = _unit(p.scalar("elevation", 90.0, -90.0, 90.0), p.scalar("azimuth", 0.0))
     radius = np.radians(p.scalar("radius", 5.0, 0.0, 90.0, lo_open=True))
-    value = p.color("value", 100.0)
-    background = p.color("background", 0.0)
+    value = p.color("value", 100.0, 0.0)
+    background = p.color("background", 0.0, 0.0)
     coverage = _disc_coverage(height, centre, radius)
     return background[None, None] + coverage[..., None] * value[None, None]
 
 
-def _sun(p: _Params, height: int) -> np.ndarray:
-    sky = p.color("sky", 0.01)
+def _sun(p: SpecParams, height: int) -> np.ndarray:
+    sky = p.color("sky", 0.01, 0.0)
     ratio = p.scalar("ratio", 1e5, 0.0)
     row, col = _pixel_of(_unit(p.scalar("elevation", 45.0, -90.0, 90.0), p.scalar("azimuth", 0.0)), height)
     image = np.broadcast_to(sky, (height, 2 * height, 3)).copy()
@@ -216,7 +169,7 @@ def _sun(p: _Params, height: int) -> np.ndarray:
 
 
 # name -> (builder, accepted keys besides height)
-_BUILTINS: dict[str, tuple[Callable[[_Params, int], np.ndarray], tuple[str, ...]]] = {
+_BUILTINS: dict[str, tuple[Callable[[SpecParams, int], np.ndarray], tuple[str, ...]]] = {
     "sky": (_sky, ("zenith", "horizon", "ground", "sun_ratio", "sun_radius", "sun_elevation", "sun_azimuth")),
     "studio": (_studio, ("background", "intensity")),
     "constant": (_constant, ("value",)),
@@ -249,18 +202,7 @@ def builtin_radiance(spec: str) -> tuple[str, np.ndarray]:
     name, *items = [s.strip() for s in body[len(BUILTIN_PREFIX) :].split(",")]
     if name not in _BUILTINS:
         raise BadInputError(spec, f"unknown built-in environment {name!r}; valid: {', '.join(BUILTIN_NAMES)}")
-    raw: dict[str, str] = {}
-    for item in items:
-        key, sep, value = (s.strip() for s in item.partition("="))
-        if not sep or not key or not value:
-            raise BadInputError(spec, f"parameter {item!r} is not of the form key=value")
-        if key not in BUILTIN_PARAMS[name]:
-            raise BadInputError(
-                spec, f"unknown parameter {key!r} for builtin:{name}; valid: {', '.join(BUILTIN_PARAMS[name])}"
-            )
-        if key in raw:
-            raise BadInputError(spec, f"parameter {key!r} given twice")
-        raw[key] = value
-    params = _Params(spec, name, raw)
+    raw = parse_params(spec, items, allowed=BUILTIN_PARAMS[name], owner=f"builtin:{name}")
+    params = SpecParams(spec, raw, owner=f"builtin:{name}")
     builder = _BUILTINS[name][0]
-    return name, builder(params, params.height())
+    return name, builder(params, params.integer("height", 256, 1, 8192))

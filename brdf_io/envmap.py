@@ -3,7 +3,8 @@
 An environment map is linear radiance on an equirectangular (lat-long) grid in the
 project frame (right-handed, z up; DESIGN §2): pixel (i, j) of an H × W map is centred
 at θ = (i + ½)π/H, φ = 2π(j + ½)/W (φ from +x toward +y), direction
-ω = (sin θ cos φ, sin θ sin φ, cos θ).
+ω = (sin θ cos φ, sin θ sin φ, cos θ); the grid geometry comes from
+:mod:`~shrmkit.brdf_io.latlong`.
 
 :func:`load_env` reads OpenEXR, Radiance .hdr and PFM lat-long maps, Debevec angular
 probes, Direct3D cube maps (a folder of six faces) and procedural ``builtin:`` specs,
@@ -21,15 +22,11 @@ from pathlib import Path
 import numpy as np
 
 from .builtin_env import BUILTIN_PREFIX, builtin_radiance
+from .cubemap import CUBE_FACES, cube_to_latlong
 from .errors import BadInputError
 from .hdr_codecs import IMAGE_SUFFIXES, read_image, write_image
-from .probe import (
-    CUBE_FACES,
-    cube_to_latlong,
-    latlong_directions,
-    latlong_solid_angles,
-    probe_to_latlong,
-)
+from .latlong import bilinear_lookup, pixel_directions, row_edges_cos, row_solid_angles
+from .probe import probe_to_latlong
 
 __all__ = ["EnvironmentMap", "load_env", "save_env"]
 
@@ -101,11 +98,11 @@ class EnvironmentMap:
 
     def directions(self) -> np.ndarray:
         """Pixel-centre unit vectors, ``(H, W, 3)`` float64."""
-        return latlong_directions(self.height, self.width)
+        return pixel_directions(self.height, self.width)
 
     def solid_angles(self) -> np.ndarray:
         """Exact per-row pixel solid angle (2π/W)(cos θ_top − cos θ_bottom), ``(H,)`` float64."""
-        return latlong_solid_angles(self.height, self.width)
+        return row_solid_angles(self.height, self.width)
 
     def integral(self) -> np.ndarray:
         """∫ L dω per channel, ``(3,)`` float64: Σ_ij L_ij Ω_i (exact for the piecewise-constant map)."""
@@ -117,7 +114,8 @@ class EnvironmentMap:
 
         The directions need not be unit length (zero vectors are refused). Interpolation
         is between pixel centres, periodic in φ, and clamped to the first/last row
-        beyond the outermost row centres (within π/2H of the poles).
+        beyond the outermost row centres (within π/2H of the poles):
+        :func:`~shrmkit.brdf_io.latlong.bilinear_lookup` at the normalized directions.
         """
         d = np.asarray(dirs, dtype=np.float64)
         if d.shape[-1:] != (3,):
@@ -125,22 +123,7 @@ class EnvironmentMap:
         norm = np.linalg.norm(d, axis=-1)
         if not np.all(norm > 0) or not np.all(np.isfinite(norm)):
             raise BadInputError(None, "lookup directions must be finite and non-zero")
-        h, w = self.height, self.width
-        theta = np.arccos(np.clip(d[..., 2] / norm, -1.0, 1.0))
-        phi = np.arctan2(d[..., 1], d[..., 0])
-        u = np.clip(theta * h / np.pi - 0.5, 0.0, h - 1.0)
-        v = phi * w / (2.0 * np.pi) - 0.5
-        i0 = np.minimum(np.floor(u).astype(np.int64), h - 1)
-        fu = (u - i0)[..., None]
-        i1 = np.minimum(i0 + 1, h - 1)
-        j0f = np.floor(v)
-        fv = (v - j0f)[..., None]
-        j0 = j0f.astype(np.int64) % w
-        j1 = (j0 + 1) % w
-        img = self.radiance
-        top = img[i0, j0] * (1.0 - fv) + img[i0, j1] * fv
-        bottom = img[i1, j0] * (1.0 - fv) + img[i1, j1] * fv
-        return top * (1.0 - fu) + bottom * fu
+        return bilinear_lookup(self.radiance, d / norm[..., None])
 
     def resized(self, height: int, width: int | None = None) -> EnvironmentMap:
         """Area-weighted resampling to ``height`` rows (``width`` defaults to W·height/H).
@@ -158,8 +141,8 @@ class EnvironmentMap:
         if (height, width) == (self.height, self.width):
             return self
         # rows: measure in μ = -cos θ (increasing with the row index)
-        mu_in = -np.cos(np.arange(self.height + 1) * np.pi / self.height)
-        mu_out = -np.cos(np.arange(height + 1) * np.pi / height)
+        mu_in = -row_edges_cos(self.height)
+        mu_out = -row_edges_cos(height)
         rows = _interval_overlap(mu_out, mu_in)
         rows /= rows.sum(axis=1, keepdims=True)
         cols = _interval_overlap(np.linspace(0.0, 1.0, width + 1), np.linspace(0.0, 1.0, self.width + 1))
@@ -278,6 +261,34 @@ def load_env(
         Missing, unreadable or corrupt file; zero-size image; NaN, infinite or negative
         radiance (the pixels are counted, never clamped); a lat-long image that is not
         2:1; a non-square probe; missing, duplicate or unequal cube faces; bad options.
+
+    Examples
+    --------
+    ``tests/resources/tiny_4x8.hdr`` is a 4 × 8 Radiance file whose pixel (i, j) is
+    ((j + 1)/8, (i + 1)/4, (i + j + 1)/16), values RGBE stores exactly. Read literally
+    (``up="z"``), file pixel (i, j) is lat-long pixel (i, j), centred at
+    θ = (i + ½)π/4, φ = 2π(j + ½)/8:
+
+    >>> import numpy as np
+    >>> env = load_env("tests/resources/tiny_4x8.hdr")
+    >>> env.radiance.shape, env.radiance.dtype
+    ((4, 8, 3), dtype('float32'))
+    >>> env.radiance[1, 6]
+    array([0.875, 0.5  , 0.5  ], dtype=float32)
+    >>> theta, phi = 1.5 * np.pi / 4, 2 * np.pi * 6.5 / 8
+    >>> env.lookup(np.array([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)]))
+    array([0.875, 0.5  , 0.5  ])
+
+    Read as a y-up panorama, file column j becomes project column (W/2 − 1 − j) mod W,
+    here (3 − 6) mod 8 = 5:
+
+    >>> load_env("tests/resources/tiny_4x8.hdr", up="y").radiance[1, 5]
+    array([0.875, 0.5  , 0.5  ], dtype=float32)
+
+    A built-in map, with its closed-form integral ∫ L dω = 4π · 2:
+
+    >>> load_env("builtin:constant,value=2,height=4").integral()
+    array([25.13274123, 25.13274123, 25.13274123])
     """
     text = str(spec_or_path)
     if up not in (None, "z", "y"):

@@ -29,6 +29,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import numpy as np
+import OpenEXR
 
 from .atomic import atomic_path
 from .errors import BadInputError
@@ -93,8 +94,6 @@ def read_exr(path: str | Path) -> np.ndarray:
     numpy.ndarray
         ``(H, W, 3)`` float32, row 0 the top of the data window.
     """
-    import OpenEXR
-
     path = Path(path)
     if not path.is_file():
         raise BadInputError(path, "no such file")
@@ -134,8 +133,6 @@ def write_exr(path: str | Path, image: np.ndarray, half: bool = False) -> None:
         Store 16-bit half floats (values above 65504 become infinite: refused) instead of
         32-bit floats (lossless for float32 input).
     """
-    import OpenEXR
-
     path = Path(path)
     image = _check_rgb(path, image)
     dtype = np.float16 if half else np.float32
@@ -276,6 +273,19 @@ def read_hdr(path: str | Path) -> np.ndarray:
     -------
     numpy.ndarray
         ``(H, W, 3)`` float32, row 0 at the top.
+
+    Examples
+    --------
+    ``tests/resources/tiny_4x8.hdr`` (4 × 8, run-length encoded, ``-Y 4 +X 8``) holds
+    pixel (i, j) = ((j + 1)/8, (i + 1)/4, (i + j + 1)/16), values RGBE stores exactly:
+
+    >>> image = read_hdr("tests/resources/tiny_4x8.hdr")
+    >>> image.shape, image.dtype
+    ((4, 8, 3), dtype('float32'))
+    >>> image[1, 6]
+    array([0.875, 0.5  , 0.5  ], dtype=float32)
+    >>> image[3, 0]
+    array([0.125, 1.   , 0.25 ], dtype=float32)
     """
     path = Path(path)
     data = _read_bytes(path)
@@ -373,7 +383,7 @@ def write_hdr(path: str | Path, image: np.ndarray, rle: bool = True) -> None:
 # PFM
 # --------------------------------------------------------------------------------------
 def read_pfm(path: str | Path) -> np.ndarray:
-    """Read a Portable FloatMap (``PF`` colour or ``Pf`` grey).
+    r"""Read a Portable FloatMap (``PF`` colour or ``Pf`` grey).
 
     The header is ``PF``/``Pf``, ``W H``, and a scale whose sign gives the byte order
     (negative: little-endian); the rows follow bottom to top, so they are reversed here.
@@ -382,6 +392,24 @@ def read_pfm(path: str | Path) -> np.ndarray:
     -------
     numpy.ndarray
         ``(H, W, 3)`` float32, row 0 at the top.
+
+    Examples
+    --------
+    A 2 × 2 little-endian grey map written byte by byte: the first stored row is the
+    bottom one, and grey is repeated into R, G and B:
+
+    >>> import pathlib, tempfile
+    >>> import numpy as np
+    >>> folder = tempfile.TemporaryDirectory()
+    >>> path = pathlib.Path(folder.name) / "grey.pfm"
+    >>> _ = path.write_bytes(b"Pf\n2 2\n-1.0\n" + np.array([1, 2, 3, 4], "<f4").tobytes())
+    >>> image = read_pfm(path)
+    >>> image.shape
+    (2, 2, 3)
+    >>> image[..., 0]
+    array([[3., 4.],
+           [1., 2.]], dtype=float32)
+    >>> folder.cleanup()
     """
     path = Path(path)
     data = _read_bytes(path)

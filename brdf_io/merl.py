@@ -29,7 +29,7 @@ from .atomic import atomic_path
 from .brdf import BRDF, Kind
 from .errors import BadInputError
 from .halfdiff import directions_to_halfdiff, halfdiff_to_directions
-from .table import EVAL_BLOCK, MaskedTableBRDF, MissingAwareGrid, eval_with_mask, flatten_directions
+from .masked_grid import MaskedTableBRDF, MissingAwareGrid, eval_with_mask
 
 __all__ = [
     "MERL_DIMS",
@@ -105,26 +105,14 @@ class MerlBRDF(MaskedTableBRDF):
         self.name = name
         self.source = source
 
-    def eval_masked(self, L: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """rho (..., 3) and a bool mask (...) of the points that had data.
+    def index_coordinates(self, L: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Continuous table indices (:func:`merl_index_coordinates`) of (N, 3) direction pairs.
 
-        Trilinear in the continuous indices of :func:`merl_index_coordinates`, periodic in
-        φ_d (sample 179 neighbours sample 0 = φ_d π), clamped in θ_h and θ_d; missing
-        samples are left out and the weights renormalized. Below-surface points are 0 and
-        count as having data.
+        Interpolation is trilinear in these indices, periodic in φ_d (sample 179 neighbours
+        sample 0 = φ_d π), clamped in θ_h and θ_d; missing samples are left out and the
+        weights renormalized (:class:`~shrmkit.brdf_io.masked_grid.MissingAwareGrid`).
         """
-        L, V, shape = flatten_directions(L, V)
-        out = np.zeros((L.shape[0], 3))
-        has = np.ones(L.shape[0], dtype=bool)
-        above = np.flatnonzero((L[:, 2] > 0) & (V[:, 2] > 0))
-        for start in range(0, above.size, EVAL_BLOCK):
-            sel = above[start : start + EVAL_BLOCK]
-            coords = merl_index_coordinates(*directions_to_halfdiff(L[sel], V[sel]))
-            values, no_data = self._interpolate(coords)
-            out[sel] = values
-            has[sel] = ~no_data
-        return out.reshape(*shape, 3), has.reshape(shape)
-
+        return merl_index_coordinates(*directions_to_halfdiff(L, V))
 
 
 def read_merl(path: str | os.PathLike[str]) -> MerlBRDF:
@@ -135,6 +123,31 @@ def read_merl(path: str | os.PathLike[str]) -> MerlBRDF:
     BadInputError
         Unreadable file, header dims other than (90, 90, 180), a length other than the
         12 + 3·8·n bytes the header implies (truncated or trailing bytes), NaN or Inf.
+
+    Examples
+    --------
+    The format fixes the table at 90 × 90 × 180 (35 MB), so the example writes one into a
+    temporary folder: ρ = i/1000 · (1, 2, 3) at θ_h index i, and one missing sample.
+
+    >>> import pathlib, tempfile
+    >>> import numpy as np
+    >>> values = np.empty((3, 90, 90, 180))
+    >>> values[:] = np.arange(90)[None, :, None, None] / 1000 * np.array([1.0, 2.0, 3.0])[:, None, None, None]
+    >>> values[:, 0, 0, 0] = np.nan
+    >>> folder = tempfile.TemporaryDirectory()
+    >>> brdf = read_merl(write_merl(pathlib.Path(folder.name) / "ramp.binary", values))
+    >>> brdf.name, brdf.values.shape, brdf.n_missing
+    ('ramp', (3, 90, 90, 180), 1)
+
+    θ_h index 45 is θ_h = (45/90)² · 90° = 22.5°; with θ_d = 0 that is L = V tilted by
+    22.5° from the normal:
+
+    >>> L = np.array([np.sin(np.pi / 8), 0.0, np.cos(np.pi / 8)])
+    >>> brdf.eval(L, L)
+    array([0.045, 0.09 , 0.135])
+    >>> brdf.eval_counted(L, np.array([-L[0], 0.0, -L[2]]))  # V below the surface
+    (array([0., 0., 0.]), 0)
+    >>> folder.cleanup()
     """
     path = Path(path)
     try:
@@ -208,6 +221,29 @@ def write_merl(path: str | os.PathLike[str], brdf_or_values: BRDF | np.ndarray) 
     ------
     BadInputError
         Wrong shape, negative or infinite values.
+
+    Examples
+    --------
+    A Lambertian BRDF (ρ = albedo/π) tabulated at MERL resolution, in a temporary folder:
+    a 12-byte header of three int32 dims, then 3 · 90·90·180 float64 stored as ρ · 1500 /
+    (1, 1.15, 1.66), red plane first, θ_h-major; samples with V below the surface are
+    missing (−1).
+
+    >>> import pathlib, tempfile
+    >>> import numpy as np
+    >>> from shrmkit.brdf_io.models import Lambert, rgb
+    >>> folder = tempfile.TemporaryDirectory()
+    >>> path = write_merl(pathlib.Path(folder.name) / "grey.binary", Lambert(albedo=rgb(0.3)))
+    >>> path.stat().st_size  # 12 + 3 * 8 * 90 * 90 * 180
+    34992012
+    >>> np.fromfile(path, "<i4", count=3)
+    array([ 90,  90, 180], dtype=int32)
+    >>> green = 12 + 8 * 90 * 90 * 180  # byte offset of the green plane
+    >>> np.fromfile(path, "<f8", count=1, offset=green) * 1.15 / 1500  # 0.3/π
+    array([0.09549297])
+    >>> read_merl(path).eval(np.array([0.0, 0.0, 1.0]), np.array([0.6, 0.0, 0.8]))
+    array([0.09549297, 0.09549297, 0.09549297])
+    >>> folder.cleanup()
     """
     path = Path(path)
     if isinstance(brdf_or_values, BRDF):

@@ -21,6 +21,11 @@ Models
     Cook & Torrance 1982 with a Beckmann (Walter et al. 2007 Smith G1 rational
     approximation) or GGX (exact separable Smith G1) distribution and Schlick's Fresnel:
     rho = kd/π + ks D(θ_h) F(V·H) G(L, V) / (4 cos θ_i cos θ_o).
+
+References
+----------
+R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering", SIGGRAPH 2002
+(RH02), ACM Trans. Graph. 21(3), doi:10.1145/566654.566611.
 """
 
 from __future__ import annotations
@@ -83,14 +88,6 @@ def _half_vector_cos(L: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, np.ndarr
     return cos_h, cos_d
 
 
-def _rho_from_rho_hat(brdf: BRDF, L: np.ndarray, V: np.ndarray) -> np.ndarray:
-    """ρ = ρ̂ / cos θ_i above the surface, 0 below, for models that define ρ̂ directly."""
-    L, V = as_directions(L, V)
-    cos_i = L[..., 2]
-    above = (cos_i > 0) & (V[..., 2] > 0)
-    return np.where(above[..., None], brdf.rho_hat(L, V) / np.where(above, cos_i, 1.0)[..., None], 0.0)
-
-
 @dataclass(frozen=True, eq=False, repr=False)
 class _Analytic(BRDF):
     kind: Kind = field(default="analytic", init=False)
@@ -104,7 +101,19 @@ class _Analytic(BRDF):
 
 
 @dataclass(frozen=True, eq=False, repr=False)
-class PhongLobe(_Analytic):
+class _DefinedByRhoHat(_Analytic):
+    """A model that defines ρ̂ = ρ cos θ_i directly (RH02's Phong and simplified microfacet)."""
+
+    def eval(self, L: np.ndarray, V: np.ndarray) -> np.ndarray:
+        """ρ = ρ̂ / cos θ_i above the surface, 0 below."""
+        L, V = as_directions(L, V)
+        cos_i = L[..., 2]
+        above = (cos_i > 0) & (V[..., 2] > 0)
+        return np.where(above[..., None], self.rho_hat(L, V) / np.where(above, cos_i, 1.0)[..., None], 0.0)
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class PhongLobe(_DefinedByRhoHat):
     """RH02 Phong lobe about the mirror direction (RH02 §6.3, Appendix D)."""
 
     s: float
@@ -117,15 +126,12 @@ class PhongLobe(_Analytic):
         lobe = (self.s + 1.0) / (2.0 * np.pi) * _safe_pow(r_dot_l, np.float64(self.s))
         return lobe[..., None] * self.ks
 
-    def eval(self, L: np.ndarray, V: np.ndarray) -> np.ndarray:
-        return _rho_from_rho_hat(self, L, V)
-
     def to_spec(self) -> str:
         return _with_scale(f"phong:s={self.s:.9g}", self.ks)
 
 
 @dataclass(frozen=True, eq=False, repr=False)
-class SimplifiedMicrofacet(_Analytic):
+class SimplifiedMicrofacet(_DefinedByRhoHat):
     """RH02 eq. 11: rho_hat = exp(-(θ_h/σ)²)/(4πσ²), zero where N·L <= 0."""
 
     sigma: float
@@ -138,9 +144,6 @@ class SimplifiedMicrofacet(_Analytic):
         lobe = np.exp(-((theta_h / self.sigma) ** 2)) / (4.0 * np.pi * self.sigma**2)
         lobe = np.where((L[..., 2] > 0) & (V[..., 2] > 0), lobe, 0.0)
         return lobe[..., None] * self.ks
-
-    def eval(self, L: np.ndarray, V: np.ndarray) -> np.ndarray:
-        return _rho_from_rho_hat(self, L, V)
 
     def to_spec(self) -> str:
         return _with_scale(f"microfacet:sigma={self.sigma:.9g}", self.ks)

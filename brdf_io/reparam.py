@@ -11,6 +11,11 @@ with ρ evaluated in its own normal-based frame. For an isotropic ρ the result 
 only on (θ_i', θ_o', φ') and is even in φ'. The grid is a quadrature grid for the
 transform of RH02 eq. 13: Gauss–Legendre in cos θ_i' and cos θ_o' (nodes strictly inside
 (0, π): the grazing singularity θ_o' = π is never sampled) and uniform in φ'.
+
+References
+----------
+R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering", SIGGRAPH 2002
+(RH02), ACM Trans. Graph. 21(3), doi:10.1145/566654.566611.
 """
 
 from __future__ import annotations

@@ -8,20 +8,25 @@ Grammar (see ``data_specs/spec_strings.md``)::
 
 A value written ``r/g/b`` is an RGB triple. Lafortune lobes are numbered by a suffix on
 the lobe keys: ``cxy, cz, n, ks`` (lobe 1), ``cxy2, cz2, n2, ks2`` (lobe 2), ...
+Parameter values are parsed and range-checked by :mod:`~shrmkit.brdf_io.spec_params`.
+
+References
+----------
+R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering", SIGGRAPH 2002
+(RH02), ACM Trans. Graph. 21(3), doi:10.1145/566654.566611.
 """
 
 from __future__ import annotations
 
-import importlib
 import json
 import re
 from collections.abc import Callable
 from pathlib import Path
 
-import numpy as np
-
 from .brdf import BRDF
+from .cornell import read_cornell
 from .errors import BadInputError
+from .merl import read_merl
 from .models import (
     CookTorrance,
     Lafortune,
@@ -29,8 +34,9 @@ from .models import (
     Lambert,
     PhongLobe,
     SimplifiedMicrofacet,
-    rgb,
 )
+from .spec_params import SpecParams, parse_params
+from .table import read_table
 
 __all__ = ["parse_spec", "brdf_from_spec", "load_brdf", "MODEL_NAMES"]
 
@@ -38,95 +44,31 @@ _SPEC_RE = re.compile(r"^\s*([a-z][a-z0-9_-]*)\s*(?::(.*))?$")
 
 
 def parse_spec(spec: str) -> tuple[str, dict[str, str]]:
-    """Split ``name:key=value,...`` into the name and a dict of raw value strings."""
+    """Split ``name:key=value,...`` into the name and a dict of raw value strings
+    (:func:`~shrmkit.brdf_io.spec_params.parse_params`)."""
     match = _SPEC_RE.match(spec)
     if not match:
         raise BadInputError(spec, "not a spec string of the form name:key=value,...")
     name, body = match.group(1), match.group(2)
-    params: dict[str, str] = {}
-    if body and body.strip():
-        for item in body.split(","):
-            key, sep, value = item.partition("=")
-            key, value = key.strip(), value.strip()
-            if not sep or not key or not value:
-                raise BadInputError(spec, f"parameter {item.strip()!r} is not of the form key=value")
-            if key in params:
-                raise BadInputError(spec, f"parameter {key!r} given twice")
-            params[key] = value
-    return name, params
+    items = body.split(",") if body and body.strip() else []
+    return name, parse_params(spec, items)
 
 
-class _Params:
-    """Typed access to raw spec parameters, with one place for range checks."""
-
-    def __init__(self, spec: str, raw: dict[str, str]) -> None:
-        self.spec = spec
-        self.raw = dict(raw)
-        self.used: set[str] = set()
-
-    def _number_list(self, key: str) -> list[float]:
-        text = self.raw[key]
-        try:
-            values = [float(v) for v in text.split("/")]
-        except ValueError:
-            raise BadInputError(self.spec, f"parameter {key}={text!r} is not a number") from None
-        if len(values) not in (1, 3):
-            raise BadInputError(self.spec, f"parameter {key}={text!r}: give one value or r/g/b")
-        if not all(np.isfinite(values)):
-            raise BadInputError(self.spec, f"parameter {key}={text!r} is not finite")
-        return values
-
-    def color(self, key: str, default: float | None, lo: float = -np.inf, hi: float = np.inf,
-              lo_open: bool = False) -> np.ndarray:
-        if key not in self.raw:
-            if default is None:
-                raise BadInputError(self.spec, f"missing parameter {key!r}")
-            return rgb(default)
-        self.used.add(key)
-        values = self._number_list(key)
-        for v in values:
-            if v < lo or v > hi or (lo_open and v == lo):
-                bracket = "(" if lo_open else "["
-                raise BadInputError(
-                    self.spec, f"parameter {key}={self.raw[key]} outside {bracket}{lo:g}, {hi:g}]"
-                )
-        return rgb(values[0] if len(values) == 1 else values)
-
-    def scalar(self, key: str, default: float | None, lo: float = -np.inf, hi: float = np.inf,
-               lo_open: bool = False) -> float:
-        value = self.color(key, default, lo, hi, lo_open)
-        if key in self.raw and "/" in self.raw[key]:
-            raise BadInputError(self.spec, f"parameter {key} takes one value, not r/g/b")
-        return float(value[0])
-
-    def choice(self, key: str, default: str, options: tuple[str, ...]) -> str:
-        value = self.raw.get(key, default)
-        self.used.add(key)
-        if value not in options:
-            raise BadInputError(self.spec, f"parameter {key}={value!r}: choose one of {options}")
-        return value
-
-    def finish(self) -> None:
-        unknown = sorted(set(self.raw) - self.used)
-        if unknown:
-            raise BadInputError(self.spec, f"unknown parameter(s) {', '.join(unknown)}")
-
-
-def _phong(p: _Params) -> BRDF:
+def _phong(p: SpecParams) -> BRDF:
     return PhongLobe(s=p.scalar("s", None, 0.0, 1e7), ks=p.color("ks", 1.0, 0.0))
 
 
-def _microfacet(p: _Params) -> BRDF:
+def _microfacet(p: SpecParams) -> BRDF:
     return SimplifiedMicrofacet(
         sigma=p.scalar("sigma", None, 0.0, 2.0, lo_open=True), ks=p.color("ks", 1.0, 0.0)
     )
 
 
-def _lambert(p: _Params) -> BRDF:
+def _lambert(p: SpecParams) -> BRDF:
     return Lambert(albedo=p.color("albedo", 0.8, 0.0, 1.0))
 
 
-def _lafortune(p: _Params) -> BRDF:
+def _lafortune(p: SpecParams) -> BRDF:
     kd = p.color("kd", 0.0, 0.0, 1.0)
     lobes = []
     suffixes = {re.sub(r"^(cxy|cz|n|ks)", "", k) for k in p.raw if re.match(r"^(cxy|cz|n|ks)\d*$", k)}
@@ -145,7 +87,7 @@ def _lafortune(p: _Params) -> BRDF:
     return Lafortune(kd=kd, lobes=tuple(lobes))
 
 
-def _cook_torrance(p: _Params) -> BRDF:
+def _cook_torrance(p: SpecParams) -> BRDF:
     return CookTorrance(
         kd=p.color("kd", 0.0, 0.0, 1.0),
         ks=p.color("ks", 1.0, 0.0),
@@ -155,7 +97,7 @@ def _cook_torrance(p: _Params) -> BRDF:
     )
 
 
-_MODELS: dict[str, Callable[[_Params], BRDF]] = {
+_MODELS: dict[str, Callable[[SpecParams], BRDF]] = {
     "phong": _phong,
     "microfacet": _microfacet,
     "lambert": _lambert,
@@ -176,7 +118,7 @@ def brdf_from_spec(spec: str) -> BRDF:
     name, raw = parse_spec(spec)
     if name not in _MODELS:
         raise BadInputError(spec, f"unknown BRDF model {name!r}; known: {', '.join(MODEL_NAMES)}")
-    params = _Params(spec, raw)
+    params = SpecParams(spec, raw, owner=name)
     brdf = _MODELS[name](params)
     params.finish()
     return brdf
@@ -193,21 +135,18 @@ def _read_model_json(path: Path) -> BRDF:
     return brdf_from_spec(spec)
 
 
-# extension -> (module in this package, reader function); imported only when used
-_FILE_READERS = {
-    ".binary": ("merl", "read_merl"),
-    ".npz": ("table", "read_table"),
-    ".brdf": ("cornell", "read_cornell"),
+# extension -> reader
+_FILE_READERS: dict[str, Callable[[Path], BRDF]] = {
+    ".binary": read_merl,
+    ".npz": read_table,
+    ".brdf": read_cornell,
 }
 
 
 def _read_brdf_file(path: Path) -> BRDF:
-    suffix = path.suffix.lower()
-    if suffix == ".json":
+    if path.suffix.lower() == ".json":
         return _read_model_json(path)
-    module_name, function_name = _FILE_READERS[suffix]
-    module = importlib.import_module(f"{__package__}.{module_name}")
-    return getattr(module, function_name)(path)
+    return _FILE_READERS[path.suffix.lower()](path)
 
 
 def load_brdf(spec_or_path: str | Path) -> BRDF:
@@ -215,6 +154,51 @@ def load_brdf(spec_or_path: str | Path) -> BRDF:
 
     Files are recognised by extension: ``.binary`` (MERL), ``.npz`` (shrmkit table),
     ``.brdf`` (Cornell scattered measurements), ``.json`` (a fitted model).
+
+    Raises
+    ------
+    BadInputError
+        A missing file, an unknown file type, or a bad spec (the message names the spec,
+        the parameter and its value).
+
+    Examples
+    --------
+    A model from a spec string; ρ of a Lambertian surface is albedo/π for every pair of
+    directions above the surface, and 0 when one is below it:
+
+    >>> import numpy as np
+    >>> brdf = load_brdf("lambert:albedo=0.2/0.5/0.8")
+    >>> brdf.eval(np.array([0.0, 0.0, 1.0]), np.array([0.6, 0.0, 0.8]))
+    array([0.06366198, 0.15915494, 0.25464791])
+    >>> brdf.eval(np.array([0.0, 0.0, 1.0]), np.array([0.6, 0.0, -0.8]))
+    array([0., 0., 0.])
+
+    RH02's Phong lobe, ρ̂ = (s + 1)/(2π) cos^s of the angle between L and the mirror
+    direction of V; at L = V = N that is 9/(2π) for s = 8:
+
+    >>> N = np.array([0.0, 0.0, 1.0])
+    >>> load_brdf("phong:s=8").rho_hat(N, N)
+    array([1.43239449, 1.43239449, 1.43239449])
+
+    A table file (data_specs/brdf_table.md): ``tests/resources/tiny_table.npz`` holds
+    ρ = (0.1 + 0.2 θ_i/90°, 0.3 + 0.1 θ_o/90°, 0.2 + 0.1 φ_d/180°) on the grid corners,
+    which the interpolation (trilinear in angle) reproduces exactly in between:
+
+    >>> table = load_brdf("tests/resources/tiny_table.npz")
+    >>> type(table).__name__, table.values.shape
+    ('TableBRDF', (2, 2, 2, 3))
+    >>> theta_i, theta_o = np.radians(60.0), np.radians(30.0)
+    >>> L = np.array([np.sin(theta_i), 0.0, np.cos(theta_i)])
+    >>> V = np.array([0.0, np.sin(theta_o), np.cos(theta_o)])  # φ_d = 90°
+    >>> table.eval(L, V)
+    array([0.23333333, 0.33333333, 0.25      ])
+
+    A bad parameter names the spec, the key and the value:
+
+    >>> load_brdf("microfacet:sigma=-1")
+    Traceback (most recent call last):
+    ...
+    shrmkit.brdf_io.errors.BadInputError: microfacet:sigma=-1: parameter sigma=-1 outside (0, 2]
     """
     text = str(spec_or_path)
     path = Path(text)

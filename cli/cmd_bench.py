@@ -2,11 +2,12 @@
 
 The benchmark scripts live in the source tree's ``benchmarks/`` folder (they are not part
 of the installed package): ``prefilter_speed.py`` (frequency-space vs angular-domain
-prefiltering, RH02 Tables 4–5, with the measured speed-up ratios and errors),
-``fit_speed.py`` (fit times and errors) and ``render_speed.py`` (frames per second; needs
-an offscreen OpenGL context and is skipped without one). Each is loaded from its file and
-its ``main`` called with ``--quick`` when asked; a benchmark that fails is reported and the
-others still run (exit status 1 if any failed).
+prefiltering, RH02 Tables 4–5, with the measured speed-up ratios and errors; RH02 =
+Ramamoorthi & Hanrahan 2002, doi:10.1145/566654.566611), ``fit_speed.py`` (fit times and
+errors) and ``render_speed.py`` (frames per second; needs an offscreen OpenGL context and is
+skipped without one). Each is loaded from its file and its ``main`` called with ``--quick``
+when asked; a benchmark that fails is reported and the others still run (exit status 1 if
+any failed).
 """
 
 from __future__ import annotations
@@ -16,6 +17,8 @@ import importlib.util
 import time
 from pathlib import Path
 
+from ..brdf_io.errors import BadInputError
+from ..render.offscreen import probe_offscreen
 from .common import stdout
 
 HELP = "run the speed-against-error benchmarks (prefilter vs angular reference, fits, render fps) and print tables"
@@ -28,9 +31,8 @@ BENCHMARKS = {
 
 
 def _default_folder() -> Path:
-    import shrmkit
-
-    return Path(shrmkit.__file__).resolve().parent / "benchmarks"
+    """``benchmarks/`` next to the package's top folder (the source checkout)."""
+    return Path(__file__).resolve().parents[1] / "benchmarks"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -64,8 +66,6 @@ def run_benchmark(path: Path, quick: bool) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..brdf_io.errors import BadInputError
-
     folder = Path(args.benchmarks) if args.benchmarks else _default_folder()
     if not folder.is_dir():
         raise BadInputError(folder, "no benchmarks folder (shrm bench needs a source checkout; pass --benchmarks DIR)")
@@ -80,8 +80,6 @@ def run(args: argparse.Namespace) -> int:
             _say(f"skipped: {path} not found")
             continue
         if name == "render":
-            from ..render.offscreen import probe_offscreen
-
             ok, message = probe_offscreen(timeout=60.0)
             if not ok:
                 results.append((name, "skipped", 0.0, f"no offscreen OpenGL: {message}"))

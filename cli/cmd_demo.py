@@ -10,7 +10,9 @@ from __future__ import annotations
 import argparse
 import time
 
+from ..brdf_io.errors import BadInputError
 from .common import stderr, stdout
+from .report.demo import run_demo
 
 HELP = "run orders, a fit, a prefilter, a preview render and reports on built-in data (default ./shrm-demo)"
 
@@ -26,9 +28,6 @@ def _say(text: str) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..brdf_io.errors import BadInputError
-    from .report.demo import run_demo
-
     if not 32 <= args.size <= 2048:
         raise BadInputError(None, f"--size must be in [32, 2048], got {args.size}")
     t0 = time.perf_counter()

@@ -6,6 +6,9 @@ stdout, or one JSON object with ``--json``); ``-o params.json`` writes the fit d
 Progress of the multi-start fit goes to stderr. Exit status: 0 when the fit converged, 1
 when nlopt stopped without converging (the result is still printed and written), 2 on bad
 input.
+
+Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
+SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
 """
 
 from __future__ import annotations

@@ -1,4 +1,8 @@
-"""``shrm orders``: how many coefficients a BRDF needs (RH02 §5.1)."""
+"""``shrm orders``: how many coefficients a BRDF needs (RH02 §5.1).
+
+Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
+SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
+"""
 
 from __future__ import annotations
 

@@ -1,4 +1,8 @@
-"""``shrm prefilter``: environment + BRDF -> global SHRM file (RH02 §4–5)."""
+"""``shrm prefilter``: environment + BRDF -> global SHRM file (RH02 §4–5).
+
+Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
+SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
+"""
 
 from __future__ import annotations
 

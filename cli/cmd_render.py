@@ -1,15 +1,35 @@
-"""``shrm render``: render a mesh with the SHRM of an environment and a BRDF, offscreen."""
+"""``shrm render``: render a mesh with the SHRM of an environment and a BRDF, offscreen.
+
+Parse and check the options, load the mesh and the (oriented) environment, call
+:func:`shrmkit.render.api.render_scene`, print what it built and how long it took, write
+the PNG/EXR/GIF files. The modes and their help come from the render-mode table
+(``shrmkit.render.modes``).
+"""
 
 from __future__ import annotations
 
 import argparse
-import time
 from pathlib import Path
 
 import numpy as np
 
+from ..analysis.tolerance import DEFAULT_EPS, check_eps
 from ..brdf_io.atomic import check_writable
 from ..brdf_io.errors import BadInputError
+from ..render.api import SIZE_RANGE, SceneRender, render_scene
+from ..render.camera import Camera
+from ..render.mesh import load_mesh
+from ..render.modes import (
+    DEFAULT_MODE,
+    ELEVATIONS_RANGE,
+    LOBES_RANGE,
+    RENDER_MODES,
+    RenderOptions,
+    mode_names,
+    self_shadow_modes,
+)
+from ..render.output import to_8bit, turntable_paths, write_exr, write_gif, write_png
+from ..render.pipeline import BACKGROUNDS, Frame, turntable_cameras
 from .common import add_env_orientation, load_env_arg
 
 HELP = "render a mesh shaded by the SHRM of ENV and BRDF to PNG (and linear EXR), offscreen"
@@ -26,30 +46,34 @@ def _vector(text: str, option: str) -> np.ndarray:
     return v
 
 
+def _mode_help() -> str:
+    listed = "; ".join(f"{m.name}: {m.help}" for m in RENDER_MODES.values())
+    return f"{listed} (default {DEFAULT_MODE})"
+
+
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "mesh", metavar="MESH", help="mesh file (obj, ply, stl, off, glb, gltf) or builtin:sphere|torus|torus-knot"
     )
     p.add_argument("--env", default="builtin:sky", help="environment map spec or file (default builtin:sky)")
     p.add_argument("--brdf", default="microfacet:sigma=0.2", help="BRDF spec or file (default microfacet:sigma=0.2)")
-    p.add_argument("--eps", type=float, default=0.03, help="SHRM tolerance epsilon (default 0.03)")
-    p.add_argument("--mode", choices=("distant", "perpixel", "rsibr", "kautz-mccool", "gaussian-lobes"),
-                   default="distant",
-                   help="distant viewer (RH02 eq. 12), per-pixel view direction, Cabral et al. 1999 (12 "
-                        "blended maps), Kautz-McCool 2000 (q = 0 SHRM, per pixel) or Green et al. 2007 "
-                        "(K Gaussian lobes per view elevation over an SG mip stack) (default distant)")
-    p.add_argument("--lobes", type=int, default=3, help="gaussian-lobes: lobes per elevation K (default 3)")
-    p.add_argument("--elevations", type=int, default=15,
-                   help="gaussian-lobes: fitted view elevations (default 15)")
+    p.add_argument("--eps", type=float, default=DEFAULT_EPS, help=f"SHRM tolerance epsilon (default {DEFAULT_EPS:g})")
+    p.add_argument("--mode", choices=mode_names(), default=DEFAULT_MODE, help=_mode_help())
+    defaults = RenderOptions()
+    shadow = " or ".join(self_shadow_modes())
+    p.add_argument("--lobes", type=int, default=defaults.lobes,
+                   help=f"gaussian-lobes: lobes per elevation K (default {defaults.lobes})")
+    p.add_argument("--elevations", type=int, default=defaults.elevations,
+                   help=f"gaussian-lobes: fitted view elevations (default {defaults.elevations})")
     p.add_argument("--self-shadow", action="store_true",
-                   help="gaussian-lobes: per-vertex self-shadowing by ray casting (Green et al. 2007 eq. 7)")
+                   help=f"{shadow}: per-vertex self-shadowing by ray casting (Green et al. 2007 eq. 7)")
     p.add_argument("--size", type=int, default=512, help="image width and height in pixels (default 512)")
     p.add_argument("--camera", choices=("perspective", "ortho"), default="perspective")
     p.add_argument("--view", default="1,0,0", help="direction from the object toward the camera, z-up frame")
     p.add_argument("--up", default="0,0,1", help="image up direction, z-up frame (default 0,0,1)")
     p.add_argument("--exposure", type=float, default=0.0, help="exposure in stops for the PNG (default 0)")
     p.add_argument("--tone", choices=("filmic", "srgb"), default="filmic", help="PNG tone mapping (default filmic)")
-    p.add_argument("--background", choices=("env", "black", "transparent"), default="env",
+    p.add_argument("--background", choices=BACKGROUNDS, default="env",
                    help="environment seen behind the object, black, or transparent PNG (default env)")
     p.add_argument("--turntable", type=int, default=0, metavar="N",
                    help="render N frames around the z axis to OUT_0000.png ... and OUT.gif")
@@ -59,18 +83,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--exr", help="also write linear radiance (before tone mapping) to this EXR")
 
 
-def run(args: argparse.Namespace) -> int:
-    from ..analysis.shrm import prefilter
-    from ..brdf_io.specs import load_brdf
-    from ..render.camera import Camera
-    from ..render.mesh import load_mesh
-    from ..render.output import to_8bit, turntable_paths, write_exr, write_gif, write_png
-    from ..render.pipeline import render_frames, turntable_cameras
-
-    if not 16 <= args.size <= 8192:
-        raise BadInputError(None, f"--size must be in [16, 8192], got {args.size}")
-    if not (np.isfinite(args.eps) and 0.0 < args.eps < 1.0):
-        raise BadInputError(None, f"--eps must be in (0, 1), got {args.eps}")
+def _validate(args: argparse.Namespace) -> tuple[list[Camera], RenderOptions]:
+    """Check every option before any long computation; returns the cameras and the builders' options."""
+    lo, hi = SIZE_RANGE
+    if not lo <= args.size <= hi:
+        raise BadInputError(None, f"--size must be in [{lo}, {hi}], got {args.size}")
+    check_eps(args.eps, "--eps")
     if not np.isfinite(args.exposure):
         raise BadInputError(None, f"--exposure must be finite, got {args.exposure}")
     if args.turntable < 0 or args.fps_frames < 0:
@@ -79,63 +97,34 @@ def run(args: argparse.Namespace) -> int:
         raise BadInputError(args.output, "output must be a .png file")
     if args.exr and Path(args.exr).suffix.lower() != ".exr":
         raise BadInputError(args.exr, "--exr must name a .exr file")
-    if not 1 <= args.lobes <= 8 or not 1 <= args.elevations <= 90:
-        raise BadInputError(None, f"--lobes must be in [1, 8] and --elevations in [1, 90], got "
+    (klo, khi), (elo, ehi) = LOBES_RANGE, ELEVATIONS_RANGE
+    if not (klo <= args.lobes <= khi and elo <= args.elevations <= ehi):
+        raise BadInputError(None, f"--lobes must be in [{klo}, {khi}] and --elevations in [{elo}, {ehi}], got "
                                   f"{args.lobes}, {args.elevations}")
+    if args.self_shadow and args.mode not in self_shadow_modes():
+        raise BadInputError(None, f"--self-shadow needs --mode {' or '.join(self_shadow_modes())}")
     view, up = _vector(args.view, "--view"), _vector(args.up, "--up")
     try:
         camera = Camera.looking_at(view=view, up=up, projection=args.camera)
     except ValueError as err:
         raise BadInputError(None, f"--view/--up: {err}") from None
-
-    for path in (args.output, args.exr):
-        if path:
-            check_writable(path)
-    mesh = load_mesh(args.mesh)
-    env = load_env_arg(args.env, args)
-    brdf = load_brdf(args.brdf)
-    print(f"mesh {mesh.name}: {mesh.n_triangles} triangles")
-    if args.self_shadow and args.mode != "gaussian-lobes":
-        raise BadInputError(None, "--self-shadow needs --mode gaussian-lobes")
-    visibility = None
-    if args.mode == "gaussian-lobes":
-        from ..analysis.baselines.gaussian_lobes import GaussianLobeModel, fit_gaussian_lobes, sg_mip_stack
-
-        lobes = fit_gaussian_lobes(brdf, K=args.lobes, n_elevations=args.elevations)
-        stack = sg_mip_stack(env)
-        shrm = GaussianLobeModel(lobes, stack)
-        render_mode = "gaussian-lobes"
-        print(f"Gaussian lobes K={lobes.K} at {lobes.theta_v.size} elevations, max relative fit error "
-              f"{float(lobes.residual.max()):.3g}")
-        print(f"fit: {lobes.meta['seconds']:.3f} s")
-        print(f"SG mip stack: {len(stack.levels)} levels, sigma {stack.sigmas[0]:.4g}..{stack.sigmas[-1]:.4g} rad, "
-              f"{stack.seconds:.3f} s")
-        if args.self_shadow:
-            from ..analysis.baselines.selfshadow import vertex_visibility_sh
-
-            t0 = time.perf_counter()
-            visibility = vertex_visibility_sh(mesh)
-            print(f"self-shadowing: order-4 SH visibility of {len(mesh.vertices)} vertices, "
-                  f"{time.perf_counter() - t0:.3f} s")
-    else:
-        t0 = time.perf_counter()
-        shrm = prefilter(env, brdf, eps=args.eps, azimuth_free=args.mode == "kautz-mccool")
-        render_mode = "perpixel" if args.mode == "kautz-mccool" else args.mode
-        t_prefilter = time.perf_counter() - t0
-        print(f"SHRM F={shrm.F} P={shrm.P} on {shrm.height}x{shrm.width} (eps {args.eps:g})")
-        print(f"prefilter: {t_prefilter:.3f} s")
-
     cameras = turntable_cameras(camera, args.turntable) if args.turntable else [camera]
-    frames, timings = render_frames(
-        mesh, shrm, cameras, size=args.size, mode=render_mode, env_radiance=env.radiance,
-        background=args.background, fps_frames=args.fps_frames, visibility_sh=visibility,
-    )
-    print(f"renderer: {timings.backend}, mode {args.mode}, {args.size}x{args.size}, {args.camera}")
+    return cameras, RenderOptions(lobes=args.lobes, elevations=args.elevations, self_shadow=args.self_shadow)
+
+
+def _report(args: argparse.Namespace, result: SceneRender) -> None:
+    timings = result.timings
+    print(f"mesh {result.mesh.name}: {result.mesh.n_triangles} triangles")
+    for line in result.built.description:
+        print(line)
+    print(f"renderer: {timings.backend}, mode {result.mode}, {args.size}x{args.size}, {args.camera}")
     print(f"first frame: {timings.first_frame_s:.3f} s")
     if timings.fps_frames:
         print(f"frames per second: {timings.fps:.1f} (over {timings.fps_frames} frames)")
 
-    def png(frame):
+
+def _write(args: argparse.Namespace, frames: list[Frame]) -> None:
+    def png(frame: Frame) -> np.ndarray:
         alpha = frame.alpha if frame.transparent else None
         return to_8bit(frame.linear, alpha, exposure=args.exposure, curve=args.tone)
 
@@ -157,4 +146,19 @@ def run(args: argparse.Namespace) -> int:
         if args.exr:
             write_exr(args.exr, frames[0].linear, frames[0].alpha)
             print(f"wrote {args.exr} (linear radiance, channels R G B A)")
+
+
+def run(args: argparse.Namespace) -> int:
+    cameras, options = _validate(args)
+    for path in (args.output, args.exr):
+        if path:
+            check_writable(path)
+    mesh = load_mesh(args.mesh)
+    env = load_env_arg(args.env, args)
+    result = render_scene(
+        mesh, env, args.brdf, mode=args.mode, eps=args.eps, camera=cameras, size=args.size,
+        background=args.background, fps_frames=args.fps_frames, options=options,
+    )
+    _report(args, result)
+    _write(args, result.frames)
     return 0

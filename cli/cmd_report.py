@@ -11,7 +11,12 @@ from __future__ import annotations
 import argparse
 import time
 
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+from ..render.mesh import load_mesh
 from .common import add_env_orientation, stderr, stdout, tolerance
+from .report.batch import run_batch
+from .report.options import load_report_env, profile
 
 HELP = "accuracy reports (orders, scene errors, fits, speed vs error, preview) for BRDFs, with a summary"
 
@@ -69,7 +74,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def options_from_args(args: argparse.Namespace):
     """ReportOptions from the parsed arguments (the quick profile when ``--quick``)."""
-    from .report.options import profile
 
     changes = {"eps": args.eps, "lobes": args.lobes, "preview": args.preview, "seed": args.seed, "mesh": args.mesh,
                "env_up": args.env_up, "env_flip": args.env_flip, "env_azimuth": args.env_azimuth}
@@ -84,9 +88,6 @@ def options_from_args(args: argparse.Namespace):
 def run_with_progress(sources: list[str], out: str, options, *, workers: int = 1, scheduler: str | None = None,
                       show: bool = True):
     """Run the batch with a rich progress bar on stderr; returns the BatchResult."""
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
-
-    from .report.batch import run_batch
 
     columns = (TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                TextColumn("{task.fields[stage]}"))
@@ -131,11 +132,8 @@ def run(args: argparse.Namespace) -> int:
 def _check_shared_inputs(options) -> None:
     """Inputs every BRDF of the batch uses (environments, mesh) are checked once, up front:
     a bad one is a usage error (exit 2), not one failure per BRDF."""
-    from .report.options import load_report_env
 
     for spec in options.envs:
         load_report_env(spec, options)
     if options.mesh:
-        from ..render.mesh import load_mesh
-
         load_mesh(options.mesh)

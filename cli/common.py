@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 from rich.console import Console
 
+from ..brdf_io.envmap import load_env
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.jsonutil import to_jsonable
 
@@ -75,7 +76,6 @@ def env_orientation(args: argparse.Namespace) -> dict[str, Any]:
 
 def load_env_arg(spec: str, args: argparse.Namespace, **kwargs: Any):
     """``load_env(spec)`` with the orientation options applied to files (not to built-ins)."""
-    from ..brdf_io.envmap import load_env
 
     if spec.strip().startswith("builtin:"):
         if args.env_up or args.env_flip:

@@ -4,6 +4,9 @@ Each verb lives in a module ``cli/cmd_<verb>.py`` that defines ``HELP`` (one lin
 ``add_arguments(parser)`` and ``run(args) -> int``; they are discovered here, so adding a
 verb touches no other file. A :class:`~shrmkit.brdf_io.errors.BadInputError` (or an
 ``OSError`` from the file system) becomes one line on stderr and exit code 2.
+
+Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
+SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
 """
 
 from __future__ import annotations
@@ -12,17 +15,17 @@ import argparse
 import importlib
 import pkgutil
 import sys
+from pathlib import Path
 
 from .._version import __version__
 from ..brdf_io.errors import ShrmError
 
 
 def _verbs() -> list[str]:
-    from .. import cli
-
+    """The verbs: one ``cmd_<verb>.py`` module each, beside this file."""
     return sorted(
         name[len("cmd_"):]
-        for _, name, _ in pkgutil.iter_modules(cli.__path__)
+        for _, name, _ in pkgutil.iter_modules([str(Path(__file__).parent)])
         if name.startswith("cmd_")
     )
 

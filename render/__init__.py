@@ -1,9 +1,12 @@
-"""Mesh rendering with the global SHRM through a pyvista/VTK GLSL shader (DESIGN §5).
+"""Mesh rendering of measured BRDFs under environment maps: SHRM and comparison render modes.
 
 Modules: ``mesh`` (loading, built-ins), ``camera`` (z-up frame = VTK world frame, rays),
-``shader`` (GLSL replacements), ``offscreen`` (EGL/OSMesa context, float framebuffer),
-``vtk_renderer`` (:class:`SHRMRenderer`), ``cpu_reference`` (numpy reference renderer),
-``output`` (EXR/PNG/GIF, tone mapping), ``pipeline`` (:func:`render_frames` for the CLI).
+``modes`` (the render-mode table: how each mode builds its model and shades it),
+``glsl`` (the shared shader prelude), ``shader`` (SHRM modes), ``gaussian_shader``
+(Gaussian lobes), ``offscreen`` (EGL/OSMesa context, float framebuffer), ``vtk_renderer``
+(:class:`SHRMRenderer`), ``pipeline`` (:func:`render_frames`), ``api`` (:func:`render_scene`,
+what ``shrm render`` calls), ``cpu_reference`` (numpy reference renderer), ``output``
+(EXR/PNG/GIF, tone mapping), ``preview`` and ``strip`` (report images).
 Names are imported on first use so that importing the package does not load VTK.
 """
 
@@ -19,6 +22,13 @@ _LAZY = {
     "SHRMRenderer": "shrmkit.render.vtk_renderer",
     "RenderResult": "shrmkit.render.vtk_renderer",
     "render_frames": "shrmkit.render.pipeline",
+    "render_scene": "shrmkit.render.api",
+    "SceneRender": "shrmkit.render.api",
+    "RenderOptions": "shrmkit.render.modes",
+    "RenderMode": "shrmkit.render.modes",
+    "RENDER_MODES": "shrmkit.render.modes",
+    "get_mode": "shrmkit.render.modes",
+    "mode_names": "shrmkit.render.modes",
     "OffscreenError": "shrmkit.render.offscreen",
     "probe_offscreen": "shrmkit.render.offscreen",
 }

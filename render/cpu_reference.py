@@ -20,12 +20,12 @@ import numpy as np
 from .camera import Camera
 from .mesh import Mesh
 
-__all__ = ["Geometry", "sphere_geometry", "mesh_geometry", "shade", "interpolate_vertex_data"]
+__all__ = ["HitGeometry", "sphere_geometry", "mesh_geometry", "shade", "interpolate_vertex_data"]
 
 
 @dataclass(frozen=True, eq=False)
-class Geometry:
-    """Per-pixel surface geometry, arrays (H, W, ...); N, V, R are zero where ``hit`` is False.
+class HitGeometry:
+    """Where each camera ray hits the surface, arrays (H, W, ...); N, V, R are zero where ``hit`` is False.
 
     ``face`` (H, W) triangle index (−1 on misses) and ``bary`` (H, W, 3) barycentric weights of
     its three vertices are set by :func:`mesh_geometry` only (None for the analytic sphere).
@@ -40,18 +40,18 @@ class Geometry:
     bary: np.ndarray | None = None
 
 
-def _finish(hit: np.ndarray, pos: np.ndarray, normal: np.ndarray, dirs: np.ndarray) -> Geometry:
+def _finish(hit: np.ndarray, pos: np.ndarray, normal: np.ndarray, dirs: np.ndarray) -> HitGeometry:
     V = -dirs
     N = normal / np.maximum(np.linalg.norm(normal, axis=-1, keepdims=True), 1e-300)
     R = 2.0 * np.sum(N * V, axis=-1, keepdims=True) * N - V
     R /= np.maximum(np.linalg.norm(R, axis=-1, keepdims=True), 1e-300)
     z = ~hit[..., None]
-    return Geometry(hit, np.where(z, 0.0, pos), np.where(z, 0.0, N), np.where(z, 0.0, V), np.where(z, 0.0, R))
+    return HitGeometry(hit, np.where(z, 0.0, pos), np.where(z, 0.0, N), np.where(z, 0.0, V), np.where(z, 0.0, R))
 
 
 def sphere_geometry(
     camera: Camera, width: int, height: int, center: np.ndarray = (0.0, 0.0, 0.0), radius: float = 1.0
-) -> Geometry:
+) -> HitGeometry:
     """Analytic ray–sphere intersection (nearest root), N = (P − c)/r."""
     origins, dirs = camera.rays(width, height)
     oc = origins - np.asarray(center, dtype=np.float64)
@@ -65,7 +65,7 @@ def sphere_geometry(
     return _finish(hit, pos, pos - np.asarray(center, dtype=np.float64), dirs)
 
 
-def mesh_geometry(camera: Camera, width: int, height: int, mesh: Mesh, *, chunk: int = 2048) -> Geometry:
+def mesh_geometry(camera: Camera, width: int, height: int, mesh: Mesh, *, chunk: int = 2048) -> HitGeometry:
     """Brute-force Möller–Trumbore ray casting with barycentric vertex-normal interpolation.
 
     The normal is flipped toward the viewer on back faces, as the shader does (gl_FrontFacing).
@@ -110,10 +110,12 @@ def mesh_geometry(camera: Camera, width: int, height: int, mesh: Mesh, *, chunk:
     shape = (height, width)
     geom = _finish(hit.reshape(shape), pos.reshape(shape + (3,)), normal.reshape(shape + (3,)), dirs)
     bary = np.where(hit[:, None], np.concatenate([1.0 - w1 - w2, w1, w2], axis=1), 0.0)
-    return Geometry(geom.hit, geom.position, geom.N, geom.V, geom.R, best_f.reshape(shape), bary.reshape(shape + (3,)))
+    return HitGeometry(
+        geom.hit, geom.position, geom.N, geom.V, geom.R, best_f.reshape(shape), bary.reshape(shape + (3,))
+    )
 
 
-def interpolate_vertex_data(geometry: Geometry, mesh: Mesh, values: np.ndarray) -> np.ndarray:
+def interpolate_vertex_data(geometry: HitGeometry, mesh: Mesh, values: np.ndarray) -> np.ndarray:
     """Per-vertex ``values`` (n_vertices, C) interpolated barycentrically at the hit pixels: (n_hit, C).
 
     Rows follow ``geometry.hit`` in C order (as in :func:`shade`); this is what the rasterizer
@@ -128,7 +130,7 @@ def interpolate_vertex_data(geometry: Geometry, mesh: Mesh, values: np.ndarray) 
     return b[:, 0:1] * values[f[:, 0]] + b[:, 1:2] * values[f[:, 1]] + b[:, 2:3] * values[f[:, 2]]
 
 
-def shade(geometry: Geometry, radiance: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> np.ndarray:
+def shade(geometry: HitGeometry, radiance: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> np.ndarray:
     """Radiance image (H, W, 3) float64: ``radiance(R, V)`` at hit pixels, 0 elsewhere."""
     out = np.zeros(geometry.hit.shape + (3,))
     m = geometry.hit

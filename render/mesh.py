@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+import trimesh
 
 from ..brdf_io.errors import BadInputError
 
@@ -154,8 +155,6 @@ def _parse_params(spec: str, text: str, allowed: dict[str, type]) -> dict[str, f
 
 
 def _icosphere(subdivisions: int) -> tuple[np.ndarray, np.ndarray]:
-    import trimesh
-
     ico = trimesh.creation.icosphere(subdivisions=subdivisions, radius=1.0)
     v = np.asarray(ico.vertices, dtype=np.float64)
     v /= np.linalg.norm(v, axis=1, keepdims=True)
@@ -254,8 +253,6 @@ def load_mesh(source: str | Path) -> Mesh:
         raise BadInputError(path, f"unsupported mesh extension {suffix!r}; use one of {', '.join(MESH_SUFFIXES)}")
     if not path.is_file():
         raise BadInputError(path, "no such file")
-    import trimesh
-
     try:
         # process=False: keep the data as written (trimesh would otherwise silently drop
         # NaN vertices and degenerate faces, which we want to report)

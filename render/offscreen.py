@@ -49,8 +49,8 @@ def window_classes() -> list[str]:
 
 
 def _new_window(name: str):  # -> vtkRenderWindow
-    import vtkmodules.vtkRenderingCore as core
-    import vtkmodules.vtkRenderingOpenGL2 as gl2  # registers the OpenGL factory overrides
+    import vtkmodules.vtkRenderingCore as core  # lazy: VTK is loaded only when rendering
+    import vtkmodules.vtkRenderingOpenGL2 as gl2  # lazy; registers the OpenGL factory overrides
 
     if name == "vtkRenderWindow":
         return core.vtkRenderWindow()
@@ -68,7 +68,7 @@ def make_render_window(width: int, height: int):  # -> vtkRenderWindow
     (``window.GetRenderers().GetFirstRenderer()``). Raises :class:`OffscreenError` when no
     back end works.
     """
-    import vtkmodules.vtkRenderingCore as core
+    import vtkmodules.vtkRenderingCore as core  # lazy: VTK is loaded only when rendering
 
     if width < 1 or height < 1:
         raise ValueError(f"image size must be positive, got {width}x{height}")
@@ -110,8 +110,8 @@ def make_render_window(width: int, height: int):  # -> vtkRenderWindow
 
 def read_rgba_float(window) -> np.ndarray:
     """The window's colour buffer as float32 (H, W, 4), row 0 at the top of the image."""
-    from vtkmodules.util.numpy_support import vtk_to_numpy
-    from vtkmodules.vtkCommonCore import vtkFloatArray
+    from vtkmodules.util.numpy_support import vtk_to_numpy  # lazy: VTK is loaded only when rendering
+    from vtkmodules.vtkCommonCore import vtkFloatArray  # lazy: VTK
 
     width, height = window.GetSize()
     arr = vtkFloatArray()

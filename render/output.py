@@ -26,6 +26,8 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
+import OpenEXR
+from PIL import Image
 
 from ..brdf_io.atomic import atomic_path
 from ..brdf_io.latlong import bilinear_lookup
@@ -106,8 +108,6 @@ def write_exr(path: str | Path, radiance: np.ndarray, alpha: np.ndarray | None =
 
     Channels R, G, B (and A), 32-bit float, ZIP compression (lossless).
     """
-    import OpenEXR
-
     rgb = np.asarray(radiance, dtype=np.float32)
     if rgb.ndim != 3 or rgb.shape[2] != 3:
         raise ValueError(f"radiance must be (H, W, 3), got {rgb.shape}")
@@ -122,16 +122,12 @@ def write_exr(path: str | Path, radiance: np.ndarray, alpha: np.ndarray | None =
 
 def write_png(path: str | Path, image8: np.ndarray) -> None:
     """Write a uint8 RGB or RGBA image to PNG, atomically."""
-    from PIL import Image
-
     with atomic_path(path) as tmp:
         Image.fromarray(np.asarray(image8, dtype=np.uint8)).save(tmp, format="PNG")
 
 
 def write_gif(path: str | Path, frames: Sequence[np.ndarray], *, fps: float = 20.0) -> None:
     """Write uint8 RGB frames as a looping animated GIF (Pillow), atomically."""
-    from PIL import Image
-
     if not frames:
         raise ValueError("no frames")
     images = [Image.fromarray(np.asarray(f, dtype=np.uint8)[..., :3]) for f in frames]

@@ -1,9 +1,9 @@
-"""One-call rendering of a mesh under an SHRM: cameras, frames, background, timings.
+"""Rendering of one mesh under a built model: cameras, frames, background, timings.
 
-:func:`render_frames` is what ``shrm render`` calls: it builds the offscreen renderer,
-renders every camera (first frame timed separately: it includes shader compilation and
-texture upload), measures frames per second over repeated frames, and composites the
-environment behind the object.
+:func:`render_frames` is what :func:`shrmkit.render.api.render_scene` (and so ``shrm render``)
+calls once the model is built: it builds the offscreen renderer, renders every camera (first
+frame timed separately: it includes shader compilation and texture upload), measures frames
+per second over repeated frames, and composites the environment behind the object.
 """
 
 from __future__ import annotations
@@ -11,12 +11,13 @@ from __future__ import annotations
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
-from ..analysis.shrm import SHRM
 from .camera import Camera, orbit_camera
 from .mesh import Mesh
+from .modes import DEFAULT_MODE
 from .output import composite, environment_background
 from .vtk_renderer import SHRMRenderer
 
@@ -56,28 +57,30 @@ def turntable_cameras(base: Camera, n_frames: int, center: np.ndarray = (0.0, 0.
 
 def render_frames(
     mesh: Mesh,
-    shrm: SHRM,
+    model: Any,
     cameras: Sequence[Camera],
     *,
     size: int,
-    mode: str = "distant",
+    mode: str = DEFAULT_MODE,
     env_radiance: np.ndarray | None = None,
     background: str = "env",
     fps_frames: int = 10,
     visibility_sh: np.ndarray | None = None,
 ) -> tuple[list[Frame], FrameTimings]:
-    """Render ``mesh`` shaded by ``shrm`` from each camera into size × size frames.
+    """Render ``mesh`` shaded by ``model`` in render ``mode`` from each camera into size × size frames.
 
     Parameters
     ----------
+    model
+        What the mode draws (``SHRMRenderer.add_object``).
     background
         ``"env"``: the environment (``env_radiance``, lat-long z-up) seen along each ray;
         ``"black"``; ``"transparent"`` (alpha from coverage).
     fps_frames
         Repeated frames for the frames-per-second figure (0 skips it; fps is then NaN).
     visibility_sh
-        ``gaussian-lobes`` mode only: per-vertex order-4 SH visibility
-        (``analysis.baselines.selfshadow.vertex_visibility_sh``) for self-shadowing.
+        Modes with self-shadowing only: per-vertex order-4 SH visibility
+        (``analysis.baselines.selfshadow.vertex_visibility_sh``).
     """
     if background not in BACKGROUNDS:
         raise ValueError(f"background must be one of {BACKGROUNDS}, got {background!r}")
@@ -85,10 +88,7 @@ def render_frames(
         raise ValueError("background 'env' needs env_radiance")
     t0 = time.perf_counter()
     with SHRMRenderer(size, size) as renderer:
-        if visibility_sh is None:
-            renderer.add_object(mesh, shrm, mode=mode)
-        else:
-            renderer.add_object(mesh, shrm, mode=mode, visibility_sh=visibility_sh)
+        renderer.add_object(mesh, model, mode=mode, visibility_sh=visibility_sh)
         results = [renderer.render(cameras[0])]
         first = time.perf_counter() - t0
         results += [renderer.render(cam) for cam in cameras[1:]]

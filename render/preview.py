@@ -10,12 +10,20 @@ composited behind the object and the result tone mapped (filmic) to 8-bit sRGB.
 from __future__ import annotations
 
 import io
+import time
 from dataclasses import dataclass
 
 import numpy as np
+from PIL import Image
 
 from ..analysis.shrm import SHRM
 from ..brdf_io.envmap import EnvironmentMap
+from .camera import Camera
+from .cpu_reference import shade, sphere_geometry
+from .mesh import Mesh, load_mesh
+from .offscreen import probe_offscreen
+from .output import composite, environment_background, to_8bit
+from .pipeline import render_frames
 
 __all__ = [
     "PREVIEW_DISABLED", "PREVIEW_VIEW", "PreviewImage", "png_bytes", "render_previews", "resolve_preview_mode",
@@ -40,8 +48,6 @@ class PreviewImage:
 
 def png_bytes(image8: np.ndarray) -> bytes:
     """Encode a uint8 (H, W, 3|4) image as PNG."""
-    from PIL import Image
-
     buf = io.BytesIO()
     Image.fromarray(np.asarray(image8, dtype=np.uint8)).save(buf, format="PNG", optimize=True)
     return buf.getvalue()
@@ -54,26 +60,19 @@ def resolve_preview_mode(mode: str) -> tuple[str, str]:
     """
     if mode != "auto":
         return mode, ""
-    from .offscreen import probe_offscreen
-
     ok, message = probe_offscreen(timeout=60.0)
     if ok:
         return "gl", ""
     return "cpu", f"no offscreen OpenGL ({message}): CPU reference renderer used, mesh previews skipped"
 
 
-def preview_camera():  # -> render.camera.Camera
+def preview_camera() -> Camera:
     """The preview camera: frames the unit sphere from :data:`PREVIEW_VIEW`."""
-    from .camera import Camera
-
     return Camera.looking_at(view=np.array(PREVIEW_VIEW), up=(0.0, 0.0, 1.0), margin=1.15)
 
 
 def cpu_sphere_image(shrm: SHRM, env: EnvironmentMap, size: int) -> np.ndarray:
     """Linear (size, size, 3) image of the unit sphere shaded by ``shrm`` over ``env`` (numpy only)."""
-    from .cpu_reference import shade, sphere_geometry
-    from .output import composite, environment_background
-
     camera = preview_camera()
     geometry = sphere_geometry(camera, size, size)
     radiance = shade(geometry, shrm.radiance).astype(np.float32)
@@ -96,10 +95,6 @@ def render_previews(
     (images, notes)
         The previews made and notes about those that were not.
     """
-    import time
-
-    from .output import to_8bit
-
     if mode == "none":
         return [], [PREVIEW_DISABLED]
     images: list[PreviewImage] = []
@@ -113,9 +108,6 @@ def render_previews(
         if mesh:
             notes.append(f"mesh preview of {mesh} needs OpenGL (CPU preview renders the sphere only)")
         return images, notes
-    from .mesh import load_mesh
-    from .pipeline import render_frames
-
     targets = [("sphere", "builtin:sphere")] + ([("mesh", mesh)] if mesh else [])
     camera = preview_camera()
     for key, source in targets:
@@ -128,7 +120,7 @@ def render_previews(
     return images, notes
 
 
-def unit_mesh(mesh):  # Mesh -> Mesh
+def unit_mesh(mesh: Mesh) -> Mesh:
     """The mesh moved and scaled into the unit sphere about the origin (what the camera frames)."""
     centre = 0.5 * (mesh.vertices.min(axis=0) + mesh.vertices.max(axis=0))
     radius = float(np.max(np.linalg.norm(mesh.vertices - centre, axis=1)))

@@ -1,77 +1,58 @@
-"""GLSL for SHRM shading, inserted into VTK's polydata shaders as shader replacements.
+"""Shading of the SHRM render modes (``distant``, ``perpixel``, ``kautz-mccool``, ``rsibr``).
 
-Per fragment (RH02 §5, DESIGN §5), all in the z-up world frame (= VTK world frame, the
-mesh is uploaded in world coordinates so model coordinates are world coordinates):
+RH02 = Ramamoorthi & Hanrahan, "Frequency Space Environment Map Rendering", SIGGRAPH 2002,
+doi:10.1145/566654.566611. Per fragment, after the shared prelude of ``render.glsl``
+(N, V, R in the z-up world frame):
 
-- N = normalize(interpolated vertex normal), flipped on back faces;
-- V = normalize(eye − P) (perspective) or the constant direction toward the camera (ortho);
-- R = 2 (N·V) N − V, so that N = normalize(R + V);
-- ``distant`` mode (RH02 eq. 12): radiance = M(R) with M = Σ B̃_pq Y^r_pq(Ṽ) one lat-long map
-  per frame (computed on the CPU, uploaded as a float texture);
-- ``perpixel`` mode (RH02 eq. 8): radiance = Σ B̃_pq(R) Y^r_pq(V), the (P+1)² coefficient
-  maps tiled in one float texture (tile c at column (c mod cols)·W, row (c div cols)·H) and
-  Y^r_pq(V) evaluated in the shader.
+- ``distant`` (RH02 eq. 12): radiance = M(R) with M = Σ B̃_pq Y^r_pq(Ṽ) one lat-long map per
+  frame and object, Ṽ the direction from the object's bounding-sphere centre toward the eye,
+  computed on the CPU (:func:`distant_update`) and uploaded as a float texture;
+- ``perpixel`` (RH02 eq. 8): radiance = Σ B̃_pq(R) Y^r_pq(V), the (P+1)² coefficient maps
+  tiled in one float texture (:func:`coefficient_atlas`: tile c at column (c mod cols)·W,
+  row (c div cols)·H) and Y^r_pq(V) evaluated in the shader; ``kautz-mccool`` draws the
+  azimuth-free (q = 0) SHRM the same way;
+- ``rsibr`` (Cabral et al. 1999): the distant shader fed, per frame, the spherical-barycentric
+  blend of the twelve maps of ``analysis.baselines.rsibr`` (:func:`rsibr_update`).
 
-Lat-long lookup is the bilinear interpolation of :func:`shrmkit.brdf_io.latlong.bilinear_lookup`
-done with ``texelFetch`` (four exact float texels, weights in float32): φ wraps around with no
-seam, θ is clamped to the first and last row centres; θ = atan2(|R_xy|, R_z) stays accurate
-at the poles. No hardware filtering or mipmapping is involved, so there is no seam from
-derivative jumps and no 8-bit weight quantization.
-
-The real SH (DESIGN §2 basis, index l² + l + m) are generated as straight-line GLSL:
-Y^r_lm = K_lm h_lm(z) Re (x + iy)^m (m ≥ 0) or Im (x + iy)^|m| (m < 0), with
-K_m = √2 (−1)^m f_mm / sin^m θ and h_lm the normalized-Legendre three-term recurrence of
-:func:`shrmkit.analysis.sh.legendre_f` divided by f_mm (no trigonometric functions).
+All maps are looked up with the bilinear lat-long rule of ``render.glsl`` (four ``texelFetch``es).
 """
 
 from __future__ import annotations
 
 import math
+from typing import Any
+
+import numpy as np
+
+from ..analysis.baselines.rsibr import RSIBRMaps, rsibr_from_shrm
+from ..analysis.sh import real_sph_harm
+from ..analysis.shrm import SHRM
+from .glsl import (
+    LATLONG_GLSL,
+    Shading,
+    check_texture_size,
+    fragment_replacements,
+    sh_glsl,
+    vertex_replacements,
+)
+from .mesh import Mesh
 
 __all__ = [
-    "sh_glsl",
-    "vertex_replacements",
-    "fragment_replacements",
     "atlas_layout",
-    "MODES",
+    "coefficient_atlas",
+    "shrm_fragment_replacements",
+    "distant_shading",
+    "distant_update",
+    "perpixel_shading",
+    "rsibr_shading",
+    "rsibr_update",
 ]
 
-MODES = ("distant", "perpixel")
-
-
-def _f(x: float) -> str:
-    return f"{x:.9e}"
-
-
-def sh_glsl(lmax: int) -> str:
-    """GLSL function ``void shrm_sh(vec3 v, out float Y[n])`` for the real SH up to ``lmax``."""
-    n = (lmax + 1) ** 2
-    lines = [f"void shrm_sh(vec3 v, out float Y[{n}]) {{", "  float x = v.x, y = v.y, z = v.z;"]
-    lines.append("  float c0 = 1.0, s0 = 0.0;")
-    fmm = 1.0 / math.sqrt(4.0 * math.pi)  # f_00; f_mm = this * prod(-sqrt((2k+1)/(2k))) * sin^m
-    for m in range(lmax + 1):
-        if m > 0:
-            fmm *= -math.sqrt((2.0 * m + 1.0) / (2.0 * m))
-            # (x + iy)^m = (x + iy)^(m-1) (x + iy)
-            lines.append(f"  float c{m} = c{m - 1} * x - s{m - 1} * y, s{m} = c{m - 1} * y + s{m - 1} * x;")
-        k = fmm if m == 0 else math.sqrt(2.0) * (-1.0) ** m * fmm
-        for l in range(m, lmax + 1):
-            if l == m:
-                expr = "1.0"
-            elif l == m + 1:
-                expr = f"{_f(math.sqrt(2.0 * m + 3.0))} * z"
-            else:
-                a_l = math.sqrt((4.0 * l * l - 1.0) / (l * l - m * m))
-                a_lm1 = math.sqrt((4.0 * (l - 1) ** 2 - 1.0) / ((l - 1) ** 2 - m * m))
-                expr = f"{_f(a_l)} * (z * h{l - 1}_{m} - {_f(1.0 / a_lm1)} * h{l - 2}_{m})"
-            lines.append(f"  float h{l}_{m} = {expr};")
-            if m == 0:
-                lines.append(f"  Y[{l * l + l}] = {_f(k)} * h{l}_0;")
-            else:
-                lines.append(f"  Y[{l * l + l + m}] = {_f(k)} * h{l}_{m} * c{m};")
-                lines.append(f"  Y[{l * l + l - m}] = {_f(k)} * h{l}_{m} * s{m};")
-    lines.append("}")
-    return "\n".join(lines) + "\n"
+_LOOKUP = LATLONG_GLSL + """
+void shrm_setup(vec3 d, out ivec4 idx, out vec2 f) {
+  latlong_setup(d, SHRM_H, SHRM_W, idx, f);
+}
+"""
 
 
 def atlas_layout(n_tiles: int) -> tuple[int, int]:
@@ -81,95 +62,40 @@ def atlas_layout(n_tiles: int) -> tuple[int, int]:
     return cols, rows
 
 
-def vertex_replacements() -> list[tuple[str, str]]:
-    """(tag, replacement) pairs for the vertex shader: pass world position and normal on.
+def coefficient_atlas(coeffs: np.ndarray) -> np.ndarray:
+    """Tile the (n, H, W, 3) coefficient maps into one float32 (rows·H, cols·W, 3) image.
 
-    The actor's model matrix is the identity (meshes are uploaded in world coordinates and
-    VBO shift/scale is disabled), so ``vertexMC`` and ``normalMC`` are world-space.
+    Tile c sits at rows [r·H, (r+1)·H), columns [k·W, (k+1)·W) with k = c mod cols,
+    r = c div cols (:func:`atlas_layout`); texture row 0 is the first array row.
     """
-    return [
-        ("//VTK::Normal::Dec", "//VTK::Normal::Dec\nout vec3 shrmPosWC;\nout vec3 shrmNormWC;\n"),
-        ("//VTK::Normal::Impl", "//VTK::Normal::Impl\n  shrmPosWC = vertexMC.xyz;\n  shrmNormWC = normalMC;\n"),
-    ]
+    n, h, w, _ = coeffs.shape
+    cols, rows = atlas_layout(n)
+    out = np.zeros((rows * h, cols * w, 3), dtype=np.float32)
+    for c in range(n):
+        r, k = divmod(c, cols)
+        out[r * h:(r + 1) * h, k * w:(k + 1) * w] = coeffs[c]
+    return out
 
 
-LATLONG_GLSL = """
-// bilinear lat-long lookup set-up (brdf_io.latlong.bilinear_lookup) on an H x W tile:
-// texel columns x0, x1 (phi wraps), rows y0, y1 (theta clamped to the first/last row centre),
-// weights f = (fx, fy)
-void latlong_setup(vec3 d, int H, int W, out ivec4 idx, out vec2 f) {
-  const float PI = 3.14159265358979;
-  float rxy = length(d.xy);
-  float theta = atan(rxy, d.z);
-  float phi = (rxy > 0.0) ? atan(d.y, d.x) : 0.0;
-  if (phi < 0.0) phi += 2.0 * PI;
-  float yy = clamp(theta * float(H) / PI - 0.5, 0.0, float(H) - 1.0);
-  float xx = phi * float(W) / (2.0 * PI) - 0.5;
-  float y0f = min(floor(yy), float(max(H - 2, 0)));
-  float x0f = floor(xx);
-  int x0 = int(x0f);
-  x0 = x0 - W * int(floor(float(x0) / float(W)));
-  int x1 = x0 + 1;
-  if (x1 >= W) x1 -= W;
-  int y0 = int(y0f);
-  int y1 = min(y0 + 1, H - 1);
-  idx = ivec4(x0, x1, y0, y1);
-  f = vec2(xx - x0f, yy - y0f);
-}
-// bilinear fetch from shrmTex at tile offset o (texel units)
-vec3 shrm_fetch(ivec2 o, ivec4 idx, vec2 f) {
-  vec3 t00 = texelFetch(shrmTex, o + ivec2(idx.x, idx.z), 0).rgb;
-  vec3 t01 = texelFetch(shrmTex, o + ivec2(idx.y, idx.z), 0).rgb;
-  vec3 t10 = texelFetch(shrmTex, o + ivec2(idx.x, idx.w), 0).rgb;
-  vec3 t11 = texelFetch(shrmTex, o + ivec2(idx.y, idx.w), 0).rgb;
-  vec3 top = t00 * (1.0 - f.x) + t01 * f.x;
-  vec3 bottom = t10 * (1.0 - f.x) + t11 * f.x;
-  return top * (1.0 - f.y) + bottom * f.y;
-}
-"""
+def shrm_fragment_replacements(lmax: int, height: int, width: int, *, per_pixel: bool) -> list[tuple[str, str]]:
+    """Fragment shader replacements of one SHRM actor.
 
-_LOOKUP = LATLONG_GLSL + """
-void shrm_setup(vec3 d, out ivec4 idx, out vec2 f) {
-  latlong_setup(d, SHRM_H, SHRM_W, idx, f);
-}
-"""
-
-
-def fragment_replacements(mode: str, lmax: int, height: int, width: int) -> list[tuple[str, str]]:
-    """(tag, replacement) pairs for the fragment shader of one SHRM actor.
-
-    Uniforms (set per frame as custom uniforms): ``shrmEye`` (vec3), ``shrmOrtho`` (int),
-    ``shrmViewDir`` (vec3, toward the camera, used when ortho). Sampler ``shrmTex``: the
-    dynamic map (distant) or the coefficient atlas (perpixel).
+    ``per_pixel=False``: ``shrmTex`` is one H × W map looked up by R (distant, rsibr);
+    ``per_pixel=True``: ``shrmTex`` is the coefficient atlas and Σ_c Y^r_c(V) tile_c(R) is summed.
     """
-    if mode not in MODES:
-        raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
     n = (lmax + 1) ** 2
     cols, _ = atlas_layout(n)
     dec = [
-        "//VTK::Edges::Dec",
-        "in vec3 shrmPosWC;",
-        "in vec3 shrmNormWC;",
         f"#define SHRM_H {int(height)}",
         f"#define SHRM_W {int(width)}",
         f"#define SHRM_COLS {cols}",
         f"#define SHRM_NC {n}",
         _LOOKUP,
     ]
-    if mode == "perpixel":
+    body = ["  ivec4 shrmIdx; vec2 shrmF;", "  shrm_setup(shrmR, shrmIdx, shrmF);"]
+    if per_pixel:
         dec.append(sh_glsl(lmax))
-    impl = [
-        "  vec3 shrmN = normalize(shrmNormWC);",
-        "  if (!gl_FrontFacing) shrmN = -shrmN;",
-        "  vec3 shrmV = (shrmOrtho != 0) ? normalize(shrmViewDir) : normalize(shrmEye - shrmPosWC);",
-        "  vec3 shrmR = normalize(2.0 * dot(shrmN, shrmV) * shrmN - shrmV);",
-        "  ivec4 shrmIdx; vec2 shrmF;",
-        "  shrm_setup(shrmR, shrmIdx, shrmF);",
-    ]
-    if mode == "distant":
-        impl.append("  vec3 shrmRad = shrm_fetch(ivec2(0, 0), shrmIdx, shrmF);")
-    else:
-        impl += [
+        body += [
             "  float shrmY[SHRM_NC];",
             "  shrm_sh(shrmV, shrmY);",
             "  vec3 shrmRad = vec3(0.0);",
@@ -178,7 +104,56 @@ def fragment_replacements(mode: str, lmax: int, height: int, width: int) -> list
             "    shrmRad += shrmY[c] * shrm_fetch(o, shrmIdx, shrmF);",
             "  }",
         ]
-    impl.append("  gl_FragData[0] = vec4(shrmRad, 1.0);")
-    # declarations go at the last declaration tag before main(), after VTK has declared the
-    # texture samplers (//VTK::TMap::Dec); the tag is kept so VTK's own code still lands there
-    return [("//VTK::Edges::Dec", "\n".join(dec) + "\n"), ("//VTK::Light::Impl", "\n".join(impl) + "\n")]
+    else:
+        body.append("  vec3 shrmRad = shrm_fetch(ivec2(0, 0), shrmIdx, shrmF);")
+    return fragment_replacements(dec, body)
+
+
+def _view_map_shading(height: int, width: int, state: Any) -> Shading:
+    """A per-frame H × W map looked up by R (filled by the mode's update before each frame)."""
+    return Shading(
+        np.zeros((height, width, 3), dtype=np.float32),
+        vertex_replacements(),
+        shrm_fragment_replacements(0, height, width, per_pixel=False),
+        state=state,
+    )
+
+
+def distant_shading(shrm: SHRM, mesh: Mesh) -> Shading:
+    """Distant viewer (RH02 eq. 12): the per-frame map Σ B̃_pq Y^r_pq(Ṽ); state = (P, flat coefficients)."""
+    n, h, w, _ = shrm.coeffs.shape
+    flat = np.ascontiguousarray(shrm.coeffs.reshape(n, -1), dtype=np.float32)
+    return _view_map_shading(h, w, (shrm.P, flat))
+
+
+def distant_update(state: tuple[int, np.ndarray], view: np.ndarray, out: np.ndarray) -> None:
+    """Write Σ B̃_pq Y^r_pq(``view``) into the texture buffer ``out`` (no allocation of the map)."""
+    P, flat = state
+    basis = real_sph_harm(P, view).astype(np.float32)
+    np.matmul(basis, flat, out=out.reshape(-1))
+
+
+def perpixel_shading(shrm: SHRM, mesh: Mesh) -> Shading:
+    """Per-pixel view (RH02 eq. 8): the (P+1)² coefficient maps in one atlas, the SH of V in the shader."""
+    n, h, w, _ = shrm.coeffs.shape
+    cols, rows = atlas_layout(n)
+    hint = "use mode='distant' or a coarser SHRM"
+    check_texture_size((rows * h, cols * w), f"SHRM with P={shrm.P} on {h}x{w}", hint)
+    return Shading(
+        coefficient_atlas(shrm.coeffs),
+        vertex_replacements(),
+        shrm_fragment_replacements(shrm.P, h, w, per_pixel=True),
+    )
+
+
+def rsibr_shading(model: RSIBRMaps | SHRM, mesh: Mesh) -> Shading:
+    """Cabral et al. 1999: the twelve maps (made from an SHRM by ``rsibr_from_shrm`` when given one)."""
+    maps = model if isinstance(model, RSIBRMaps) else rsibr_from_shrm(model)
+    _, h, w, _ = maps.maps.shape
+    return _view_map_shading(h, w, maps)
+
+
+def rsibr_update(maps: RSIBRMaps, view: np.ndarray, out: np.ndarray) -> None:
+    """Write the blend of the three maps of the face containing ``view`` into ``out``."""
+    blended = maps.view_map(view)
+    out.reshape(blended.shape)[...] = blended

@@ -1,10 +1,12 @@
-"""Offscreen VTK renderer shading meshes from global SHRMs in a GLSL fragment shader.
+"""Offscreen VTK renderer shading meshes in a GLSL fragment shader, one render mode per object.
 
 One :class:`SHRMRenderer` holds a float-framebuffer offscreen window (see ``offscreen``)
-and any number of objects, each a mesh with its own SHRM (its material under its lighting)
-and mode (``distant`` or ``perpixel``, see ``shader``), or, in mode ``gaussian-lobes``, a
-``GaussianLobeModel`` (Green et al. 2007 lobes + SG mip stack, see ``gaussian_shader``).
-Rendering returns linear radiance read back as float32, never clamped or quantized.
+and any number of objects, each a mesh with its own model (its material under its lighting:
+an SHRM, RSIBR maps, Gaussian lobes …) drawn in a render mode of the table in ``modes``. The
+mode's record makes the object's texture, shader replacements and vertex attributes
+(``glsl.Shading``) and its per-frame texture update; this module only sets up the VTK actor,
+once for every mode, and dispatches through the record. Rendering returns linear radiance
+read back as float32, never clamped or quantized.
 
 Frame: VTK world coordinates are the z-up math frame (``camera`` module docstring); meshes
 are uploaded in world coordinates with an identity actor matrix.
@@ -14,35 +16,17 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
-from ..analysis.baselines.gaussian_lobes import GaussianLobeModel
-from ..analysis.sh import real_sph_harm
-from ..analysis.shrm import SHRM
 from .camera import Camera, orbit_camera
-from .gaussian_shader import (
-    N_VIS_ATTRIBUTES,
-    gaussian_fragment_replacements,
-    gaussian_vertex_replacements,
-    sg_atlas,
-)
+from .glsl import Shading
 from .mesh import Mesh
+from .modes import DEFAULT_MODE, RenderMode, get_mode
 from .offscreen import make_render_window, read_rgba_float
-from .shader import MODES, atlas_layout, fragment_replacements, vertex_replacements
 
-__all__ = ["SHRMRenderer", "RenderResult", "coefficient_atlas", "RENDER_MODES"]
-
-#: Shader modes plus ``rsibr`` (Cabral et al. 1999: the distant-mode shader fed, per frame, the
-#: spherical-barycentric blend of twelve maps made from the SHRM at the icosahedron's
-#: vertices, ``analysis.baselines.rsibr``). Kautz–McCool is the SHRM shader fed an
-#: azimuth-free SHRM (``prefilter(..., azimuth_free=True)``), so it needs no mode here.
-#: ``gaussian-lobes``: Green, Kautz & Durand 2007 (``analysis.baselines.gaussian_lobes``), fed a
-#: ``GaussianLobeModel`` in place of the SHRM.
-RENDER_MODES = MODES + ("rsibr", "gaussian-lobes")
-
-#: Largest texture edge we rely on (llvmpipe and current GPUs allow at least 16384).
-MAX_TEXTURE_SIZE = 16384
+__all__ = ["SHRMRenderer", "RenderResult"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -56,7 +40,7 @@ class RenderResult:
     alpha
         float32 (H, W): 1 where an object covers the pixel centre, else 0.
     seconds
-        Wall time of the frame (dynamic-map update, draw, readback).
+        Wall time of the frame (per-frame texture updates, draw, readback).
     """
 
     radiance: np.ndarray
@@ -64,25 +48,10 @@ class RenderResult:
     seconds: float
 
 
-def coefficient_atlas(coeffs: np.ndarray) -> np.ndarray:
-    """Tile the (n, H, W, 3) coefficient maps into one float32 (rows·H, cols·W, 3) image.
-
-    Tile c sits at rows [r·H, (r+1)·H), columns [k·W, (k+1)·W) with k = c mod cols,
-    r = c div cols (``shader.atlas_layout``); texture row 0 is the first array row.
-    """
-    n, h, w, _ = coeffs.shape
-    cols, rows = atlas_layout(n)
-    out = np.zeros((rows * h, cols * w, 3), dtype=np.float32)
-    for c in range(n):
-        r, k = divmod(c, cols)
-        out[r * h:(r + 1) * h, k * w:(k + 1) * w] = coeffs[c]
-    return out
-
-
 def _float_texture(image: np.ndarray):  # -> (vtkTexture, vtkImageData, numpy buffer)
-    from vtkmodules.util.numpy_support import numpy_to_vtk
-    from vtkmodules.vtkCommonDataModel import vtkImageData
-    from vtkmodules.vtkRenderingCore import vtkTexture
+    from vtkmodules.util.numpy_support import numpy_to_vtk  # lazy: VTK is loaded only when rendering
+    from vtkmodules.vtkCommonDataModel import vtkImageData  # lazy: VTK
+    from vtkmodules.vtkRenderingCore import vtkTexture  # lazy: VTK
 
     h, w, _ = image.shape
     buf = np.ascontiguousarray(image, dtype=np.float32).reshape(h * w, 3)
@@ -100,10 +69,15 @@ def _float_texture(image: np.ndarray):  # -> (vtkTexture, vtkImageData, numpy bu
     return tex, data, buf
 
 
-def _polydata(mesh: Mesh, visibility_sh: np.ndarray | None = None):
-    from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
-    from vtkmodules.vtkCommonCore import vtkPoints
-    from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData
+def _attribute_array(name: str) -> str:
+    """Name of the point-data array that feeds the vertex attribute ``name``."""
+    return f"{name}_data"
+
+
+def _polydata(mesh: Mesh, attributes: dict[str, np.ndarray]):
+    from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray  # lazy: VTK
+    from vtkmodules.vtkCommonCore import vtkPoints  # lazy: VTK
+    from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData  # lazy: VTK
 
     pts = vtkPoints()
     pts.SetData(numpy_to_vtk(np.ascontiguousarray(mesh.vertices, dtype=np.float32), deep=1))
@@ -119,33 +93,29 @@ def _polydata(mesh: Mesh, visibility_sh: np.ndarray | None = None):
     normals = numpy_to_vtk(np.ascontiguousarray(mesh.normals, dtype=np.float32), deep=1)
     normals.SetName("Normals")
     poly.GetPointData().SetNormals(normals)
-    if visibility_sh is not None:  # 25 SH-4 coefficients per vertex as 7 vec4 arrays (last padded)
-        padded = np.zeros((mesh.vertices.shape[0], 4 * N_VIS_ATTRIBUTES), dtype=np.float32)
-        padded[:, :visibility_sh.shape[1]] = visibility_sh
-        for i in range(N_VIS_ATTRIBUTES):
-            arr = numpy_to_vtk(np.ascontiguousarray(padded[:, 4 * i:4 * i + 4]), deep=1)
-            arr.SetName(f"glVisArray{i}")
-            poly.GetPointData().AddArray(arr)
+    for name, values in attributes.items():  # per-vertex vec4 attributes of the mode
+        arr = numpy_to_vtk(np.ascontiguousarray(values, dtype=np.float32), deep=1)
+        arr.SetName(_attribute_array(name))
+        poly.GetPointData().AddArray(arr)
     return poly
 
 
 @dataclass(eq=False)
 class _Object:
     mesh: Mesh
-    shrm: SHRM | GaussianLobeModel
-    mode: str
-    actor: object
-    texture: object
-    image: object
-    buffer: np.ndarray
+    model: Any
+    mode: RenderMode
+    actor: Any
+    texture: Any
+    image: Any  # vtkImageData sharing ``buffer``
+    buffer: np.ndarray  # float32 (h·w, 3) texels, rewritten by the mode's per-frame update
+    state: Any  # what the mode's update reads
     center: np.ndarray
     radius: float
-    flat_coeffs: np.ndarray | None  # (n, H·W·3) for the distant-mode update
-    rsibr: object = None  # RSIBRMaps for mode "rsibr"
 
 
 class SHRMRenderer:
-    """Render meshes shaded by global SHRMs, offscreen, with float readback.
+    """Render meshes shaded by SHRMs (or another mode's model), offscreen, with float readback.
 
     Parameters
     ----------
@@ -176,137 +146,73 @@ class SHRMRenderer:
     def add_object(
         self,
         mesh: Mesh,
-        shrm: SHRM | GaussianLobeModel,
+        model: Any,
         *,
-        mode: str = "distant",
+        mode: str = DEFAULT_MODE,
         visibility_sh: np.ndarray | None = None,
         normalized_visibility: bool = True,
     ) -> int:
-        """Add a mesh shaded by ``shrm`` in ``mode``; returns the object's index.
+        """Add a mesh shaded by ``model`` in render ``mode``; returns the object's index.
 
-        For ``mode="gaussian-lobes"`` pass a ``GaussianLobeModel`` as ``shrm``; then
-        ``visibility_sh`` (n_vertices, 25), the order-4 SH visibility of each vertex
-        (``analysis.baselines.selfshadow.vertex_visibility_sh``), turns on self-shadowing
+        ``model`` is what the mode's record accepts (``modes.RENDER_MODES[mode].models``): an
+        SHRM for ``distant``, ``perpixel`` and ``kautz-mccool`` (an azimuth-free SHRM), RSIBR
+        maps or an SHRM for ``rsibr``, a ``GaussianLobeModel`` for ``gaussian-lobes``. In the
+        modes with self-shadowing, ``visibility_sh`` (n_vertices, 25), the order-4 SH visibility
+        of each vertex (``analysis.baselines.selfshadow.vertex_visibility_sh``), turns it on
         (Green et al. 2007 eq. 7), ``normalized_visibility`` as in ``selfshadow.visibility_at``.
+        Raises ValueError for an unknown mode or a model or visibility the mode does not take.
         """
-        from vtkmodules.vtkRenderingCore import vtkActor
-        from vtkmodules.vtkRenderingOpenGL2 import vtkOpenGLPolyDataMapper
-
-        if mode not in RENDER_MODES:
-            raise ValueError(f"mode must be one of {RENDER_MODES}, got {mode!r}")
-        if (mode == "gaussian-lobes") != isinstance(shrm, GaussianLobeModel):
-            raise ValueError("mode 'gaussian-lobes' takes a GaussianLobeModel, the other modes an SHRM")
-        if visibility_sh is not None:
-            if mode != "gaussian-lobes":
-                raise ValueError("visibility_sh (self-shadowing) is only supported in mode 'gaussian-lobes'")
-            visibility_sh = np.asarray(visibility_sh, dtype=np.float64)
-            if visibility_sh.shape != (mesh.vertices.shape[0], 25) or not np.all(np.isfinite(visibility_sh)):
-                raise ValueError(f"visibility_sh must be finite (n_vertices={mesh.vertices.shape[0]}, 25), "
-                                 f"got shape {visibility_sh.shape}")
-        if mode == "gaussian-lobes":
-            if visibility_sh is not None and normalized_visibility:
-                from ..analysis.baselines.selfshadow import hemisphere_step_sh
-
-                # the shader gets occlusion coefficients: unoccluded vertex step − visibility
-                visibility_sh = hemisphere_step_sh(mesh.normals, 4) - visibility_sh
-            return self._add_gaussian(mesh, shrm, visibility_sh, normalized_visibility)
-        rsibr = None
-        if mode == "rsibr":
-            from ..analysis.baselines.rsibr import rsibr_from_shrm
-
-            rsibr = rsibr_from_shrm(shrm)
-        n, h, w, _ = shrm.coeffs.shape
-        if mode == "perpixel":
-            cols, rows = atlas_layout(n)
-            if max(cols * w, rows * h) > MAX_TEXTURE_SIZE:
-                raise ValueError(
-                    f"SHRM with P={shrm.P} on {h}x{w} needs a {rows * h}x{cols * w} texture "
-                    f"(limit {MAX_TEXTURE_SIZE}); use mode='distant' or a coarser SHRM"
-                )
-            image = coefficient_atlas(shrm.coeffs)
-            flat = None
-        else:
-            flat = np.ascontiguousarray(shrm.coeffs.reshape(n, -1), dtype=np.float32)
-            image = np.zeros((h, w, 3), dtype=np.float32)
-        tex, data, buf = _float_texture(image)
-        mapper = vtkOpenGLPolyDataMapper()
-        mapper.SetInputData(_polydata(mesh))
-        mapper.SetVBOShiftScaleMethod(0)  # DISABLE_SHIFT_SCALE: vertexMC must be world coordinates
-        mapper.ScalarVisibilityOff()
-        actor = vtkActor()
-        actor.SetMapper(mapper)
-        actor.GetProperty().SetTexture("shrmTex", tex)
-        sp = actor.GetShaderProperty()
-        for tag, text in vertex_replacements():
-            sp.AddVertexShaderReplacement(tag, True, text, False)
-        for tag, text in fragment_replacements("distant" if mode == "rsibr" else mode, shrm.P, h, w):
-            sp.AddFragmentShaderReplacement(tag, True, text, False)
-        return self._finish_object(mesh, shrm, mode, actor, tex, data, buf, flat, rsibr)
-
-    def _finish_object(self, mesh, shrm, mode, actor, tex, data, buf, flat, rsibr) -> int:
-        uni = actor.GetShaderProperty().GetFragmentCustomUniforms()
-        uni.SetUniform3f("shrmEye", [0.0, 0.0, 0.0])
-        uni.SetUniform3f("shrmViewDir", [1.0, 0.0, 0.0])
-        uni.SetUniformi("shrmOrtho", 0)
+        record = get_mode(mode)
+        shading = record.prepare(model, mesh, visibility_sh, normalized_visibility)
+        actor, tex, data, buf = self._actor(mesh, shading)
         self._renderer.AddActor(actor)
         lo, hi = mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)
         center = 0.5 * (lo + hi)
         radius = float(np.max(np.linalg.norm(mesh.vertices - center, axis=1)))
-        self._objects.append(_Object(mesh, shrm, mode, actor, tex, data, buf, center, radius, flat, rsibr))
+        self._objects.append(_Object(mesh, model, record, actor, tex, data, buf, shading.state, center, radius))
         return len(self._objects) - 1
 
-    def _add_gaussian(
-        self, mesh: Mesh, glr: GaussianLobeModel, visibility_sh: np.ndarray | None, normalized: bool
-    ) -> int:
-        """Green et al. 2007: mip atlas texture + lobe table compiled into the fragment shader."""
-        from vtkmodules.vtkCommonDataModel import vtkDataObject
-        from vtkmodules.vtkRenderingCore import vtkActor
-        from vtkmodules.vtkRenderingOpenGL2 import vtkOpenGLPolyDataMapper
+    @staticmethod
+    def _actor(mesh: Mesh, shading: Shading):  # -> (vtkActor, vtkTexture, vtkImageData, buffer)
+        """The one VTK set-up of every mode: mapper, actor, texture, shader replacements, uniforms."""
+        from vtkmodules.vtkCommonDataModel import vtkDataObject  # lazy: VTK is loaded only when rendering
+        from vtkmodules.vtkRenderingCore import vtkActor  # lazy: VTK
+        from vtkmodules.vtkRenderingOpenGL2 import vtkOpenGLPolyDataMapper  # lazy: VTK
 
-        image, rows, heights = sg_atlas(glr.stack.levels)
-        if max(image.shape[:2]) > MAX_TEXTURE_SIZE:
-            raise ValueError(f"SG mip atlas {image.shape[0]}x{image.shape[1]} exceeds {MAX_TEXTURE_SIZE}")
-        tex, data, buf = _float_texture(image)
-        shadow = visibility_sh is not None
+        tex, data, buf = _float_texture(shading.texture)
         mapper = vtkOpenGLPolyDataMapper()
-        mapper.SetInputData(_polydata(mesh, visibility_sh))
+        mapper.SetInputData(_polydata(mesh, shading.attributes))
         mapper.SetVBOShiftScaleMethod(0)  # DISABLE_SHIFT_SCALE: vertexMC must be world coordinates
         mapper.ScalarVisibilityOff()
-        if shadow:
-            for i in range(N_VIS_ATTRIBUTES):
-                mapper.MapDataArrayToVertexAttribute(
-                    f"glVis{i}", f"glVisArray{i}", vtkDataObject.FIELD_ASSOCIATION_POINTS, -1
-                )
+        for name in shading.attributes:
+            mapper.MapDataArrayToVertexAttribute(
+                name, _attribute_array(name), vtkDataObject.FIELD_ASSOCIATION_POINTS, -1
+            )
         actor = vtkActor()
         actor.SetMapper(mapper)
         actor.GetProperty().SetTexture("shrmTex", tex)
         sp = actor.GetShaderProperty()
-        for tag, text in gaussian_vertex_replacements(shadow):
+        for tag, text in shading.vertex:
             sp.AddVertexShaderReplacement(tag, True, text, False)
-        frag = gaussian_fragment_replacements(
-            glr.lobes, glr.stack.sigmas, rows, heights, shadow=shadow, normalized=normalized
-        )
-        for tag, text in frag:
+        for tag, text in shading.fragment:
             sp.AddFragmentShaderReplacement(tag, True, text, False)
-        return self._finish_object(mesh, glr, "gaussian-lobes", actor, tex, data, buf, None, None)
+        uni = sp.GetFragmentCustomUniforms()
+        uni.SetUniform3f("shrmEye", [0.0, 0.0, 0.0])
+        uni.SetUniform3f("shrmViewDir", [1.0, 0.0, 0.0])
+        uni.SetUniformi("shrmOrtho", 0)
+        return actor, tex, data, buf
 
     def update_view_maps(self, camera: Camera) -> None:
-        """Recompute each distant-mode object's map Σ B̃_pq Y^r_pq(Ṽ) (RH02 eq. 12) and mark it for upload.
+        """Run each object's per-frame texture update (its mode's ``update``) and mark the texture for upload.
 
-        Ṽ is the direction from the object's bounding-sphere centre toward the camera.
+        The update gets Ṽ, the direction from the object's bounding-sphere centre toward the
+        camera (distant: the map Σ B̃_pq Y^r_pq(Ṽ) of RH02 eq. 12; rsibr: the blended view map).
         """
         for obj in self._objects:
-            if obj.mode == "rsibr":  # Cabral et al. 1999: blend of the face's three maps
-                blended = obj.rsibr.view_map(camera.view_direction(obj.center))
-                obj.buffer.reshape(blended.shape)[...] = blended
-                obj.image.Modified()
+            if obj.mode.update is None:
                 continue
-            if obj.mode != "distant":
-                continue
-            view = camera.view_direction(obj.center)
-            basis = real_sph_harm(obj.shrm.P, view).astype(np.float32)
             # obj.buffer is shared with the vtkImageData (no copy); Modified() re-uploads it
-            np.matmul(basis, obj.flat_coeffs, out=obj.buffer.reshape(-1))
+            obj.mode.update(obj.state, camera.view_direction(obj.center), obj.buffer)
             obj.image.Modified()
 
     def _setup(self, camera: Camera, update_maps: bool = True) -> None:

@@ -1,9 +1,29 @@
-"""Comparators: Cabral et al. 1999 RSIBR, Kautz & McCool 2000, Green et al. 2007 Gaussian lobes.
+"""The numbers of a comparison: the SHRM (RH02) against Kautz & McCool 2000, Cabral, Olano,
+Nemec 1999 (RSIBR) and Green, Kautz, Durand 2007 (Gaussian lobes).
 
-``compare(brdf, env, ...)`` (:func:`.table.compare`) builds every representation and returns
-one JSON-able table of errors against the angular reference and of costs.
+- :func:`compare` / :func:`compare_representations` (:mod:`.table`): every representation
+  against the angular reference, one JSON-able table (``data_specs/compare_json.md``); the
+  latter also returns the built representations (for ``shrmkit.render.strip``).
+- :class:`CompareOptions` (:mod:`.options`): every option, passed whole.
+- :class:`Representation` (:mod:`.representation`): the contract of a representation;
+  :data:`REGISTRY` (:mod:`.registry`): kind key → builder.
+- :func:`sample_pairs` (:mod:`.pairs`) and :func:`relative_rms` (:mod:`.metrics`): the one
+  (R, V) sampler and the one error metric of the project.
+
+This package never imports the render layer.
 """
 
-from .table import compare
+from .metrics import relative_rms
+from .options import DEFAULT_ENV_HEIGHT, CompareOptions
+from .pairs import sample_pairs
+from .registry import REGISTRY, Builder, build_representations
+from .representation import BuildContext, BuiltRepresentation, RadianceModel, Representation, time_update
+from .table import FRONTAL_DEG, GRAZING_DEG, Comparison, compare, compare_representations, table_markdown
 
-__all__ = ["compare"]
+__all__ = [
+    "compare", "compare_representations", "Comparison", "table_markdown", "GRAZING_DEG", "FRONTAL_DEG",
+    "CompareOptions", "DEFAULT_ENV_HEIGHT",
+    "Representation", "RadianceModel", "BuiltRepresentation", "BuildContext", "time_update",
+    "REGISTRY", "Builder", "build_representations",
+    "sample_pairs", "relative_rms",
+]

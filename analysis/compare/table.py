@@ -1,49 +1,72 @@
 """``compare``: every representation against the angular reference, as one JSON-able table.
 
-For each representation of :mod:`.representations` the table holds the relative RMS radiance
-error against the brute-force angular integral (:func:`~shrmkit.analysis.reference.reference_radiance`,
-RH02 eq. 2) on sampled (R, V) pairs (:func:`.pairs.sample_pairs`, grazing views included),
+For each representation of :mod:`.registry` the table holds the relative RMS radiance error
+(:func:`.metrics.relative_rms`) against the brute-force angular integral
+(:func:`~shrmkit.analysis.reference.reference_radiance`, RH02 eq. 2) on sampled (R, V) pairs
+(:func:`.pairs.sample_pairs`, grazing views included), over all pairs, grazing views
+(θ_v > 70°) and views below 45°, with storage in bytes, precompute seconds, per-frame update
+seconds (distant viewer) and CPU evaluation cost per (R, V) pair. See
+``data_specs/compare_json.md`` for the dictionary's layout.
 
-    rel_rms = sqrt(Σ_pairs,rgb (B − B_ref)² / Σ_pairs,rgb B_ref²),
-
-the same restricted to grazing views (θ_v > 70°) and to views below 45°, storage in bytes,
-precompute seconds, per-frame update seconds (distant viewer) and CPU evaluation cost per
-(R, V) pair. See ``data_specs/compare_json.md`` for the dictionary's layout.
+This module computes numbers only. The side-by-side image strip is the render layer's:
+:func:`compare_representations` returns the built representations with the table so that
+``shrmkit.render.strip.write_strip`` draws them without a second build.
 """
 
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from ..._version import __version__
+from ...brdf_io.brdf import BRDF
+from ...brdf_io.envmap import EnvironmentMap, load_env
 from ...brdf_io.errors import BadInputError
+from ...brdf_io.specs import load_brdf
 from ..reference import reference_radiance
+from .metrics import relative_rms
+from .options import CompareOptions
 from .pairs import sample_pairs
-from .representations import build_representations
+from .registry import build_representations
+from .representation import Representation
 
-__all__ = ["compare", "relative_rms", "table_markdown", "GRAZING_DEG", "DEFAULT_ENV_HEIGHT"]
+__all__ = ["Comparison", "compare", "compare_representations", "table_markdown", "GRAZING_DEG", "FRONTAL_DEG"]
 
+#: Views with θ_v above this many degrees count as grazing (``rel_rms_grazing``).
 GRAZING_DEG = 70.0
-DEFAULT_ENV_HEIGHT = 64
+#: Views with θ_v below this many degrees count as frontal (``rel_rms_frontal``).
+FRONTAL_DEG = 45.0
+
+_MOVED_TO_RENDER = ("strip", "strip_size", "mesh")
 
 
-def relative_rms(value: np.ndarray, reference: np.ndarray) -> float:
-    """sqrt(Σ (value − reference)² / Σ reference²) over all entries (NaN if the reference is 0)."""
-    den = float(np.sum(np.asarray(reference, float) ** 2))
-    if den == 0.0:
-        return float("nan")
-    return float(np.sqrt(np.sum((np.asarray(value, float) - reference) ** 2) / den))
+@dataclass(frozen=True, eq=False)
+class Comparison:
+    """The outcome of :func:`compare_representations`.
+
+    Attributes
+    ----------
+    result
+        The JSON-able table (``data_specs/compare_json.md``), without ``strip``.
+    representations
+        The built :class:`~.representation.Representation` objects, in row order.
+    brdf, env
+        The inputs as evaluated (loaded; the environment resampled to ``env_height``): pass
+        these to ``write_strip`` so that the strip shows what the table measured.
+    """
+
+    result: dict[str, Any]
+    representations: tuple[Representation, ...]
+    brdf: BRDF
+    env: EnvironmentMap
 
 
-def _load_inputs(brdf: Any, env: Any, env_height: int | None) -> tuple[Any, Any]:
-    from ...brdf_io.envmap import EnvironmentMap, load_env
-    from ...brdf_io.specs import load_brdf
-
+def _load_inputs(brdf: Any, env: Any, env_height: int | None) -> tuple[BRDF, EnvironmentMap]:
     if isinstance(brdf, str | Path):
         brdf = load_brdf(brdf)
     if brdf.kind == "scattered":
@@ -56,74 +79,37 @@ def _load_inputs(brdf: Any, env: Any, env_height: int | None) -> tuple[Any, Any]
     return brdf, env
 
 
-def compare(
+def compare_representations(
     brdf: Any,
     env: Any,
+    options: CompareOptions | None = None,
     *,
-    eps: float = 0.03,
-    env_height: int | None = DEFAULT_ENV_HEIGHT,
-    n_pairs: int = 2000,
-    max_view_deg: float = 88.0,
-    seed: int = 0,
-    lower_P: int | None = None,
-    lobes: Sequence[int] = (1, 2, 3, 4),
-    n_elevations: int = 15,
-    cabral_reference_height: int | None = 32,
-    strip: str | Path | None = None,
-    strip_size: int = 64,
-    mesh: Any = None,
     progress: Callable[[str], None] | None = None,
-) -> dict[str, Any]:
-    """Compare the SHRM with Kautz–McCool, Cabral et al. and Green et al. (issue 7).
+) -> Comparison:
+    """Compare the SHRM with Kautz–McCool, Cabral et al. and Green et al.; keep what was built.
 
-    Parameters
-    ----------
-    brdf
-        BRDF object, spec string or file (a scattered one must be fitted first).
-    env
-        EnvironmentMap, spec or file (load y-up files with ``load_env`` yourself).
-    eps
-        SHRM tolerance (orders chosen by RH02's rule).
-    env_height
-        The environment is area-resampled to this many rows first (the angular reference
-        costs O(W S_L²) per value); None keeps it.
-    n_pairs, max_view_deg, seed
-        Error sample: :func:`.pairs.sample_pairs`.
-    lower_P, lobes, n_elevations, cabral_reference_height
-        Passed to :func:`.representations.build_representations`.
-    strip
-        If given, write the side-by-side image strip (:func:`.strip.write_strip`) there.
-    strip_size, mesh
-        Panel size in pixels and an optional mesh (default: a sphere) for the strip.
-    progress
-        ``progress(stage)`` callback.
-
-    Returns
-    -------
-    dict
-        JSON-able: ``brdf``, ``environment``, ``eps``, ``n_pairs``, ``reference`` (timings),
-        ``rows`` (one dict per representation), ``markdown`` (a table for reports),
-        ``strip`` (path and per-panel errors, when written). Layout: ``data_specs/compare_json.md``.
+    The numbers-only core of :func:`compare` (``brdf``, ``env``, ``progress`` as there), with
+    the options as one :class:`~.options.CompareOptions` (default: all defaults). The caller
+    may draw the image strip from the returned representations without a second build:
+    ``shrmkit.render.strip.write_comparison_strip(comparison, path)`` returns the table with
+    its ``strip`` entry.
     """
-    if not (np.isfinite(eps) and 0.0 < eps < 1.0):
-        raise BadInputError(None, f"eps must be in (0, 1), got {eps}")
-    if n_pairs < 10:
-        raise BadInputError(None, f"n_pairs must be at least 10, got {n_pairs}")
-    brdf, env = _load_inputs(brdf, env, env_height)
+    options = CompareOptions() if options is None else options
+    brdf, env = _load_inputs(brdf, env, options.env_height)
 
     def stage(name: str) -> None:
         if progress is not None:
             progress(name)
 
-    R, V, theta_v = sample_pairs(n_pairs, seed=seed, max_view_deg=max_view_deg)
+    n = options.n_pairs
+    R, V, theta_v = sample_pairs(n, seed=options.seed, max_view_deg=options.max_view_deg)
     stage("angular reference")
     t0 = time.perf_counter()
     ref = reference_radiance(env, brdf, R, V)
     t_ref = time.perf_counter() - t0
-    reps = build_representations(env, brdf, eps, lower_P=lower_P, lobes=lobes, n_elevations=n_elevations,
-                                 cabral_reference_height=cabral_reference_height, progress=progress)
+    reps = tuple(build_representations(env, brdf, options, progress=progress))
     grazing = theta_v > np.radians(GRAZING_DEG)
-    frontal = theta_v < np.radians(45.0)
+    frontal = theta_v < np.radians(FRONTAL_DEG)
     rows = []
     for rep in reps:
         stage(f"error: {rep.label}")
@@ -136,31 +122,73 @@ def compare(
             "rel_rms": relative_rms(pred, ref),
             "rel_rms_grazing": relative_rms(pred[grazing], ref[grazing]),
             "rel_rms_frontal": relative_rms(pred[frontal], ref[frontal]),
-            "storage_bytes": rep.storage_bytes,
-            "precompute_s": rep.precompute_s,
-            "update_s": rep.update_s,
-            "eval_us_per_pair": 1e6 * t_eval / n_pairs,
-            "params": rep.params,
+            "storage_bytes": int(rep.storage_bytes),
+            "precompute_s": float(rep.precompute_s),
+            "update_s": float(rep.update_s),
+            "eval_us_per_pair": 1e6 * t_eval / n,
+            "params": dict(rep.params),
         })
     result: dict[str, Any] = {
         "brdf": brdf.name,
         "environment": f"{env.name} ({env.height}x{env.width})",
-        "eps": float(eps),
-        "n_pairs": int(n_pairs),
-        "max_view_deg": float(max_view_deg),
+        "eps": options.eps,
+        "n_pairs": int(n),
+        "max_view_deg": float(options.max_view_deg),
         "grazing_deg": GRAZING_DEG,
-        "seed": int(seed),
-        "reference": {"seconds": t_ref, "us_per_pair": 1e6 * t_ref / n_pairs},
+        "seed": int(options.seed),
+        "reference": {"seconds": t_ref, "us_per_pair": 1e6 * t_ref / n},
         "rows": rows,
         "shrmkit_version": __version__,
     }
-    if strip is not None:
-        from ...render.strip import write_strip
-
-        stage("image strip")
-        result["strip"] = write_strip(strip, reps, env, brdf, size=strip_size, mesh=mesh)
     result["markdown"] = table_markdown(result)
-    return result
+    return Comparison(result, reps, brdf, env)
+
+
+def compare(brdf: Any, env: Any, *, progress: Callable[[str], None] | None = None, **options: Any) -> dict[str, Any]:
+    """Compare the SHRM with Kautz & McCool 2000, Cabral, Olano, Nemec 1999 and Green, Kautz,
+    Durand 2007 against the angular reference: the JSON-able table only.
+
+    Parameters
+    ----------
+    brdf
+        BRDF object, spec string or file (a scattered one must be fitted first).
+    env
+        EnvironmentMap, spec or file (load y-up files with ``load_env`` yourself).
+    progress
+        ``progress(stage)`` callback.
+    **options
+        Keyword-only fields of :class:`~.options.CompareOptions`: ``eps`` (default
+        ``DEFAULT_EPS``, checked by ``check_eps``), ``env_height``, ``n_pairs``,
+        ``max_view_deg``, ``seed``, ``lower_P``, ``lobes``, ``n_elevations``,
+        ``cabral_reference_height``, ``update_view``.
+
+    The image strip is not written here any more (this layer computes numbers only):
+    ``strip``, ``strip_size`` and ``mesh`` raise ``TypeError``. To get the strip, call
+    :func:`compare_representations` and pass its ``representations``, ``env`` and ``brdf`` to
+    ``shrmkit.render.strip.write_strip(path, ..., size=strip_size, mesh=mesh)``, as
+    ``shrm compare --strip`` does.
+
+    Returns
+    -------
+    dict
+        JSON-able: ``brdf``, ``environment``, ``eps``, ``n_pairs``, ``reference`` (timings),
+        ``rows`` (one dict per representation), ``markdown`` (a table for reports). Layout:
+        ``data_specs/compare_json.md``.
+
+    Raises
+    ------
+    BadInputError
+        Invalid options (ε outside (0, 1), n_pairs < 10, …), unreadable inputs, scattered
+        measurements.
+    TypeError
+        An unknown option, or one of the strip options that moved to the render layer.
+    """
+    moved = [name for name in _MOVED_TO_RENDER if name in options]
+    if moved:
+        raise TypeError(f"compare() no longer draws the image strip ({', '.join(moved)}): call "
+                        "compare_representations() and shrmkit.render.strip.write_strip() with its "
+                        "representations, env and brdf")
+    return compare_representations(brdf, env, CompareOptions(**options), progress=progress).result
 
 
 def _fmt_bytes(n: int) -> str:
@@ -174,7 +202,8 @@ def table_markdown(result: dict[str, Any]) -> str:
         f"{result['n_pairs']} (R, V) pairs, views up to {result['max_view_deg']:g} deg; reference "
         f"{result['reference']['seconds']:.2f} s)",
         "",
-        "| representation | rel RMS | grazing (>70 deg) | <45 deg | storage | precompute s | update ms | eval us |",
+        f"| representation | rel RMS | grazing (>{GRAZING_DEG:g} deg) | <{FRONTAL_DEG:g} deg | storage | precompute s "
+        "| update ms | eval us |",
         "|---|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for r in result["rows"]:

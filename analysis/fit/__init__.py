@@ -6,6 +6,9 @@ colour parameterizations and physical bounds), ``objective`` (variable projectio
 ``metrics`` (error metrics), ``optimize`` (:func:`fit_brdf`, :class:`FitResult`),
 ``report`` (errors per view-elevation band), ``fit_file`` (the JSON document,
 ``data_specs/fit_json.md``).
+
+Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
+SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
 """
 
 from .fit_file import fit_document, write_fit_json

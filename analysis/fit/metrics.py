@@ -19,6 +19,9 @@ A fit minimizes a weighted least-squares sum; for ``rel`` it is exactly rel_rms�
 ``log`` the weights are w/(ε + y cos θ_i)², the first-order expansion of the log metric
 about the data (ln(ε + m) − ln(ε + y) ≈ (m − y)/(ε + y)), which keeps the colour weights
 linear (variable projection) and the objective smooth.
+
+Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
+SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
 """
 
 from __future__ import annotations

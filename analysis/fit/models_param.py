@@ -23,6 +23,9 @@ RGB ks carry the colour. The shape is (ψ, ln n) with (Cxy, Cz) ∝ (cos ψ, sin
 the result is reported max-normalized. Cook–Torrance's Fresnel term is linear too:
 ks F = (ks f0) S₀ + (ks (1 − f0)) S₁ with S₀ = DG/(4 cos θ_i cos θ_o) and
 S₁ = S₀ (1 − cos θ_d)⁵, so only ln α is nonlinear.
+
+Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
+SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
 """
 
 from __future__ import annotations

@@ -17,6 +17,9 @@ Pipeline
 
 The same inputs and ``seed`` give the same result: every random choice is seeded and
 nlopt's own generator is seeded with ``nlopt.srand(seed)``.
+
+Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
+SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
 """
 
 from __future__ import annotations
@@ -33,6 +36,7 @@ from scipy.stats import qmc
 
 from ...brdf_io.brdf import BRDF
 from ...brdf_io.errors import BadInputError
+from ...brdf_io.specs import load_brdf
 from .metrics import METRICS, error_metrics
 from .models_param import MODELS, ModelParam, make_param
 from .objective import ProjectedObjective
@@ -233,8 +237,6 @@ def fit_brdf(
     t0 = time.perf_counter()
     _check_options(model, lobes, metric, distribution, starts, n_samples)
     if isinstance(brdf, str | Path):
-        from ...brdf_io.specs import load_brdf
-
         brdf = load_brdf(brdf)
     nlopt.srand(int(seed))
     if samples is None:

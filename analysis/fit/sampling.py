@@ -35,6 +35,9 @@ References
 ----------
 S. Rusinkiewicz, "A New Change of Variables for Efficient BRDF Representation", EGWR 1998.
 A. Ngan, F. Durand, W. Matusik, "Experimental Analysis of BRDF Models", EGSR 2005.
+
+Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
+SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
 """
 
 from __future__ import annotations
@@ -47,7 +50,8 @@ from scipy.stats import qmc
 from ...brdf_io.brdf import BRDF
 from ...brdf_io.errors import BadInputError
 from ...brdf_io.halfdiff import halfdiff_to_directions
-from ...brdf_io.table import eval_with_mask
+from ...brdf_io.masked_grid import eval_with_mask
+from ...brdf_io.merl import MERL_DIMS, merl_index_coordinates, merl_sample_angles
 
 __all__ = ["FitSamples", "sample_halfdiff", "collect_samples"]
 
@@ -92,8 +96,6 @@ class FitSamples:
 def _snap_to_merl_nodes(
     theta_h: np.ndarray, theta_d: np.ndarray, phi_d: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    from ...brdf_io.merl import MERL_DIMS, merl_index_coordinates, merl_sample_angles
-
     nodes = merl_sample_angles()
     index = merl_index_coordinates(theta_h, theta_d, phi_d)
     snapped = []

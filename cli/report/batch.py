@@ -20,14 +20,17 @@ Results do not depend on the engine (every random choice is seeded per BRDF).
 
 from __future__ import annotations
 
+import multiprocessing
 import re
 import time
 from collections.abc import Callable, Iterable, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from ...brdf_io.errors import BadInputError
+from ...render.preview import resolve_preview_mode
 from .collect import collect_report, failed_report
 from .options import ReportOptions
 from .writer import report_files, summary_row, write_folder, write_summary
@@ -111,9 +114,6 @@ def _serial(tasks: Sequence[ReportTask], progress: BatchProgress | None) -> Iter
 
 
 def _processes(tasks: Sequence[ReportTask], workers: int, progress: BatchProgress | None) -> Iterable[ReportOutcome]:
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor, as_completed
-
     with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn")) as pool:
         futures = []
         for task in tasks:
@@ -125,7 +125,7 @@ def _processes(tasks: Sequence[ReportTask], workers: int, progress: BatchProgres
 
 
 def _dask(tasks: Sequence[ReportTask], scheduler: str, progress: BatchProgress | None) -> Iterable[ReportOutcome]:
-    try:
+    try:  # lazy: Dask is an optional extra (shrmkit[dask]), loaded only for --dask-scheduler
         from distributed import Client
     except ImportError:  # pragma: no cover - depends on the installation
         raise BadInputError(None, "--dask-scheduler needs dask.distributed: pip install 'shrmkit[dask]'") from None
@@ -172,7 +172,6 @@ def run_batch(
     BatchResult
         ``n_failed`` counts the BRDFs whose report failed (they are in the summary).
     """
-    from ...render.preview import resolve_preview_mode
 
     if not sources:
         raise BadInputError(None, "no BRDF given")

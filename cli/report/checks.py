@@ -18,8 +18,11 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from ...brdf_io.brdf import BRDF
+from ...brdf_io.halfdiff import halfdiff_to_directions
+from ...brdf_io.merl import merl_sample_angles
 
 __all__ = ["directional_albedo", "reciprocity_check", "scattered_reciprocity", "data_checks",
            "merl_missing_above_surface", "ALBEDO_VIEWS_DEG"]
@@ -93,7 +96,6 @@ def _angles(L: np.ndarray, V: np.ndarray) -> np.ndarray:
 
 def scattered_reciprocity(L: np.ndarray, V: np.ndarray, rgb: np.ndarray, tol_deg: float = 0.5) -> dict[str, Any]:
     """Compare measurements at swapped configurations (θ_i, θ_o, Δφ) ↔ (θ_o, θ_i, Δφ)."""
-    from scipy.spatial import cKDTree
 
     a = _angles(np.asarray(L, float), np.asarray(V, float))
     swapped = a[:, [1, 0, 2]]
@@ -122,8 +124,6 @@ def merl_missing_above_surface(brdf: BRDF) -> int | None:
     values = getattr(brdf, "values", None)
     if values is None or getattr(values, "shape", None) != (3, 90, 90, 180):
         return None
-    from ...brdf_io.halfdiff import halfdiff_to_directions
-    from ...brdf_io.merl import merl_sample_angles
 
     th, td, pd = merl_sample_angles()
     L, V = halfdiff_to_directions(th[:, None, None], td[None, :, None], pd[None, None, :])

@@ -20,6 +20,9 @@ Reproducibility: every random choice is seeded by ``options.seed``, floats are r
 to 10 significant digits, and every field that depends on the machine's speed has a key
 ending in ``_seconds`` (:func:`strip_timings` removes them), so the same inputs give the
 same ``report.json`` apart from those keys.
+
+Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
+SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
 """
 
 from __future__ import annotations
@@ -33,11 +36,19 @@ from typing import Any
 import numpy as np
 
 from ..._version import __version__
+from ...analysis.compare import relative_rms, sample_pairs
+from ...analysis.fit import fit_brdf
+from ...analysis.lighting import lighting_coefficients
+from ...analysis.orders import choose_orders
+from ...analysis.reference import reference_radiance
+from ...analysis.shrm import prefilter
 from ...brdf_io.brdf import BRDF
 from ...brdf_io.errors import BadInputError
-from ...render.preview import PREVIEW_DISABLED, PreviewImage, render_previews
+from ...brdf_io.specs import load_brdf
+from ...render.preview import PREVIEW_DISABLED, PreviewImage, render_previews, resolve_preview_mode
 from .checks import RECIPROCITY_TOLERANCE, data_checks
 from .options import ReportOptions, load_report_env
+from .shared_state import OPENGL_LOCK
 
 __all__ = [
     "REPORT_FORMAT",
@@ -47,12 +58,14 @@ __all__ = [
     "failed_report",
     "jsonable",
     "strip_timings",
-    "random_pairs",
-    "relative_rms",
+    "REPORT_MAX_VIEW_DEG",
 ]
 
 REPORT_FORMAT = "shrmkit-report"
 REPORT_FORMAT_VERSION = 1
+#: Largest view angle θ_v of the error sample (``analysis.compare.sample_pairs``, the sampler
+#: ``shrm compare`` uses too); stated in report.json as ``error_sample``.
+REPORT_MAX_VIEW_DEG = 80.0
 SLICE_VIEWS_DEG = (0.0, 30.0, 60.0, 75.0)
 _SLICE_THETA_DEG = np.arange(-85.0, 85.0 + 1e-9, 2.5)
 _SIG_DIGITS = 10
@@ -90,32 +103,6 @@ def strip_timings(doc: Any) -> Any:
     return doc
 
 
-def random_pairs(n: int, seed: int, max_view_deg: float = 80.0) -> tuple[np.ndarray, np.ndarray]:
-    """Seeded (R, V) pairs: R uniform on the sphere, the view at θ_v from the normal
-    N = normalize(R + V) with cos θ_v uniform in [cos ``max_view_deg``, 1], azimuth uniform.
-
-    The angle between R and V is 2θ_v.
-    """
-    rng = np.random.default_rng(seed)
-    R = rng.normal(size=(n, 3))
-    R /= np.linalg.norm(R, axis=1, keepdims=True)
-    helper = np.where(np.abs(R[:, 2:3]) < 0.9, [0.0, 0.0, 1.0], [1.0, 0.0, 0.0])
-    t1 = np.cross(R, helper)
-    t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
-    t2 = np.cross(R, t1)
-    psi = rng.uniform(0.0, 2.0 * np.pi, n)
-    T = np.cos(psi)[:, None] * t1 + np.sin(psi)[:, None] * t2
-    theta_v = np.arccos(rng.uniform(np.cos(np.radians(max_view_deg)), 1.0, n))
-    V = np.cos(2 * theta_v)[:, None] * R + np.sin(2 * theta_v)[:, None] * T
-    return R, V / np.linalg.norm(V, axis=1, keepdims=True)
-
-
-def relative_rms(estimate: np.ndarray, reference: np.ndarray) -> float:
-    """sqrt(Σ|estimate − reference|² / Σ|reference|²) over all pairs and channels."""
-    den = float(np.sum(reference**2))
-    return float(np.sqrt(np.sum((estimate - reference) ** 2) / den)) if den > 0 else float("nan")
-
-
 def _stage(progress: Progress | None, name: str) -> None:
     if progress is not None:
         progress(name)
@@ -143,8 +130,6 @@ def _fit_entry(result: Any) -> dict[str, Any]:
 
 
 def _fits(brdf: BRDF, options: ReportOptions) -> tuple[list[dict[str, Any]], list[Any]]:
-    from ...analysis.fit import fit_brdf
-
     entries, results = [], []
     for model in options.models:
         t0 = time.perf_counter()
@@ -214,8 +199,6 @@ def _slices(brdf: BRDF, fitted: list[Any], models: tuple[str, ...]) -> dict[str,
 
 
 def _orders(brdf: BRDF, options: ReportOptions) -> tuple[list[dict[str, Any]], dict[str, Any], Any]:
-    from ...analysis.orders import choose_orders
-
     rows, choices = [], []
     for tol in options.all_tolerances:
         choice = choose_orders(brdf, eps=tol, max_F=options.max_F, max_P=options.max_P)
@@ -244,11 +227,7 @@ def _orders(brdf: BRDF, options: ReportOptions) -> tuple[list[dict[str, Any]], d
 
 
 def _environments(brdf: BRDF, options: ReportOptions, progress: Progress | None):
-    from ...analysis.lighting import lighting_coefficients
-    from ...analysis.reference import reference_radiance
-    from ...analysis.shrm import prefilter
-
-    R, V = random_pairs(options.n_pairs, options.seed)
+    R, V, _ = sample_pairs(options.n_pairs, seed=options.seed, max_view_deg=REPORT_MAX_VIEW_DEG)
     env_entries, speed_rows, main_shrms = [], [], []
     for spec in options.envs:
         env = load_report_env(spec, options)
@@ -304,6 +283,7 @@ def _environments(brdf: BRDF, options: ReportOptions, progress: Progress | None)
                     "eps_B": row["eps_B"],
                     "measured_rel_rms": err,
                     "n_pairs": options.n_pairs,
+                    "max_view_deg": REPORT_MAX_VIEW_DEG,
                 })
                 main_shrms.append((env, shrm))
         env_entries.append(entry)
@@ -409,8 +389,6 @@ def collect_report(
     BadInputError
         Unreadable BRDF, or nothing to analyse.
     """
-    from ...brdf_io.specs import load_brdf
-    from ...render.preview import resolve_preview_mode
 
     t_start = time.perf_counter()
     _stage(progress, "load")
@@ -429,7 +407,8 @@ def collect_report(
     env0, shrm0 = main_shrms[0]
     t0 = time.perf_counter()
     try:
-        previews, notes = render_previews(shrm0, env0, mode=mode, size=options.preview_size, mesh=options.mesh)
+        with OPENGL_LOCK:  # one offscreen context at a time per process (shared_state module)
+            previews, notes = render_previews(shrm0, env0, mode=mode, size=options.preview_size, mesh=options.mesh)
         preview_error = None
     except Exception as err:  # a failed preview must not lose the report
         previews, notes, preview_error = [], [f"preview failed: {err}"], str(err)

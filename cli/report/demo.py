@@ -9,6 +9,9 @@
 5. a preview render of a built-in mesh (torus knot with OpenGL; the CPU reference renders
    a sphere when no offscreen OpenGL context exists);
 6. reports on both materials with the summary table (``batch.run_batch``, quick profile).
+
+Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
+SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
 """
 
 from __future__ import annotations
@@ -18,6 +21,22 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+
+import numpy as np
+
+from ...analysis.fit import fit_brdf, write_fit_json
+from ...analysis.orders import choose_orders
+from ...analysis.shrm import prefilter
+from ...brdf_io.envmap import load_env
+from ...brdf_io.merl import write_merl
+from ...brdf_io.specs import load_brdf
+from ...render.camera import Camera
+from ...render.mesh import load_mesh
+from ...render.output import to_8bit, write_png
+from ...render.pipeline import render_frames
+from ...render.preview import PREVIEW_VIEW, cpu_sphere_image, preview_exposure, resolve_preview_mode, unit_mesh
+from .batch import run_batch
+from .options import profile
 
 __all__ = ["DEMO_MATERIALS", "DEMO_ENV", "DEMO_MESH", "DemoStep", "run_demo"]
 
@@ -44,18 +63,10 @@ class DemoStep:
 
 def _render_preview(shrm: Any, env: Any, path: Path, size: int) -> str:
     """Render the demo mesh with OpenGL, or the sphere with the CPU reference; returns a note."""
-    import numpy as np
-
-    from ...render.output import to_8bit, write_png
-    from ...render.preview import PREVIEW_VIEW, cpu_sphere_image, preview_exposure, resolve_preview_mode, unit_mesh
 
     mode, note = resolve_preview_mode("auto")
     exposure = preview_exposure(env)
     if mode == "gl":
-        from ...render.camera import Camera
-        from ...render.mesh import load_mesh
-        from ...render.pipeline import render_frames
-
         mesh = unit_mesh(load_mesh(DEMO_MESH))
         camera = Camera.looking_at(view=np.array(PREVIEW_VIEW), up=(0.0, 0.0, 1.0), margin=1.05)
         frames, timings = render_frames(mesh, shrm, [camera], size=size, mode="distant", env_radiance=env.radiance,
@@ -70,14 +81,6 @@ def run_demo(out_dir: str | Path = "shrm-demo", *, progress: Callable[[str], Non
              report_progress: Callable[[str, str, str], None] | None = None,
              size: int = 384) -> list[DemoStep]:
     """Run the demo into ``out_dir`` (see module docstring); returns the steps in order."""
-    import shrmkit
-
-    from ...analysis.fit import fit_brdf, write_fit_json
-    from ...analysis.orders import choose_orders
-    from ...analysis.shrm import prefilter
-    from ...brdf_io.merl import write_merl
-    from .batch import run_batch
-    from .options import profile
 
     out = Path(out_dir)
     steps: list[DemoStep] = []
@@ -90,13 +93,13 @@ def run_demo(out_dir: str | Path = "shrm-demo", *, progress: Callable[[str], Non
     t = begin("tabulate built-in materials as MERL files")
     files = []
     for name, spec in DEMO_MATERIALS.items():
-        files.append(write_merl(out / "brdfs" / f"{name}.binary", shrmkit.load_brdf(spec)))
+        files.append(write_merl(out / "brdfs" / f"{name}.binary", load_brdf(spec)))
     steps.append(DemoStep("MERL files", tuple(files), "analytic Lafortune materials tabulated at 90x90x180",
                           time.perf_counter() - t))
     plastic = files[0]
 
     t = begin("orders")
-    brdf = shrmkit.load_brdf(plastic)
+    brdf = load_brdf(plastic)
     orders = choose_orders(brdf, eps=DEMO_EPS)
     steps.append(DemoStep("orders", (plastic,), f"{plastic.stem}: F={orders.F}, P={orders.P} at eps {DEMO_EPS:g} "
                           f"(eps(F,P)={orders.eps:.3g})", time.perf_counter() - t,
@@ -109,7 +112,7 @@ def run_demo(out_dir: str | Path = "shrm-demo", *, progress: Callable[[str], Non
                           time.perf_counter() - t, {"rel_rms": fit.errors["rel_rms"]}))
 
     t = begin("prefilter")
-    env = shrmkit.load_env(DEMO_ENV, height=128)
+    env = load_env(DEMO_ENV, height=128)
     shrm = prefilter(env, brdf, eps=DEMO_EPS)
     shrm_path = shrm.save(out / "shrm" / f"{plastic.stem}.shrm.npz")
     steps.append(DemoStep("prefilter", (shrm_path,), f"SHRM F={shrm.F}, P={shrm.P}, {shrm.height}x{shrm.width}, "

@@ -10,6 +10,8 @@ import math
 from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
+from ...analysis.fit.models_param import MODELS
+from ...brdf_io.envmap import load_env
 from ...brdf_io.errors import BadInputError
 
 __all__ = ["ReportOptions", "DEFAULT_TOLERANCES", "DEFAULT_MODELS", "PREVIEW_MODES", "profile"]
@@ -101,7 +103,6 @@ class ReportOptions:
             raise BadInputError(None, f"env_azimuth must be finite, got {self.env_azimuth!r}")
         if self.albedo_nodes < 8:
             raise BadInputError(None, f"albedo_nodes must be >= 8, got {self.albedo_nodes!r}")
-        from ...analysis.fit.models_param import MODELS
 
         for model in self.models:
             if model not in MODELS:
@@ -145,7 +146,6 @@ def profile(name: str = "full", **changes: Any) -> ReportOptions:
 
 def load_report_env(spec: str, options: ReportOptions):  # -> EnvironmentMap
     """Load one of ``options.envs`` at ``env_height`` rows with the orientation options."""
-    from ...brdf_io.envmap import load_env
 
     if spec.strip().startswith("builtin:"):
         return load_env(spec, azimuth=options.env_azimuth, height=options.env_height)

@@ -1,7 +1,9 @@
 """Report plots as PNG bytes, drawn from a ``report.json`` document alone (matplotlib, Agg).
 
 The figures use matplotlib's object API (``Figure`` + the Agg canvas, never ``pyplot``),
-so they need no display, keep no global state and can be drawn from worker threads.
+so they need no display and change no pyplot state. matplotlib's text layout (mathtext,
+font caches) is still shared by the whole process, so :func:`make_plots` draws under
+``shared_state.MATPLOTLIB_LOCK``: safe from the threads of a Dask worker.
 
 - ``energy``: captured energy 1 − ε(F, P) against F for each P, with the environments'
   1 − ε_L(F) (RH02 Fig. 6 style) and the chosen (F, P) at each tolerance;
@@ -10,6 +12,9 @@ so they need no display, keep no global state and can be drawn from worker threa
 - ``speed_error``: measured SHRM error against prefilter time per tolerance (and √ε_B);
 - ``fit_slices``: measured vs fitted ρ in the plane of incidence at a few view angles;
 - ``fit_bands``: fit error by view-elevation band (Green et al. 2007 Fig. 4 style).
+
+Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
+SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
 """
 
 from __future__ import annotations
@@ -18,6 +23,11 @@ import io
 from typing import Any
 
 import numpy as np
+from matplotlib import colormaps
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+from .shared_state import MATPLOTLIB_LOCK
 
 __all__ = ["PLOT_TITLES", "make_plots", "energy_plot", "accuracy_by_p_plot", "speed_error_plot",
            "fit_slices_plot", "fit_bands_plot"]
@@ -34,9 +44,6 @@ _DPI = 80
 
 
 def _figure(width: float = 6.0, height: float = 3.6):
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
     fig = Figure(figsize=(width, height), dpi=_DPI)
     FigureCanvasAgg(fig)
     return fig
@@ -55,7 +62,6 @@ def energy_plot(doc: dict[str, Any]) -> bytes:
     fig = _figure()
     ax = fig.add_subplot(1, 1, 1)
     F = np.arange(table.shape[0])
-    from matplotlib import colormaps
 
     cmap = colormaps["viridis"]
     n_p = min(table.shape[1], 9)
@@ -170,11 +176,12 @@ def make_plots(doc: dict[str, Any]) -> dict[str, bytes]:
     """Every plot the document has data for: ``{key: png_bytes}`` (keys of :data:`PLOT_TITLES`)."""
     if doc.get("status") != "ok":
         return {}
-    plots = {"energy": energy_plot(doc), "accuracy_by_p": accuracy_by_p_plot(doc)}
-    if doc.get("speed_vs_error"):
-        plots["speed_error"] = speed_error_plot(doc)
-    if doc.get("fit_slices", {}).get("views"):
-        plots["fit_slices"] = fit_slices_plot(doc)
-    if any(f.get("bands") for f in doc.get("fits", [])):
-        plots["fit_bands"] = fit_bands_plot(doc)
+    with MATPLOTLIB_LOCK:  # matplotlib's text layout is process-global state (shared_state module)
+        plots = {"energy": energy_plot(doc), "accuracy_by_p": accuracy_by_p_plot(doc)}
+        if doc.get("speed_vs_error"):
+            plots["speed_error"] = speed_error_plot(doc)
+        if doc.get("fit_slices", {}).get("views"):
+            plots["fit_slices"] = fit_slices_plot(doc)
+        if any(f.get("bands") for f in doc.get("fits", [])):
+            plots["fit_bands"] = fit_bands_plot(doc)
     return plots

@@ -6,8 +6,15 @@ import numpy as np
 import pytest
 from scipy.special import sph_harm_y
 
-from shrmkit.analysis.sh import Lambda, complex_sph_harm, legendre_f, real_sph_harm
-from shrmkit.analysis.wigner import rotation_D
+from shrmkit.analysis.sh import (
+    LEGENDRE_TESTED_LMAX,
+    Lambda,
+    NumericalLimitWarning,
+    complex_sph_harm,
+    legendre_f,
+    real_sph_harm,
+)
+from shrmkit.analysis.wigner import WIGNER_TESTED_LMAX, rotation_D, wigner_d_tilde
 
 
 def _unit(rng, n):
@@ -76,3 +83,21 @@ def test_q0_column_is_funk_hecke():
 def test_wigner_unitary_high_degree():
     D = rotation_D(200, 1.1, 0.4)
     np.testing.assert_allclose(D @ D.conj().T, np.eye(401), atol=1e-10)
+
+
+def test_legendre_orthonormal_at_the_tested_limit():
+    """At l = LEGENDRE_TESTED_LMAX the f_lm stay orthonormal under Gauss–Legendre quadrature
+    (exact for these polynomial degrees): 2π Σ_k w_k f_lm(x_k) f_l'm(x_k) = δ_ll'."""
+    L = LEGENDRE_TESTED_LMAX
+    x, w = np.polynomial.legendre.leggauss(L + 2)
+    f = legendre_f(L, 8, x)
+    for m in (0, 4, 8):
+        gram = 2.0 * np.pi * (f[m:, m, :] * w) @ f[m:, m, :].T
+        assert np.abs(gram - np.eye(L + 1 - m)).max() < 1e-9
+
+
+def test_beyond_the_tested_degree_warns():
+    with pytest.warns(NumericalLimitWarning, match="legendre_f: degree 2001"):
+        legendre_f(LEGENDRE_TESTED_LMAX + 1, 0, np.array([0.5]))
+    with pytest.warns(NumericalLimitWarning, match="wigner_d_tilde: degree 201"):
+        wigner_d_tilde(WIGNER_TESTED_LMAX + 1, 0.3)

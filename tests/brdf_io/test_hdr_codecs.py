@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 import pytest
 
@@ -139,18 +137,15 @@ def test_pfm_layout_bottom_row_first(tmp_path):
     assert np.array_equal(back[..., 1], grey[::-1].astype(np.float32))
 
 
-def test_real_files_and_speed(shared_data):
+def test_real_files(shared_data):
     """Reference: data/README.md (grace_latlong max ≈ 18.4, mean ≈ 0.016; 1024×512 sizes)."""
     grace = read_image(shared_data / "env" / "grace_latlong.exr")
     assert grace.shape == (512, 1024, 3)
     assert grace.max() == pytest.approx(18.4, rel=0.01)
     assert grace.mean() == pytest.approx(0.016, rel=0.05)
     path = shared_data / "env" / "polyhaven_cc0" / "venice_sunset_1k.hdr"
-    start = time.perf_counter()
     venice = read_image(path)
-    elapsed = time.perf_counter() - start
     assert venice.shape == (512, 1024, 3)
-    assert elapsed < 1.0
     cube_face = read_image(shared_data / "env" / "debevec1999_cubes" / "stpeters" / "px.exr")
     assert cube_face.shape == (256, 256, 3)
 

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 import struct
-import time
 from pathlib import Path
 
 import numpy as np
@@ -276,14 +275,16 @@ def test_missing_block_is_excluded_and_counted(tmp_path: Path) -> None:
     np.testing.assert_allclose(rho_c[n_in:], 0.25, rtol=1e-14)
 
 
-def test_eval_speed_1e6_directions() -> None:
-    """1e6 queries in about a second (vectorized, blocked); bound loose for slow CI."""
+def test_blocked_evaluation_matches_small_batches() -> None:
+    """Queries spanning several evaluation blocks give the same values as small batches
+    (the speed of 1e6 queries is measured in benchmarks/io_speed.py, not asserted here)."""
     rng = np.random.default_rng(14)
     brdf = MerlBRDF(rng.uniform(size=(3, 90, 90, 180)), name="random")
-    L, V = _random_hemisphere(rng, 1_000_000), _random_hemisphere(rng, 1_000_000)
-    t0 = time.perf_counter()
-    brdf.eval(L, V)
-    assert time.perf_counter() - t0 < 4.0
+    L, V = _random_hemisphere(rng, 100_000), _random_hemisphere(rng, 100_000)
+    whole = brdf.eval(L.reshape(10, -1, 3), V.reshape(10, -1, 3))
+    assert whole.shape == (10, 10_000, 3)
+    parts = np.concatenate([brdf.eval(L[k : k + 997], V[k : k + 997]) for k in range(0, 100_000, 997)])
+    np.testing.assert_array_equal(whole.reshape(-1, 3), parts)
 
 
 # ----------------------------------------------------------------------------- bad input

@@ -1,4 +1,4 @@
-"""shrmkit BRDF table (.npz) reader/writer and interpolation (brdf_io/table.py)."""
+"""shrmkit BRDF table (.npz) reader/writer and interpolation (brdf_io/table.py, brdf_io/masked_grid.py)."""
 
 from __future__ import annotations
 
@@ -11,10 +11,10 @@ import pytest
 import shrmkit
 from shrmkit.brdf_io.errors import BadInputError
 from shrmkit.brdf_io.halfdiff import spherical_angles
+from shrmkit.brdf_io.masked_grid import interpolate_excluding_missing
 from shrmkit.brdf_io.merl import MerlBRDF
 from shrmkit.brdf_io.table import (
     TableBRDF,
-    interpolate_excluding_missing,
     read_table,
     tabulate_table,
     write_table,

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
+from shrmkit.analysis.tolerance import DEFAULT_EPS
 from shrmkit.cli.main import main
 
 FAST = ["--env", "builtin:studio,height=16", "--env-height", "16", "--pairs", "100", "--lobes", "1",
@@ -26,7 +27,9 @@ def test_compare_json_strip_and_markdown(tmp_path: Path, capsys) -> None:
     assert image.shape == (2 * 32, (1 + len(labels)) * 32, 3)
     assert image[:32, :32].max() > 0  # the reference panel is not black
     assert md.read_text().startswith("Comparison for microfacet:sigma=0.3")
-    assert len(doc["strip"]["panels"]) == len(labels)
+    assert [p["label"] for p in doc["strip"]["panels"]] == labels
+    assert list(doc)[-2:] == ["strip", "markdown"]  # the layout of data_specs/compare_json.md
+    assert doc["eps"] == DEFAULT_EPS
 
 
 def test_compare_table_output(capsys) -> None:

@@ -13,7 +13,11 @@ import OpenEXR
 import pytest
 from PIL import Image
 
+import shrmkit
+from shrmkit.analysis.tolerance import DEFAULT_EPS
 from shrmkit.cli.main import main
+from shrmkit.render.camera import Camera
+from shrmkit.render.cpu_reference import shade, sphere_geometry
 
 
 def _read_exr(path: Path) -> tuple[np.ndarray, np.ndarray]:
@@ -26,10 +30,6 @@ def _read_exr(path: Path) -> tuple[np.ndarray, np.ndarray]:
 def test_render_sphere_png_exr_and_timings(offscreen, tmp_path: Path, capsys) -> None:
     """Ortho sphere in distant mode: EXR = CPU reference of the same prefiltered SHRM inside the disc,
     environment behind it; PNG written; timings printed."""
-    import shrmkit
-    from shrmkit.render.camera import Camera
-    from shrmkit.render.cpu_reference import shade, sphere_geometry
-
     png, exr = tmp_path / "s.png", tmp_path / "s.exr"
     rc = main(["render", "builtin:sphere:subdivisions=5", "--env", "builtin:studio", "--brdf", "phong:s=8",
                "--size", "48", "--camera", "ortho", "--view", "0,1,0.5", "--fps-frames", "2",
@@ -40,7 +40,7 @@ def test_render_sphere_png_exr_and_timings(offscreen, tmp_path: Path, capsys) ->
         assert word in out
     assert np.asarray(Image.open(png)).shape == (48, 48, 3)
     rad, alpha = _read_exr(exr)
-    shrm = shrmkit.prefilter("builtin:studio", "phong:s=8", eps=0.03)
+    shrm = shrmkit.prefilter("builtin:studio", "phong:s=8", eps=DEFAULT_EPS)
     cam = Camera.looking_at(view=(0, 1, 0.5), projection="ortho")
     geom = sphere_geometry(cam, 48, 48)
     inside = geom.hit & (alpha > 0.5) & (np.sum(geom.N * geom.V, -1) > 0.2)

@@ -100,12 +100,11 @@ def test_exr_holds_float32_exactly(tmp_path: Path) -> None:
 
 def test_writers_are_atomic(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """A failing write leaves neither the target nor a temporary file behind."""
-    import PIL.Image
 
     def boom(*args, **kwargs):
         raise OSError("disk full")
 
-    monkeypatch.setattr(PIL.Image.Image, "save", boom)
+    monkeypatch.setattr(Image.Image, "save", boom)
     with pytest.raises(OSError, match="disk full"):
         write_png(tmp_path / "x.png", np.zeros((2, 2, 3), np.uint8))
     assert list(tmp_path.iterdir()) == []

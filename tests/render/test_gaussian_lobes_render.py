@@ -10,11 +10,20 @@ environment: every normalized SG convolution is the constant, so B = c Σ_k w_k(
 from __future__ import annotations
 
 import numpy as np
+import OpenEXR
 import pytest
 
-from shrmkit.analysis.baselines.gaussian_lobes import GaussianLobeModel, GaussianLobes, sg_mip_stack
+from shrmkit.analysis.baselines.gaussian_lobes import (
+    GaussianLobeModel,
+    GaussianLobes,
+    fit_gaussian_lobes,
+    sg_mip_stack,
+)
 from shrmkit.analysis.baselines.selfshadow import hemisphere_step_sh, vertex_visibility_sh, visibility_hook
+from shrmkit.brdf_io.envmap import load_env
 from shrmkit.brdf_io.latlong import pixel_directions
+from shrmkit.brdf_io.specs import load_brdf
+from shrmkit.cli.main import main
 from shrmkit.render.camera import Camera
 from shrmkit.render.cpu_reference import interpolate_vertex_data, mesh_geometry, shade, sphere_geometry
 from shrmkit.render.mesh import load_mesh
@@ -132,13 +141,6 @@ def test_add_object_checks_representation(offscreen, sphere, glr) -> None:
 
 def test_cli_render_gaussian_lobes(offscreen, tmp_path, capsys) -> None:
     """``shrm render --mode gaussian-lobes``: fit time printed; EXR = CPU render of the same fit."""
-    import OpenEXR
-
-    from shrmkit.analysis.baselines.gaussian_lobes import fit_gaussian_lobes
-    from shrmkit.brdf_io.envmap import load_env
-    from shrmkit.brdf_io.specs import load_brdf
-    from shrmkit.cli.main import main
-
     png, exr = tmp_path / "g.png", tmp_path / "g.exr"
     rc = main(["render", "builtin:sphere:subdivisions=5", "--env", "builtin:studio", "--brdf", "phong:s=8",
                "--mode", "gaussian-lobes", "--elevations", "4", "--size", "40", "--camera", "ortho",

@@ -6,6 +6,7 @@ import io
 
 import numpy as np
 import pytest
+from PIL import Image
 
 import shrmkit
 from shrmkit.render.preview import render_previews
@@ -13,8 +14,6 @@ from shrmkit.render.preview import render_previews
 
 @pytest.mark.render
 def test_mesh_preview_is_rendered_next_to_the_sphere(offscreen):
-    from PIL import Image
-
     env = shrmkit.load_env("builtin:studio,height=32")
     shrm = shrmkit.prefilter(env, "microfacet:sigma=0.3", eps=0.1, size=32)
     images, notes = render_previews(shrm, env, mode="gl", size=64, mesh="builtin:torus")

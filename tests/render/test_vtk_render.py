@@ -2,7 +2,8 @@
 
 References: closed forms (B depending only on R, or only on V through the real SH of
 analysis.sh), the numpy CPU renderer (analytic ray–sphere / Möller–Trumbore ray casting +
-SHRM.radiance), and the brute-force angular-domain integral analysis.reference (RH02 eq. 2).
+SHRM.radiance), and the brute-force angular-domain integral analysis.reference (RH02 eq. 2;
+RH02 = Ramamoorthi & Hanrahan 2002, doi:10.1145/566654.566611).
 """
 
 from __future__ import annotations
@@ -11,9 +12,14 @@ import numpy as np
 import OpenEXR
 import pytest
 
+import shrmkit
+from shrmkit.analysis.reference import reference_radiance
 from shrmkit.analysis.sh import real_sph_harm
 from shrmkit.analysis.shrm import SHRM
+from shrmkit.analysis.tolerance import DEFAULT_EPS
+from shrmkit.brdf_io.envmap import load_env
 from shrmkit.brdf_io.latlong import pixel_directions
+from shrmkit.brdf_io.specs import load_brdf
 from shrmkit.render.camera import Camera
 from shrmkit.render.cpu_reference import mesh_geometry, shade, sphere_geometry
 from shrmkit.render.mesh import load_mesh
@@ -151,22 +157,16 @@ def test_several_objects_with_their_own_shrm(offscreen) -> None:
 
 @pytest.fixture(scope="module")
 def prefiltered():
-    import shrmkit
-    from shrmkit.brdf_io.envmap import load_env
-    from shrmkit.brdf_io.specs import load_brdf
-
     env = load_env("builtin:studio", height=64)
     brdf = load_brdf("microfacet:sigma=0.2")
-    eps = 0.03
+    eps = DEFAULT_EPS
     return env, brdf, eps, shrmkit.prefilter(env, brdf, eps=eps)
 
 
 @pytest.mark.parametrize(("mode", "projection"), [("distant", "ortho"), ("perpixel", "perspective")])
 def test_accuracy_against_angular_reference(offscreen, sphere, prefiltered, tmp_path, mode, projection) -> None:
-    """Issue acceptance: relative RMS between the rendered EXR and the angular-domain reference
+    """Acceptance: relative RMS between the rendered EXR and the angular-domain reference
     (interior pixels, θ_v ≤ 80°) ≤ 2·sqrt(ε) + 2%. 300 random interior pixels are integrated."""
-    from shrmkit.analysis.reference import reference_radiance
-
     env, brdf, eps, shrm = prefiltered
     cam = Camera.looking_at(view=(1.0, 0.5, 0.4), projection=projection)
     with SHRMRenderer(64, 64) as r:
@@ -191,9 +191,6 @@ def test_accuracy_against_angular_reference(offscreen, sphere, prefiltered, tmp_
 def test_spot_lights_the_matching_side(offscreen, sphere, spot, view, bright_half) -> None:
     """builtin:spot at +x seen from −y lights the right half (image right = +x); a spot at +z
     seen from +x lights the top half."""
-    import shrmkit
-    from shrmkit.brdf_io.envmap import load_env
-
     env = load_env(f"builtin:spot,dir={spot}", height=32)
     shrm = shrmkit.prefilter(env, "microfacet:sigma=0.3", eps=0.05)
     cam = Camera.looking_at(view=view, projection="ortho")

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from shrmkit.analysis.baselines.rsibr import rsibr_from_shrm
-from shrmkit.analysis.compare.pairs import sample_pairs
+from shrmkit.analysis.compare import relative_rms, sample_pairs
 from shrmkit.analysis.reference import reference_radiance
 from shrmkit.analysis.shrm import prefilter
 from shrmkit.brdf_io.envmap import load_env
@@ -31,7 +31,7 @@ def sharp():
 
 
 def _err(pred: np.ndarray, ref: np.ndarray, sel: np.ndarray) -> float:
-    return float(np.sqrt(np.sum((pred[sel] - ref[sel]) ** 2) / np.sum(ref[sel] ** 2)))
+    return relative_rms(pred[sel], ref[sel])
 
 
 def test_shrm_p5_beats_kautz_mccool_near_grazing(sharp) -> None:

@@ -1,0 +1,200 @@
+"""GLSL shared by every render mode: the shader prelude, lat-long lookup, real SH, and :class:`Shading`.
+
+Each render mode (``render.modes``) turns its model into a :class:`Shading`: one float32
+texture (sampler ``shrmTex``), VTK shader replacements, optional per-vertex ``vec4``
+attributes, and the state its per-frame update reads. The replacements are made here, once:
+
+- vertex shader (:func:`vertex_replacements`): pass the world position ``shrmPosWC`` and
+  normal ``shrmNormWC`` on (the actor's model matrix is the identity and VBO shift/scale is
+  disabled, so ``vertexMC`` and ``normalMC`` are world-space), plus each attribute ``a`` as
+  the varying :func:`varying` (``a_f``);
+- fragment shader (:func:`fragment_replacements`): the prelude computes, in the z-up world
+  frame (= VTK world frame), N = normalize(interpolated normal) flipped on back faces,
+  V = normalize(eye − P) (perspective) or the constant direction toward the camera (ortho),
+  R = 2 (N·V) N − V; the mode's body then sets ``vec3 shrmRad``, written out as the colour.
+
+Uniforms (set per frame by the renderer): ``shrmEye`` (vec3), ``shrmOrtho`` (int),
+``shrmViewDir`` (vec3, toward the camera, used when ortho).
+
+Lat-long lookup (:data:`LATLONG_GLSL`) is the bilinear interpolation of
+:func:`shrmkit.brdf_io.latlong.bilinear_lookup` done with ``texelFetch`` (four exact float
+texels, weights in float32): φ wraps around with no seam, θ is clamped to the first and last
+row centres; θ = atan2(|R_xy|, R_z) stays accurate at the poles. No hardware filtering or
+mipmapping is involved, so there is no seam from derivative jumps and no 8-bit weight
+quantization.
+
+The real SH (DESIGN §2 basis, index l² + l + m) are generated as straight-line GLSL
+(:func:`sh_glsl`): Y^r_lm = K_lm h_lm(z) Re (x + iy)^m (m ≥ 0) or Im (x + iy)^|m| (m < 0),
+with K_m = √2 (−1)^m f_mm / sin^m θ and h_lm the normalized-Legendre three-term recurrence of
+:func:`shrmkit.analysis.sh.legendre_f` divided by f_mm (no trigonometric functions).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "Shading",
+    "MAX_TEXTURE_SIZE",
+    "check_texture_size",
+    "vertex_replacements",
+    "fragment_replacements",
+    "varying",
+    "glsl_float",
+    "sh_glsl",
+    "LATLONG_GLSL",
+]
+
+#: Largest texture edge we rely on (llvmpipe and current GPUs allow at least 16384).
+MAX_TEXTURE_SIZE = 16384
+
+Replacements = list[tuple[str, str]]
+
+
+@dataclass(frozen=True, eq=False)
+class Shading:
+    """What one object needs on the GPU.
+
+    Attributes
+    ----------
+    texture
+        float32 (h, w, 3) image bound as sampler ``shrmTex``; texel (x, y) is ``texture[y, x]``.
+        A mode with a per-frame update rewrites it in place every frame.
+    vertex, fragment
+        (tag, replacement) pairs for VTK's vertex and fragment shaders.
+    attributes
+        Per-vertex ``vec4`` attributes: GLSL name -> float32 (n_vertices, 4).
+    state
+        What the mode's per-frame update reads (``RenderMode.update``), or None.
+    """
+
+    texture: np.ndarray
+    vertex: Replacements
+    fragment: Replacements
+    attributes: dict[str, np.ndarray] = field(default_factory=dict)
+    state: Any = None
+
+
+def check_texture_size(shape: tuple[int, ...], what: str, hint: str = "") -> None:
+    """Raise ValueError when a texture of ``shape`` (height, width, ...) has an edge over
+    :data:`MAX_TEXTURE_SIZE` texels; the message starts with ``what`` and ends with ``hint``."""
+    h, w = int(shape[0]), int(shape[1])
+    if max(h, w) > MAX_TEXTURE_SIZE:
+        raise ValueError(f"{what} needs a {h}x{w} texture (limit {MAX_TEXTURE_SIZE}){'; ' + hint if hint else ''}")
+
+
+def glsl_float(x: float) -> str:
+    """A GLSL float literal with 9 significant digits (exact for float32)."""
+    return f"{float(x):.9e}"
+
+
+def varying(attribute: str) -> str:
+    """Name of the varying that carries the vertex attribute ``attribute`` to the fragment shader."""
+    return f"{attribute}_f"
+
+
+def vertex_replacements(attributes: Sequence[str] = ()) -> Replacements:
+    """(tag, replacement) pairs for the vertex shader: world position, normal and ``attributes`` passed on."""
+    dec = ["//VTK::Normal::Dec", "out vec3 shrmPosWC;", "out vec3 shrmNormWC;"]
+    impl = ["//VTK::Normal::Impl", "  shrmPosWC = vertexMC.xyz;", "  shrmNormWC = normalMC;"]
+    for name in attributes:
+        dec += [f"in vec4 {name};", f"out vec4 {varying(name)};"]
+        impl.append(f"  {varying(name)} = {name};")
+    return [("//VTK::Normal::Dec", "\n".join(dec) + "\n"), ("//VTK::Normal::Impl", "\n".join(impl) + "\n")]
+
+
+def fragment_replacements(
+    declarations: Sequence[str], body: Sequence[str], attributes: Sequence[str] = ()
+) -> Replacements:
+    """(tag, replacement) pairs for the fragment shader: the prelude, the mode's ``declarations``
+    and ``body`` (which sets ``vec3 shrmRad`` from ``shrmN``, ``shrmV``, ``shrmR``), the output."""
+    dec = [
+        "//VTK::Edges::Dec",
+        "in vec3 shrmPosWC;",
+        "in vec3 shrmNormWC;",
+        *(f"in vec4 {varying(name)};" for name in attributes),
+        *declarations,
+    ]
+    impl = [
+        "  vec3 shrmN = normalize(shrmNormWC);",
+        "  if (!gl_FrontFacing) shrmN = -shrmN;",
+        "  vec3 shrmV = (shrmOrtho != 0) ? normalize(shrmViewDir) : normalize(shrmEye - shrmPosWC);",
+        "  vec3 shrmR = normalize(2.0 * dot(shrmN, shrmV) * shrmN - shrmV);",
+        *body,
+        "  gl_FragData[0] = vec4(shrmRad, 1.0);",
+    ]
+    # declarations go at the last declaration tag before main(), after VTK has declared the
+    # texture samplers (//VTK::TMap::Dec); the tag is kept so VTK's own code still lands there
+    return [("//VTK::Edges::Dec", "\n".join(dec) + "\n"), ("//VTK::Light::Impl", "\n".join(impl) + "\n")]
+
+
+def sh_glsl(lmax: int) -> str:
+    """GLSL function ``void shrm_sh(vec3 v, out float Y[n])`` for the real SH up to ``lmax``."""
+    n = (lmax + 1) ** 2
+    lines = [f"void shrm_sh(vec3 v, out float Y[{n}]) {{", "  float x = v.x, y = v.y, z = v.z;"]
+    lines.append("  float c0 = 1.0, s0 = 0.0;")
+    fmm = 1.0 / math.sqrt(4.0 * math.pi)  # f_00; f_mm = this * prod(-sqrt((2k+1)/(2k))) * sin^m
+    for m in range(lmax + 1):
+        if m > 0:
+            fmm *= -math.sqrt((2.0 * m + 1.0) / (2.0 * m))
+            # (x + iy)^m = (x + iy)^(m-1) (x + iy)
+            lines.append(f"  float c{m} = c{m - 1} * x - s{m - 1} * y, s{m} = c{m - 1} * y + s{m - 1} * x;")
+        k = fmm if m == 0 else math.sqrt(2.0) * (-1.0) ** m * fmm
+        for l in range(m, lmax + 1):
+            if l == m:
+                expr = "1.0"
+            elif l == m + 1:
+                expr = f"{glsl_float(math.sqrt(2.0 * m + 3.0))} * z"
+            else:
+                a_l = math.sqrt((4.0 * l * l - 1.0) / (l * l - m * m))
+                a_lm1 = math.sqrt((4.0 * (l - 1) ** 2 - 1.0) / ((l - 1) ** 2 - m * m))
+                expr = f"{glsl_float(a_l)} * (z * h{l - 1}_{m} - {glsl_float(1.0 / a_lm1)} * h{l - 2}_{m})"
+            lines.append(f"  float h{l}_{m} = {expr};")
+            if m == 0:
+                lines.append(f"  Y[{l * l + l}] = {glsl_float(k)} * h{l}_0;")
+            else:
+                lines.append(f"  Y[{l * l + l + m}] = {glsl_float(k)} * h{l}_{m} * c{m};")
+                lines.append(f"  Y[{l * l + l - m}] = {glsl_float(k)} * h{l}_{m} * s{m};")
+    lines.append("}")
+    return "\n".join(lines) + "\n"
+
+
+LATLONG_GLSL = """
+// bilinear lat-long lookup set-up (brdf_io.latlong.bilinear_lookup) on an H x W tile:
+// texel columns x0, x1 (phi wraps), rows y0, y1 (theta clamped to the first/last row centre),
+// weights f = (fx, fy)
+void latlong_setup(vec3 d, int H, int W, out ivec4 idx, out vec2 f) {
+  const float PI = 3.14159265358979;
+  float rxy = length(d.xy);
+  float theta = atan(rxy, d.z);
+  float phi = (rxy > 0.0) ? atan(d.y, d.x) : 0.0;
+  if (phi < 0.0) phi += 2.0 * PI;
+  float yy = clamp(theta * float(H) / PI - 0.5, 0.0, float(H) - 1.0);
+  float xx = phi * float(W) / (2.0 * PI) - 0.5;
+  float y0f = min(floor(yy), float(max(H - 2, 0)));
+  float x0f = floor(xx);
+  int x0 = int(x0f);
+  x0 = x0 - W * int(floor(float(x0) / float(W)));
+  int x1 = x0 + 1;
+  if (x1 >= W) x1 -= W;
+  int y0 = int(y0f);
+  int y1 = min(y0 + 1, H - 1);
+  idx = ivec4(x0, x1, y0, y1);
+  f = vec2(xx - x0f, yy - y0f);
+}
+// bilinear fetch from shrmTex at tile offset o (texel units)
+vec3 shrm_fetch(ivec2 o, ivec4 idx, vec2 f) {
+  vec3 t00 = texelFetch(shrmTex, o + ivec2(idx.x, idx.z), 0).rgb;
+  vec3 t01 = texelFetch(shrmTex, o + ivec2(idx.y, idx.z), 0).rgb;
+  vec3 t10 = texelFetch(shrmTex, o + ivec2(idx.x, idx.w), 0).rgb;
+  vec3 t11 = texelFetch(shrmTex, o + ivec2(idx.y, idx.w), 0).rgb;
+  vec3 top = t00 * (1.0 - f.x) + t01 * f.x;
+  vec3 bottom = t10 * (1.0 - f.x) + t11 * f.x;
+  return top * (1.0 - f.y) + bottom * f.y;
+}
+"""

@@ -1,0 +1,253 @@
+"""The render-mode table: one :class:`RenderMode` record per way of shading a mesh.
+
+A record says everything the renderer, :func:`shrmkit.render.api.render_scene` and
+``shrm render --mode`` need to know about a mode:
+
+- ``name`` and a one-line ``help`` (the CLI's choices and help come from here);
+- ``build(env, brdf, mesh, *, eps, options) -> BuiltModel``: the model made from the scene
+  (an SHRM, twelve RSIBR maps, Gaussian lobes over a mip stack), with the numbers and the
+  description lines ``shrm render`` prints;
+- ``models``: the model types :meth:`SHRMRenderer.add_object` accepts for the mode;
+- ``shading(model, mesh[, visibility_sh, normalized]) -> Shading``: its texture, shader
+  replacements and vertex attributes (``render.glsl``);
+- ``update(state, view, out)`` or None: the per-frame texture update from the view direction
+  toward the object (distant: Σ B̃_pq Y^r_pq(Ṽ); rsibr: the blended view map);
+- ``self_shadow``: whether per-vertex SH visibility (``visibility_sh``) is supported.
+
+The modes (RH02 = Ramamoorthi & Hanrahan 2002, doi:10.1145/566654.566611):
+
+=================  ===========================================================================
+``distant``        RH02 eq. 12: SHRM, one map per frame for the distant viewer (``shader``)
+``perpixel``       RH02 eq. 8: SHRM, Σ B̃_pq(R) Y_pq(V) per pixel (``shader``)
+``rsibr``          Cabral et al. 1999: twelve maps from the SHRM, blended per frame (``shader``)
+``kautz-mccool``   Kautz & McCool 2000: the azimuth-free (q = 0) SHRM drawn per pixel (``shader``)
+``gaussian-lobes`` Green et al. 2007: Gaussian lobes over an SG mip stack, optional self-shadowing
+                   (``gaussian_shader``)
+=================  ===========================================================================
+
+Adding a mode: write its module (a ``shading`` function, its ``update`` if it has one, and
+its ``build``), then add one :class:`RenderMode` entry to :data:`RENDER_MODES` below.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from numbers import Integral
+from typing import Any
+
+import numpy as np
+
+from ..analysis.baselines.gaussian_lobes import GaussianLobeModel, fit_gaussian_lobes, sg_mip_stack
+from ..analysis.baselines.rsibr import RSIBRMaps, rsibr_from_shrm
+from ..analysis.baselines.selfshadow import vertex_visibility_sh
+from ..analysis.shrm import SHRM, prefilter
+from ..brdf_io.brdf import BRDF
+from ..brdf_io.envmap import EnvironmentMap
+from ..brdf_io.errors import BadInputError
+from .gaussian_shader import gaussian_shading
+from .glsl import Shading
+from .mesh import Mesh
+from .shader import distant_shading, distant_update, perpixel_shading, rsibr_shading, rsibr_update
+
+__all__ = [
+    "RenderOptions",
+    "BuiltModel",
+    "RenderMode",
+    "RENDER_MODES",
+    "DEFAULT_MODE",
+    "mode_names",
+    "get_mode",
+    "self_shadow_modes",
+]
+
+#: Gaussian lobes per view elevation and fitted elevations allowed (``fit_gaussian_lobes``).
+LOBES_RANGE = (1, 8)
+ELEVATIONS_RANGE = (1, 90)
+
+
+@dataclass(frozen=True)
+class RenderOptions:
+    """Options of the model builders; a mode uses those it needs.
+
+    Attributes
+    ----------
+    lobes
+        ``gaussian-lobes``: lobes per view elevation K, in [1, 8].
+    elevations
+        ``gaussian-lobes``: fitted view elevations, in [1, 90].
+    self_shadow
+        Per-vertex SH visibility by ray casting (Green et al. 2007 eq. 7); only for the modes
+        whose record has ``self_shadow`` (:func:`self_shadow_modes`).
+    """
+
+    lobes: int = 3
+    elevations: int = 15
+    self_shadow: bool = False
+
+    def __post_init__(self) -> None:
+        for name, (lo, hi) in (("lobes", LOBES_RANGE), ("elevations", ELEVATIONS_RANGE)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, Integral) or not lo <= value <= hi:
+                raise BadInputError(None, f"{name} must be an integer in [{lo}, {hi}], got {value!r}")
+
+
+@dataclass(frozen=True, eq=False)
+class BuiltModel:
+    """A mode's model of the scene.
+
+    Attributes
+    ----------
+    model
+        What the renderer draws (``RenderMode.models``).
+    info
+        Numbers about it: orders, ε, seconds of each stage, fit residual … (keys per mode).
+    description
+        Lines that describe it, as ``shrm render`` prints them.
+    visibility_sh
+        (n_vertices, 25) per-vertex SH visibility for self-shadowing, or None.
+    """
+
+    model: Any
+    info: dict[str, Any] = field(default_factory=dict)
+    description: tuple[str, ...] = ()
+    visibility_sh: np.ndarray | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class RenderMode:
+    """One row of the render-mode table (module docstring)."""
+
+    name: str
+    help: str
+    build: Callable[..., BuiltModel]
+    models: tuple[type, ...]
+    shading: Callable[..., Shading]
+    update: Callable[[Any, np.ndarray, np.ndarray], None] | None = None
+    self_shadow: bool = False
+
+    def prepare(
+        self, model: Any, mesh: Mesh, visibility_sh: np.ndarray | None = None, normalized_visibility: bool = True
+    ) -> Shading:
+        """Check ``model`` and ``visibility_sh`` against the mode and make its :class:`Shading`.
+
+        Raises ValueError for a model of another type, or visibility in a mode without
+        self-shadowing, or visibility that is not finite (n_vertices, 25).
+        """
+        if not isinstance(model, self.models):
+            names = " or ".join(t.__name__ for t in self.models)
+            raise ValueError(f"mode {self.name!r} takes a {names}, got {type(model).__name__}")
+        if visibility_sh is None:
+            return self.shading(model, mesh)
+        if not self.self_shadow:
+            raise ValueError(f"visibility_sh (self-shadowing) is only supported in mode "
+                             f"{' or '.join(repr(m) for m in self_shadow_modes())}, not {self.name!r}")
+        visibility_sh = np.asarray(visibility_sh, dtype=np.float64)
+        if visibility_sh.shape != (mesh.vertices.shape[0], 25) or not np.all(np.isfinite(visibility_sh)):
+            raise ValueError(f"visibility_sh must be finite (n_vertices={mesh.vertices.shape[0]}, 25), "
+                             f"got shape {visibility_sh.shape}")
+        return self.shading(model, mesh, visibility_sh, normalized_visibility)
+
+
+# ------------------------------------------------------------------------------------------
+# Builders
+# ------------------------------------------------------------------------------------------
+
+
+def _prefiltered(env: EnvironmentMap, brdf: BRDF, eps: float, *, azimuth_free: bool = False) -> BuiltModel:
+    t0 = time.perf_counter()
+    shrm = prefilter(env, brdf, eps=eps, azimuth_free=azimuth_free)
+    seconds = time.perf_counter() - t0
+    info = {"F": shrm.F, "P": shrm.P, "height": shrm.height, "width": shrm.width, "eps": eps,
+            "achieved_eps": dict(shrm.eps), "azimuth_free": azimuth_free, "prefilter_seconds": seconds}
+    lines = (f"SHRM F={shrm.F} P={shrm.P} on {shrm.height}x{shrm.width} (eps {eps:g})", f"prefilter: {seconds:.3f} s")
+    return BuiltModel(shrm, info, lines)
+
+
+def build_shrm(env: EnvironmentMap, brdf: BRDF, mesh: Mesh, *, eps: float, options: RenderOptions) -> BuiltModel:
+    """The global SHRM of ``env`` and ``brdf`` at tolerance ``eps`` (RH02 §4–5)."""
+    return _prefiltered(env, brdf, eps)
+
+
+def build_kautz_mccool(
+    env: EnvironmentMap, brdf: BRDF, mesh: Mesh, *, eps: float, options: RenderOptions
+) -> BuiltModel:
+    """The azimuth-free (q = 0) SHRM of Kautz & McCool 2000: ``prefilter(..., azimuth_free=True)``."""
+    return _prefiltered(env, brdf, eps, azimuth_free=True)
+
+
+def build_rsibr(env: EnvironmentMap, brdf: BRDF, mesh: Mesh, *, eps: float, options: RenderOptions) -> BuiltModel:
+    """Cabral et al. 1999: the SHRM, then its twelve maps at the icosahedron's vertices."""
+    built = _prefiltered(env, brdf, eps)
+    maps = rsibr_from_shrm(built.model)
+    return BuiltModel(maps, {**built.info, "rsibr_seconds": float(maps.meta["seconds"])}, built.description)
+
+
+def build_gaussian_lobes(
+    env: EnvironmentMap, brdf: BRDF, mesh: Mesh, *, eps: float, options: RenderOptions
+) -> BuiltModel:
+    """Green et al. 2007: K lobes fitted at the view elevations, the SG mip stack of ``env``,
+    and (``options.self_shadow``) the per-vertex SH visibility of ``mesh``. ``eps`` is not used."""
+    lobes = fit_gaussian_lobes(brdf, K=options.lobes, n_elevations=options.elevations)
+    stack = sg_mip_stack(env)
+    residual = float(lobes.residual.max())
+    info: dict[str, Any] = {
+        "K": lobes.K, "elevations": int(lobes.theta_v.size), "max_fit_residual": residual,
+        "fit_seconds": float(lobes.meta["seconds"]), "mip_levels": len(stack.levels),
+        "sigma_min": float(stack.sigmas[0]), "sigma_max": float(stack.sigmas[-1]), "mip_seconds": stack.seconds,
+    }
+    lines = [
+        f"Gaussian lobes K={lobes.K} at {lobes.theta_v.size} elevations, max relative fit error {residual:.3g}",
+        f"fit: {info['fit_seconds']:.3f} s",
+        f"SG mip stack: {len(stack.levels)} levels, sigma {stack.sigmas[0]:.4g}..{stack.sigmas[-1]:.4g} rad, "
+        f"{stack.seconds:.3f} s",
+    ]
+    visibility = None
+    if options.self_shadow:
+        t0 = time.perf_counter()
+        visibility = vertex_visibility_sh(mesh)
+        info["visibility_seconds"] = time.perf_counter() - t0
+        lines.append(f"self-shadowing: order-4 SH visibility of {len(mesh.vertices)} vertices, "
+                     f"{info['visibility_seconds']:.3f} s")
+    return BuiltModel(GaussianLobeModel(lobes, stack), info, tuple(lines), visibility)
+
+
+# ------------------------------------------------------------------------------------------
+# The table
+# ------------------------------------------------------------------------------------------
+
+_MODES = (
+    RenderMode("distant", "distant viewer (RH02 eq. 12): one SHRM map per frame, looked up by R",
+               build_shrm, (SHRM,), distant_shading, distant_update),
+    RenderMode("perpixel", "per-pixel view direction (RH02 eq. 8): the SHRM summed in the fragment shader",
+               build_shrm, (SHRM,), perpixel_shading),
+    RenderMode("rsibr", "Cabral et al. 1999: 12 maps at the icosahedron's vertices, blended per frame",
+               build_rsibr, (RSIBRMaps, SHRM), rsibr_shading, rsibr_update),
+    RenderMode("kautz-mccool", "Kautz & McCool 2000: the azimuth-free (q = 0) SHRM, per pixel",
+               build_kautz_mccool, (SHRM,), perpixel_shading),
+    RenderMode("gaussian-lobes", "Green et al. 2007: K Gaussian lobes per view elevation over an SG mip stack",
+               build_gaussian_lobes, (GaussianLobeModel,), gaussian_shading, self_shadow=True),
+)
+
+#: The render modes by name, in the order the CLI lists them.
+RENDER_MODES: dict[str, RenderMode] = {m.name: m for m in _MODES}
+DEFAULT_MODE = "distant"
+
+
+def mode_names() -> tuple[str, ...]:
+    """The registered mode names, in table order."""
+    return tuple(RENDER_MODES)
+
+
+def self_shadow_modes() -> tuple[str, ...]:
+    """Names of the modes that support self-shadowing."""
+    return tuple(m.name for m in RENDER_MODES.values() if m.self_shadow)
+
+
+def get_mode(name: str) -> RenderMode:
+    """The record of mode ``name``; :class:`BadInputError` (a ValueError) naming the known modes otherwise."""
+    try:
+        return RENDER_MODES[name]
+    except (KeyError, TypeError):
+        raise BadInputError(None, f"unknown render mode {name!r}; known: {', '.join(RENDER_MODES)}") from None
