@@ -31,6 +31,8 @@ _LAZY = {
     "SHRM": "shrmkit.analysis.shrm",
     "fit_brdf": "shrmkit.analysis.fit",
     "compare": "shrmkit.analysis.compare",
+    "render_scene": "shrmkit.render.api",
+    "SHRMRenderer": "shrmkit.render.vtk_renderer",
 }
 
 __all__ = ["__version__", *_LAZY]

@@ -498,6 +498,32 @@ def prefilter(
     -------
     SHRM
         float32 global SHRM with orders, achieved errors, timings in ``meta``.
+
+    Raises
+    ------
+    BadInputError
+        ε outside (0, 1), an unreadable map or BRDF, an all-zero BRDF, sizes out of range, or
+        radiance that overflows float32 maps.
+
+    Examples
+    --------
+    A constant sky of radiance 1 over a Lambertian surface of albedo 0.5 reflects 0.5 in
+    every direction (closed form), and needs only the l = 0 lighting band:
+
+    >>> m = prefilter("builtin:constant,height=16", "lambert:albedo=0.5")
+    >>> m.F, (m.height, m.width)
+    (0, (32, 64))
+    >>> R = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
+    >>> V = np.array([[0.0, 0.0, 1.0], [0.6, 0.0, 0.8]])
+    >>> m.radiance(R, V).round(4)
+    array([[0.5, 0.5, 0.5],
+           [0.5, 0.5, 0.5]])
+
+    A file works the same way (a 4 × 8 Radiance ``.hdr``, z-up lat-long):
+
+    >>> m = prefilter("tests/resources/tiny_4x8.hdr", "phong:s=8", eps=0.1)
+    >>> m.P, m.F <= 3   # Phong needs no view dependence; the 4-row map resolves l <= 3
+    (0, True)
     """
     eps = check_eps(eps)
 

@@ -26,6 +26,7 @@ from rich.console import Console
 from rich.table import Table
 
 from shrmkit.analysis.brdf_coeffs import rho_lpq
+from shrmkit.analysis.compare import relative_rms, sample_pairs
 from shrmkit.analysis.lighting import lighting_coefficients
 from shrmkit.analysis.orders import eps_table
 from shrmkit.analysis.reference import reference_radiance
@@ -41,22 +42,6 @@ GRACE = Path("/work/shared/data/env/grace_latlong.exr")
 MAX_THETA_V = np.radians(80.0)
 
 console = Console(width=200, highlight=False)
-
-
-def relative_rms(estimate: np.ndarray, reference: np.ndarray) -> float:
-    """sqrt(Σ|estimate − reference|² / Σ|reference|²) over all values and channels."""
-    return float(np.sqrt(np.sum((estimate - reference) ** 2) / np.sum(reference**2)))
-
-
-def random_pairs(n: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-    """R uniform on the sphere; V at 2θ_v from R with cos θ_v uniform on [cos 80°, 1]."""
-    R = rng.normal(size=(n, 3))
-    R /= np.linalg.norm(R, axis=1, keepdims=True)
-    perp = rng.normal(size=(n, 3))
-    perp -= np.sum(perp * R, axis=1, keepdims=True) * R
-    perp /= np.linalg.norm(perp, axis=1, keepdims=True)
-    angle = 2.0 * np.arccos(rng.uniform(np.cos(MAX_THETA_V), 1.0, size=n))
-    return R, np.cos(angle)[:, None] * R + np.sin(angle)[:, None] * perp
 
 
 def fmt(x: float) -> str:
@@ -99,7 +84,7 @@ def main(argv: list[str] | None = None) -> int:
 
     measured_F = [1, 4, 10] if args.quick else [1, 2, 4, 6, 8, 10, 14, 20]
     n_pairs = 150 if args.quick else 300
-    R, V = random_pairs(n_pairs, np.random.default_rng(args.seed))
+    R, V = sample_pairs(n_pairs, seed=args.seed, max_view_deg=80.0)[:2]
     t0 = time.perf_counter()
     ref = reference_radiance(env, brdf, R, V)
     t_ref = time.perf_counter() - t0

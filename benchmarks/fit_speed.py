@@ -10,7 +10,7 @@ Runs on one core (BLAS threads pinned to 1 before numpy loads). Prints three tab
 2. Cornell — each of the five measured materials fitted with Lafortune 1–3 lobes and
    Cook–Torrance: time and errors;
 3. Cornell per view-elevation band (Green et al. 2007, Fig. 4 style): rel_rms per band.
-Target (issue 4): a 2-lobe Lafortune or a Cook–Torrance fit of a MERL table in <= 10 s.
+Target: a 2-lobe Lafortune or a Cook–Torrance fit of a MERL table in <= 10 s.
 """
 
 from __future__ import annotations

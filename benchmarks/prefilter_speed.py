@@ -35,6 +35,7 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
+from shrmkit.analysis.compare import relative_rms, sample_pairs
 from shrmkit.analysis.lighting import lighting_coefficients
 from shrmkit.analysis.orders import choose_orders
 from shrmkit.analysis.reference import reference_radiance
@@ -55,11 +56,6 @@ console = Console(width=200, highlight=False)
 # ----------------------------------------------------------------------------------------
 # helpers
 # ----------------------------------------------------------------------------------------
-def relative_rms(estimate: np.ndarray, reference: np.ndarray) -> float:
-    """sqrt(Σ|estimate − reference|² / Σ|reference|²) over all values and channels."""
-    return float(np.sqrt(np.sum((estimate - reference) ** 2) / np.sum(reference**2)))
-
-
 def _perpendicular(R: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     """A random unit vector perpendicular to each row of R."""
     v = rng.normal(size=R.shape)
@@ -77,13 +73,6 @@ def views_for(R: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     angle = 2.0 * np.arccos(cos_tv)
     perp = _perpendicular(R, rng)
     return np.cos(angle)[:, None] * R + np.sin(angle)[:, None] * perp
-
-
-def random_pairs(n: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-    """n random (R, V) pairs: R uniform on the sphere, V from :func:`views_for`."""
-    R = rng.normal(size=(n, 3))
-    R /= np.linalg.norm(R, axis=1, keepdims=True)
-    return R, views_for(R, rng)
 
 
 def timed(fn: Callable[[], Any], repeats: int = 1) -> tuple[float, Any]:
@@ -290,7 +279,7 @@ def table_sweep(
         table.add_column(col, justify="right")
     for spec in specs:
         brdf = load_brdf(spec)
-        R, V = random_pairs(n_pairs, np.random.default_rng(seed))
+        R, V = sample_pairs(n_pairs, seed=seed, max_view_deg=80.0)[:2]
         t_ref, ref = timed(lambda R=R, V=V, brdf=brdf: reference_radiance(env, brdf, R, V))
         for tol in tolerances:
             F = scene_F(env, brdf, tol)

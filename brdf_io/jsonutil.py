@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -9,19 +10,24 @@ import numpy as np
 __all__ = ["to_jsonable"]
 
 
-def to_jsonable(value: Any) -> Any:
+def to_jsonable(value: Any, *, digits: int | None = None) -> Any:
     """Convert numpy scalars/arrays and nested dicts/lists/tuples to JSON types.
 
-    Non-finite floats become ``None`` (JSON has no NaN/Inf).
+    Non-finite floats become ``None`` (strict JSON has no NaN/Inf); dict keys become
+    strings. With ``digits``, every float is rounded to that many significant digits
+    (reports keep 10, so that re-runs compare equal); 0.0 stays 0.0.
     """
     if isinstance(value, dict):
-        return {str(k): to_jsonable(v) for k, v in value.items()}
+        return {str(k): to_jsonable(v, digits=digits) for k, v in value.items()}
     if isinstance(value, list | tuple):
-        return [to_jsonable(v) for v in value]
+        return [to_jsonable(v, digits=digits) for v in value]
     if isinstance(value, np.ndarray):
-        return to_jsonable(value.tolist())
+        return to_jsonable(value.tolist(), digits=digits)
     if isinstance(value, np.generic):
-        return to_jsonable(value.item())
-    if isinstance(value, float) and not np.isfinite(value):
-        return None
+        return to_jsonable(value.item(), digits=digits)
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            return None
+        if digits is not None and value != 0.0:
+            return float(f"{value:.{digits - 1}e}")
     return value

@@ -13,6 +13,7 @@ from rich.table import Table
 
 from ..analysis.orders import DEFAULT_MAX_F, DEFAULT_MAX_P, choose_orders
 from ..analysis.scene import scene_for
+from ..analysis.tolerance import DEFAULT_EPS
 from ..brdf_io.specs import load_brdf
 from .common import add_env_orientation, load_env_arg, print_json, stderr, stdout, tolerance
 
@@ -21,7 +22,8 @@ HELP = "choose the SH orders (F, P) a BRDF needs at a tolerance eps (RH02 §5.1)
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("brdf", help="BRDF spec (e.g. microfacet:sigma=0.2) or file (.binary, .npz, .json)")
-    parser.add_argument("--eps", type=tolerance, default=0.03, help="tolerance on uncaptured energy (default 0.03)")
+    parser.add_argument("--eps", type=tolerance, default=DEFAULT_EPS,
+                        help=f"tolerance on uncaptured energy (default {DEFAULT_EPS:g})")
     parser.add_argument("--max-F", type=int, default=DEFAULT_MAX_F, help=f"cap on F (default {DEFAULT_MAX_F})")
     parser.add_argument("--max-P", type=int, default=DEFAULT_MAX_P, help=f"cap on P (default {DEFAULT_MAX_P})")
     parser.add_argument("--env", help="environment (builtin:sky or a map file): also report F_L, F_B and the bound")

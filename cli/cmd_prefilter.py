@@ -14,6 +14,7 @@ from rich.table import Table
 
 from ..analysis.orders import DEFAULT_MAX_F, DEFAULT_MAX_P
 from ..analysis.shrm import prefilter
+from ..analysis.tolerance import DEFAULT_EPS
 from ..brdf_io.atomic import check_writable
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.specs import load_brdf
@@ -25,7 +26,7 @@ HELP = "prefilter an environment map with a BRDF into a global SHRM file (.shrm.
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--env", required=True, help="environment: builtin:sky, builtin:studio, or a map file")
     parser.add_argument("--brdf", required=True, help="BRDF spec or file")
-    parser.add_argument("--eps", type=tolerance, default=0.03, help="tolerance (default 0.03)")
+    parser.add_argument("--eps", type=tolerance, default=DEFAULT_EPS, help=f"tolerance (default {DEFAULT_EPS:g})")
     parser.add_argument("--size", type=int, help="SHRM rows S (S x 2S lat-long); default 10 F, clamped to [32, 1024]")
     parser.add_argument("--max-F", type=int, default=DEFAULT_MAX_F)
     parser.add_argument("--max-P", type=int, default=DEFAULT_MAX_P)

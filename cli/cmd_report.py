@@ -13,6 +13,7 @@ import time
 
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
+from ..analysis.tolerance import DEFAULT_EPS
 from ..render.mesh import load_mesh
 from .common import add_env_orientation, stderr, stdout, tolerance
 from .report.batch import run_batch
@@ -44,7 +45,8 @@ def _positive_int(text: str) -> int:
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("brdfs", nargs="+", metavar="BRDF", help="BRDF files (.binary, .npz, .brdf, .json) or spec strings")
-    p.add_argument("--eps", type=tolerance, default=0.03, help="main tolerance (scene orders, preview; default 0.03)")
+    p.add_argument("--eps", type=tolerance, default=DEFAULT_EPS,
+                   help=f"main tolerance (scene orders, preview; default {DEFAULT_EPS:g})")
     p.add_argument("--tolerances", type=_tolerances, default=None,
                    help="tolerances of the order table and speed rows (default 0.1,0.03,0.01)")
     p.add_argument("--env", nargs="+", default=None, metavar="ENV",

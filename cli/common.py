@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 from rich.console import Console
 
+from ..analysis.tolerance import check_eps
 from ..brdf_io.envmap import load_env
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.jsonutil import to_jsonable
@@ -46,8 +47,17 @@ def number_in(
     return parse
 
 
-tolerance = number_in(0.0, 1.0, lo_open=True, hi_open=True)
-"""argparse type for ε: a number in (0, 1)."""
+def tolerance(text: str) -> float:
+    """argparse type for ε: the number checked by the one validator,
+    :func:`shrmkit.analysis.tolerance.check_eps` (a number in (0, 1))."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    try:
+        return check_eps(value)
+    except BadInputError as err:
+        raise argparse.ArgumentTypeError(str(err)) from None
 
 positive_float = number_in(0.0, np.inf, lo_open=True)
 """argparse type: a finite number > 0."""

@@ -1,4 +1,4 @@
-"""The ``Examples`` sections of the main readers' docstrings run as tests (doctest).
+"""The ``Examples`` sections of the main readers' and ``prefilter``'s docstrings run as tests (doctest).
 
 The examples name their input files as ``tests/resources/...``, relative to the
 repository root, so each module's examples run with the root as the working directory.
@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from shrmkit.analysis import shrm
 from shrmkit.brdf_io import envmap, hdr_codecs, merl, specs
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -27,6 +28,7 @@ DOCUMENTED = {
     envmap: ("load_env",),
     merl: ("read_merl", "write_merl"),
     hdr_codecs: ("read_hdr", "read_pfm"),
+    shrm: ("prefilter",),
 }
 
 

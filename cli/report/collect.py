@@ -44,6 +44,7 @@ from ...analysis.reference import reference_radiance
 from ...analysis.shrm import prefilter
 from ...brdf_io.brdf import BRDF
 from ...brdf_io.errors import BadInputError
+from ...brdf_io.jsonutil import to_jsonable
 from ...brdf_io.specs import load_brdf
 from ...render.preview import PREVIEW_DISABLED, PreviewImage, render_previews, resolve_preview_mode
 from .checks import RECIPROCITY_TOLERANCE, data_checks
@@ -56,7 +57,7 @@ __all__ = [
     "SLICE_VIEWS_DEG",
     "collect_report",
     "failed_report",
-    "jsonable",
+    "REPORT_DIGITS",
     "strip_timings",
     "REPORT_MAX_VIEW_DEG",
 ]
@@ -68,30 +69,10 @@ REPORT_FORMAT_VERSION = 1
 REPORT_MAX_VIEW_DEG = 80.0
 SLICE_VIEWS_DEG = (0.0, 30.0, 60.0, 75.0)
 _SLICE_THETA_DEG = np.arange(-85.0, 85.0 + 1e-9, 2.5)
-_SIG_DIGITS = 10
+#: Significant digits of every float in report.json (``to_jsonable(..., digits=)``).
+REPORT_DIGITS = 10
 
 Progress = Callable[[str], None]
-
-
-def jsonable(value: Any, digits: int = _SIG_DIGITS) -> Any:
-    """Plain JSON types: numpy → Python, floats rounded to ``digits`` significant digits,
-    NaN/Inf → ``None`` (strict JSON has no NaN)."""
-    if isinstance(value, dict):
-        return {str(k): jsonable(v, digits) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [jsonable(v, digits) for v in value]
-    if isinstance(value, np.ndarray):
-        return jsonable(value.tolist(), digits)
-    if isinstance(value, np.bool_ | bool):
-        return bool(value)
-    if isinstance(value, np.integer):
-        return int(value)
-    if isinstance(value, float | np.floating):
-        x = float(value)
-        if not math.isfinite(x):
-            return None
-        return float(f"{x:.{digits - 1}e}") if x != 0.0 else 0.0
-    return value
 
 
 def strip_timings(doc: Any) -> Any:
@@ -446,13 +427,13 @@ def collect_report(
         "provenance": {"shrmkit_version": __version__, "numpy_version": np.__version__},
         "total_seconds": time.perf_counter() - t_start,
     }
-    return jsonable(doc), previews
+    return to_jsonable(doc, digits=REPORT_DIGITS), previews
 
 
 def failed_report(source: str | Path, name: str, options: ReportOptions, error: str,
                   seconds: float = 0.0) -> dict[str, Any]:
     """The ``report.json`` of a BRDF whose report could not be made (``status: failed``)."""
-    return jsonable({
+    return to_jsonable({
         "format": REPORT_FORMAT,
         "format_version": REPORT_FORMAT_VERSION,
         "status": "failed",
@@ -462,4 +443,4 @@ def failed_report(source: str | Path, name: str, options: ReportOptions, error: 
         "error": error,
         "provenance": {"shrmkit_version": __version__, "numpy_version": np.__version__},
         "total_seconds": seconds,
-    })
+    }, digits=REPORT_DIGITS)

@@ -3,7 +3,7 @@
 1. Two analytic materials (Lafortune lobes: a red plastic and a gold-like metal) are
    tabulated at MERL resolution and written as MERL ``.binary`` files
    (``brdf_io.merl.write_merl``) — from then on they are measured data like any other;
-2. orders (F, P) of the plastic at ε = 0.03 (RH02 §5.1);
+2. orders (F, P) of the plastic at the default ε (RH02 §5.1);
 3. a one-lobe Lafortune fit of the plastic, written as a fit JSON (``data_specs/fit_json.md``);
 4. the SHRM of the built-in studio environment and the plastic, saved as ``.shrm.npz``;
 5. a preview render of a built-in mesh (torus knot with OpenGL; the CPU reference renders
@@ -27,6 +27,7 @@ import numpy as np
 from ...analysis.fit import fit_brdf, write_fit_json
 from ...analysis.orders import choose_orders
 from ...analysis.shrm import prefilter
+from ...analysis.tolerance import DEFAULT_EPS
 from ...brdf_io.envmap import load_env
 from ...brdf_io.merl import write_merl
 from ...brdf_io.specs import load_brdf
@@ -47,7 +48,7 @@ DEMO_MATERIALS = {
 }
 DEMO_ENV = "builtin:studio"
 DEMO_MESH = "builtin:torus-knot"
-DEMO_EPS = 0.03
+DEMO_EPS = DEFAULT_EPS
 
 
 @dataclass(frozen=True)

@@ -11,6 +11,7 @@ from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 from ...analysis.fit.models_param import MODELS
+from ...analysis.tolerance import DEFAULT_EPS, check_eps
 from ...brdf_io.envmap import load_env
 from ...brdf_io.errors import BadInputError
 
@@ -60,7 +61,7 @@ class ReportOptions:
         Gauss–Legendre nodes in cos θ_i of the directional-albedo quadrature (2× as many in φ).
     """
 
-    eps: float = 0.03
+    eps: float = DEFAULT_EPS
     tolerances: tuple[float, ...] = DEFAULT_TOLERANCES
     envs: tuple[str, ...] = ("builtin:sky",)
     env_height: int = 64
@@ -82,11 +83,9 @@ class ReportOptions:
     profile: str = field(default="full")
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.eps) and 0.0 < self.eps < 1.0):
-            raise BadInputError(None, f"eps must be in (0, 1), got {self.eps!r}")
+        check_eps(self.eps)
         for tol in self.tolerances:
-            if not (math.isfinite(tol) and 0.0 < tol < 1.0):
-                raise BadInputError(None, f"every tolerance must be in (0, 1), got {tol!r}")
+            check_eps(tol, "every tolerance")
         if not 4 <= self.env_height <= 2048:
             raise BadInputError(None, f"env_height must be in [4, 2048], got {self.env_height!r}")
         if self.n_pairs < 1:

@@ -16,7 +16,7 @@ import pytest
 
 import shrmkit
 from shrmkit.cli.report.checks import directional_albedo, reciprocity_check, scattered_reciprocity
-from shrmkit.cli.report.collect import collect_report, jsonable, strip_timings
+from shrmkit.cli.report.collect import collect_report, strip_timings
 from shrmkit.cli.report.options import profile
 
 NUM = (int, float)
@@ -227,11 +227,6 @@ def test_reciprocity_checks():
     out = scattered_reciprocity(L, V, rgb)
     assert out["n_pairs"] == 2
     assert out["max_rel"] == pytest.approx(0.5)
-
-
-def test_jsonable_rounds_and_nulls():
-    assert jsonable({"a": np.float64(1.23456789012345), "b": float("nan"), "c": np.int64(3), "d": np.bool_(True)}) \
-        == {"a": 1.234567890, "b": None, "c": 3, "d": True}
 
 
 def test_failed_load_raises_bad_input(tmp_path):
