@@ -23,12 +23,14 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
 from ..brdf_io.brdf import BRDF
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.reparam import ReparamBRDF, ReparamGrid, reparameterize
+from ..brdf_io.specs import load_brdf
 from .brdf_coeffs import BRDFCoefficients, rho_lpq
 from .tolerance import DEFAULT_EPS, check_eps
 
@@ -111,15 +113,32 @@ def eps_table(coefficients: BRDFCoefficients) -> np.ndarray:
     return eps.max(axis=-1)
 
 
+#: When the tolerance cannot be met, orders whose ε is within this fraction of the tolerance
+#: of the best reachable ε are taken as reaching it (:func:`choose_from_table`).
+CAPPED_SLACK = 0.01
+
+
 def choose_from_table(table: np.ndarray, tolerance: float) -> tuple[int, int, bool]:
-    """(F, P, capped) by the RH02 rule: smallest P at F0, then smallest F at that P."""
+    """(F, P, capped) by the RH02 rule: smallest P at F0, then smallest F at that P.
+
+    When no entry meets ``tolerance`` (``capped``), the smallest P, then the smallest F, whose
+    error is within :data:`CAPPED_SLACK` × ``tolerance`` (an absolute ε difference) of the
+    best error the table holds: the caps are not chosen where they buy nothing the tolerance
+    can see — Phong needs no P > 0 at any F, and a view-dependent lobe held at P = 0 gains
+    only ~1e-8 from F beyond its own band limit — while a lobe whose error still falls keeps
+    the cap. The error reported is that of the chosen entry.
+    """
     last_row = table[-1]
     ok_p = np.nonzero(last_row <= tolerance)[0]
-    if ok_p.size == 0:
-        return table.shape[0] - 1, table.shape[1] - 1, True
-    P = int(ok_p[0])
-    F = int(np.nonzero(table[:, P] <= tolerance)[0][0])
-    return F, P, False
+    if ok_p.size:
+        P = int(ok_p[0])
+        F = int(np.nonzero(table[:, P] <= tolerance)[0][0])
+        return F, P, False
+    best = float(last_row.min())
+    reach = best + CAPPED_SLACK * tolerance
+    P = int(np.nonzero(last_row <= reach)[0][0])
+    F = int(np.nonzero(table[:, P] <= reach)[0][0])
+    return F, P, True
 
 
 def _coefficients_on(brdf: BRDF, grid: ReparamGrid, max_F: int, max_P: int) -> tuple[BRDFCoefficients, int]:
@@ -129,16 +148,18 @@ def _coefficients_on(brdf: BRDF, grid: ReparamGrid, max_F: int, max_P: int) -> t
     return rho_lpq(reparam, F0, P0), reparam.n_without_data
 
 
-def _validate(tolerance: float, max_F: int, max_P: int) -> None:
-    check_eps(tolerance)
+def _validate(tolerance: float, max_F: int, max_P: int) -> float:
+    """The tolerance as a float (``check_eps``) after checking the caps."""
+    tolerance = check_eps(tolerance)
     if int(max_F) < 1 or int(max_F) > 2000:
         raise BadInputError(None, f"max_F must be in [1, 2000], got {max_F!r}")
     if int(max_P) < 0 or int(max_P) > 64:
         raise BadInputError(None, f"max_P must be in [0, 64], got {max_P!r}")
+    return tolerance
 
 
 def choose_orders(
-    brdf: BRDF,
+    brdf: BRDF | str | Path,
     *,
     eps: float = DEFAULT_EPS,
     max_F: int = DEFAULT_MAX_F,
@@ -151,7 +172,8 @@ def choose_orders(
     Parameters
     ----------
     brdf
-        Any evaluable BRDF (model, MERL, table, fitted model).
+        Any evaluable BRDF (model, MERL, table, fitted model), or a spec string or path for
+        :func:`~shrmkit.brdf_io.specs.load_brdf`.
     eps
         Tolerance on the uncaptured energy fraction, in (0, 1).
     max_F, max_P
@@ -163,7 +185,9 @@ def choose_orders(
     -------
     OrderChoice
     """
-    _validate(eps, max_F, max_P)
+    eps = _validate(eps, max_F, max_P)
+    if isinstance(brdf, str | Path):
+        brdf = load_brdf(brdf)
     t0 = time.perf_counter()
     notes: list[str] = []
     F_goal, P_goal = min(start_F, max_F), min(start_P, max_P)
@@ -231,7 +255,7 @@ def orders_on_grid_for(brdf: BRDF, F: int, P: int, *, eps: float = DEFAULT_EPS) 
     ``F``/``P`` (capped if the grid cannot meet ``eps``), but the grid is neither grown
     nor refined (``converged`` is False and ``message`` says so).
     """
-    _validate(eps, max(F, 1), P)
+    eps = _validate(eps, max(F, 1), P)
     t0 = time.perf_counter()
     grid = ReparamGrid.for_orders(F, P)
     coefficients, missing = _coefficients_on(brdf, grid, grid.n_theta_i - 1, max(P, 1))

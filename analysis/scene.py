@@ -20,6 +20,11 @@ l <= F, p > P. With C the captured energy (known exactly), the relative error ob
 Λ power is fixed here by the normalization ∫|𝒟|² = Λ².) Per RGB channel; the worst
 channel is reported.
 
+Windows (σ-factors against Gibbs ringing, DESIGN §7): multiplying the kept coefficients
+by σ_lp ∈ [0, 1] adds the energy W = Σ_{l<=F, p<=P} Λ_l² a_l r_lp (1 − σ_lp)², orthogonal
+to the truncated part, so ε_B = (E_err + W)/(C + E_err); since W <= C this grows with
+E_err and ε_B <= (U + W)/(C + U) still bounds it.
+
 Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
 SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
 """
@@ -37,7 +42,8 @@ from .orders import OrderChoice
 from .sh import Lambda
 
 __all__ = [
-    "SceneOrders", "scene_orders", "scene_for", "lighting_lmax", "reflected_error", "residual_bound", "lanczos_window",
+    "SceneOrders", "scene_orders", "scene_for", "lighting_lmax", "reflected_error", "reflected_error_parts",
+    "residual_bound", "lanczos_window", "lanczos_sigma",
 ]
 
 
@@ -60,11 +66,56 @@ def _brdf_band_energies(
     coefficients: BRDFCoefficients, P: int, q_max: int | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """r_l kept (p <= P, |q| <= q_max) and not kept, per channel: two arrays (F0+1, 3)."""
-    terms = coefficients.parseval_terms()  # (F0+1, P0+1, P0+1 over q, 3)
-    total = terms.sum(axis=(1, 2))
-    q_stop = None if q_max is None else q_max + 1
-    kept = terms[:, : P + 1, :q_stop].sum(axis=(1, 2))
+    kept_lp, total = _brdf_lp_energies(coefficients, P, q_max)
+    kept = kept_lp.sum(axis=1)
     return kept, total - kept
+
+
+def _brdf_lp_energies(
+    coefficients: BRDFCoefficients, P: int, q_max: int | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """r_lp kept (p <= P, |q| <= q_max) per (l, p) (F0+1, P+1, 3), and r_l of all (p, q) (F0+1, 3)."""
+    terms = coefficients.parseval_terms()  # (F0+1, P0+1, P0+1 over q, 3)
+    q_stop = None if q_max is None else q_max + 1
+    return terms[:, : P + 1, :q_stop].sum(axis=2), terms.sum(axis=(1, 2))
+
+
+def _window_matrix(window: np.ndarray, F: int, P: int) -> np.ndarray:
+    """A window as (F+1, P+1): a 1-D σ_l (l = 0..F) applies to every p."""
+    w = np.asarray(window, dtype=np.float64)
+    if w.ndim == 1:
+        w = np.repeat(w[: F + 1, None], P + 1, axis=1)
+    if w.shape != (F + 1, P + 1):
+        raise ValueError(f"window must have shape ({F + 1},) or ({F + 1}, {P + 1}), got {w.shape}")
+    return w
+
+
+def reflected_error_parts(
+    lighting: LightingCoefficients,
+    coefficients: BRDFCoefficients,
+    F: int,
+    P: int,
+    window: np.ndarray | None = None,
+    *,
+    q_max: int | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per channel (3,): the truncation part E_err/total and the window part W/total of ε_B
+    (module docs), so that ε_B = max over channels of their sum. A window σ(t) = 1 − t(1 − σ)
+    has the window part t² W/total: the strength a budget allows follows in closed form."""
+    a = lighting.band_energy()
+    kept_lp, all_l = _brdf_lp_energies(coefficients, P, q_max)
+    n = min(a.shape[0], all_l.shape[0])
+    lam2 = Lambda(np.arange(n))[:, None] ** 2
+    full = lam2 * a[:n] * all_l[:n]
+    kept = lam2[: F + 1, None] * a[: F + 1, None] * kept_lp[: F + 1]  # (F+1, P+1, 3)
+    total = full.sum(axis=0)
+    error = total - kept.sum(axis=(0, 1))
+    cost = np.zeros_like(total)
+    if window is not None:
+        cost = ((1.0 - _window_matrix(window, F, P))[..., None] ** 2 * kept).sum(axis=(0, 1))
+    live = total > 1e-300
+    safe = np.where(live, total, 1.0)
+    return np.where(live, error / safe, 0.0), np.where(live, cost / safe, 0.0)
 
 
 def reflected_error(
@@ -79,22 +130,12 @@ def reflected_error(
     """Relative energy error ε_B of truncating B to l <= F, p <= P, against all the
     coefficients available (l <= min(F0, lmax), p <= P0); worst channel.
 
-    With a ``window`` σ_l (l = 0..F) multiplying the kept coefficients, the kept bands
-    contribute their attenuation Σ Λ_l² a_l r_l (1 − σ_l)² to the error as well.
-    ``q_max=0`` keeps only the azimuth-free terms (Kautz & McCool 2000).
+    With a ``window`` σ_l (shape (F+1,)) or σ_lp (shape (F+1, P+1)) multiplying the kept
+    coefficients, the kept bands contribute their attenuation Σ Λ_l² a_l r_lp (1 − σ_lp)²
+    to the error as well. ``q_max=0`` keeps only the azimuth-free terms (Kautz & McCool 2000).
     """
-    a = lighting.band_energy()
-    r_in, r_out = _brdf_band_energies(coefficients, P, q_max)
-    n = min(a.shape[0], r_in.shape[0])
-    lam2 = Lambda(np.arange(n))[:, None] ** 2
-    full = lam2 * a[:n] * (r_in[:n] + r_out[:n])
-    kept = lam2[: F + 1] * a[: F + 1] * r_in[: F + 1]
-    total = full.sum(axis=0)
-    error = total - kept.sum(axis=0)
-    if window is not None:
-        error = error + ((1.0 - np.asarray(window)[: F + 1, None]) ** 2 * kept).sum(axis=0)
-    live = total > 1e-300
-    return float((error[live] / total[live]).max())
+    truncation, cost = reflected_error_parts(lighting, coefficients, F, P, window, q_max=q_max)
+    return float((truncation + cost).max())
 
 
 def lanczos_window(F: int) -> np.ndarray:
@@ -103,10 +144,35 @@ def lanczos_window(F: int) -> np.ndarray:
     return np.sinc(np.arange(F + 1) / (F + 1.0))
 
 
-def residual_bound(lighting: LightingCoefficients, coefficients: BRDFCoefficients, F: int, P: int) -> float:
-    """Conservative upper bound U/(C + U) on ε_B from residual energies (module docs)."""
+def lanczos_sigma(F: int, P: int, strength: float = 1.0) -> np.ndarray:
+    """Lanczos σ-factors in both orders, at a ``strength`` t in [0, 1]:
+
+        σ_lp(t) = 1 − t (1 − sinc(l/(F+1)) sinc(p/(P+1))),   l = 0..F, p = 0..P,
+
+    shape (F+1, P+1). t = 1 is the full Lanczos window (in l, and in the view order p, whose
+    truncation rings too); t = 0 is no window. The synthesis is linear in σ, so the map at
+    strength t is (1 − t)·(map without window) + t·(map with the full window), and the window
+    part of ε_B is t² times that of the full window (:func:`reflected_error_parts`)."""
+    t = float(strength)
+    if not 0.0 <= t <= 1.0:
+        raise ValueError(f"strength must be in [0, 1], got {strength!r}")
+    full = np.outer(lanczos_window(F), np.sinc(np.arange(P + 1) / (P + 1.0)))
+    return 1.0 - t * (1.0 - full)
+
+
+def residual_bound(
+    lighting: LightingCoefficients,
+    coefficients: BRDFCoefficients,
+    F: int,
+    P: int,
+    window: np.ndarray | None = None,
+    *,
+    q_max: int | None = None,
+) -> float:
+    """Conservative upper bound U/(C + U) on ε_B from residual energies (module docs); with a
+    ``window`` (as in :func:`reflected_error`), (U + W)/(C + U) with its exact cost W."""
     a = lighting.band_energy()
-    r_in, r_out = _brdf_band_energies(coefficients, P)
+    r_in, r_out = _brdf_band_energies(coefficients, P, q_max)
     E_L = lighting.energy
     E_rho = coefficients.energy
     lam = Lambda(np.arange(F + 2))
@@ -116,8 +182,13 @@ def residual_bound(lighting: LightingCoefficients, coefficients: BRDFCoefficient
     kept = (lam[: F + 1, None] ** 2 * a[: F + 1] * r_in[: F + 1]).sum(axis=0)
     peak = (lam[: F + 1, None] ** 2 * a[: F + 1]).max(axis=0)
     U = lam[F + 1] ** 2 * beyond_L * beyond_rho_l + peak * beyond_rho_p
+    W = np.zeros_like(U)
+    if window is not None:
+        kept_lp, _ = _brdf_lp_energies(coefficients, P, q_max)
+        w = (1.0 - _window_matrix(window, F, P))[..., None] ** 2
+        W = (w * lam[: F + 1, None, None] ** 2 * a[: F + 1, None] * kept_lp[: F + 1]).sum(axis=(0, 1))
     live = (kept + U) > 1e-300
-    return float((U[live] / (kept[live] + U[live])).max())
+    return float(((U[live] + W[live]) / (kept[live] + U[live])).max())
 
 
 def scene_orders(orders: OrderChoice, lighting: LightingCoefficients) -> SceneOrders:

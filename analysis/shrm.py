@@ -32,7 +32,7 @@ from ..brdf_io.specs import load_brdf
 from .brdf_coeffs import BRDFCoefficients
 from .lighting import LightingCoefficients, alm_index
 from .orders import DEFAULT_MAX_F, DEFAULT_MAX_P, choose_orders, orders_on_grid_for
-from .scene import lanczos_window, reflected_error, residual_bound, scene_for
+from .scene import lanczos_sigma, reflected_error_parts, residual_bound, scene_for
 from .sh import Lambda, real_index, real_sph_harm
 from .shrm_file import read_shrm_fields, save_shrm
 from .tolerance import DEFAULT_EPS, check_eps
@@ -50,7 +50,38 @@ __all__ = [
     "default_size",
     "cube_directions",
     "gibbs_negative",
+    "WINDOWS",
+    "DEFAULT_WINDOW",
+    "WINDOW_THRESHOLD",
+    "WINDOW_BUDGET_EPS",
+    "UNDERSHOOT_MAX_VIEW_DEG",
+    "check_window",
+    "undershoot_views",
+    "undershoot_samples",
+    "undershoot",
 ]
+
+#: The windows of :func:`prefilter` and of every verb that prefilters (``--window``);
+#: :func:`check_window` is their one validator.
+WINDOWS = ("none", "lanczos", "auto")
+DEFAULT_WINDOW = "auto"
+#: ``auto`` windows when the undershoot (most negative sampled radiance over the largest,
+#: worst channel; :func:`undershoot`) exceeds this fraction. Chosen from renders of the Grace
+#: probe with Phong s = 32: black blotches are visible (+4 stops) at 0.4 % of the peak, barely
+#: at 0.15 %, not at 0.03 % (README, accuracy).
+WINDOW_THRESHOLD = 1e-3
+#: ``auto``'s window may add at most this many ε of error energy to ε_B (worst channel): with
+#: the truncation's own ≲ ε, √ε_B stays inside the tested 2√ε + 1 % relative RMS.
+WINDOW_BUDGET_EPS = 2.0
+#: Largest view angle θ_v = angle(N, V) of the undershoot sample (:func:`undershoot_samples`).
+UNDERSHOOT_MAX_VIEW_DEG = 85.0
+
+
+def check_window(window: Any, name: str = "window") -> str:
+    """The one validator of a window name (:data:`WINDOWS`); BadInputError otherwise."""
+    if not isinstance(window, str) or window not in WINDOWS:
+        raise BadInputError(None, f"{name}={window!r}: choose one of {', '.join(WINDOWS)}")
+    return window
 
 
 def _unit_rows(vectors: np.ndarray, name: str) -> np.ndarray:
@@ -113,7 +144,7 @@ class SHRM:
     def width(self) -> int:
         return int(self.coeffs.shape[2])
 
-    def radiance(self, R: np.ndarray, V: np.ndarray) -> np.ndarray:
+    def radiance(self, R: np.ndarray, V: np.ndarray, *, clamp: bool = True) -> np.ndarray:
         """Predicted reflected radiance B(R, V), shape (n, 3) (RH02 eq. 8).
 
         Parameters
@@ -122,6 +153,11 @@ class SHRM:
             Reflection and view directions (n, 3) in the global z-up frame, normalized
             here (zero or non-finite rows are refused); the surface normal is
             normalize(R + V).
+        clamp
+            Set negative values to 0 (default): the Gibbs undershoot the window left
+            (``meta["negative_after"]`` of the peak on ``meta["negative_fraction_after"]`` of
+            the sampled (R, V); ``data_specs/shrm_file.md``). False returns the truncated
+            expansion itself.
         """
         R = _unit_rows(R, "R")
         V = _unit_rows(V, "V")
@@ -130,19 +166,21 @@ class SHRM:
         maps = np.moveaxis(self.coeffs, 0, 2)  # (H, W, n_coef, 3)
         at_r = bilinear_lookup(maps, R)  # (n, n_coef, 3)
         basis = real_sph_harm(self.P, V)  # (n, n_coef)
-        return np.einsum("nc,nck->nk", basis, at_r)
+        out = np.einsum("nc,nck->nk", basis, at_r)
+        return np.maximum(out, 0.0) if clamp else out
 
     def save(self, path: str | Path) -> Path:
         """Write the SHRM to a ``.shrm.npz`` file (atomic; see ``data_specs/shrm_file.md``)."""
         return save_shrm(path, self)
 
-    def view_map(self, view: np.ndarray) -> np.ndarray:
+    def view_map(self, view: np.ndarray, *, clamp: bool = True) -> np.ndarray:
         """Distant-viewer map Σ B̃_pq(α, β) Y^r_pq(V) for one view direction (RH02 eq. 12).
 
-        Returns float32 (H, W, 3).
+        Returns float32 (H, W, 3); ``clamp`` as in :meth:`radiance`.
         """
         basis = real_sph_harm(self.P, np.asarray(view, dtype=np.float64).reshape(3)).astype(np.float32)
-        return np.tensordot(basis, self.coeffs, axes=(0, 0))
+        out = np.tensordot(basis, self.coeffs, axes=(0, 0))
+        return np.maximum(out, 0.0, out=out) if clamp else out
 
 
 # ----------------------------------------------------------------------------------------
@@ -421,6 +459,141 @@ def gibbs_negative(coeffs: np.ndarray, P: int) -> float:
     return float(np.max(np.clip(-low[live] / peak[live], 0.0, None), initial=0.0))
 
 
+_GOLDEN = (np.sqrt(5.0) - 1.0) / 2.0
+#: Oblique views per pixel of the undershoot sample when P > 0 (:func:`undershoot_views`).
+OBLIQUE_VIEWS = 2
+
+
+def undershoot_views(
+    height: int, width: int, P: int, *, max_view_deg: float = UNDERSHOOT_MAX_VIEW_DEG
+) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The view directions of the undershoot sample of an H × W map, one (θ_V, Δφ_V) pair of
+    (H,) arrays per view: at pixel (i, j) (reflection direction R_ij) the view V_ij has polar
+    angle θ_V[i] and azimuth φ_j + Δφ_V[i], φ_j the pixel column's azimuth.
+
+    The first is the normal view V = R (what :func:`gibbs_negative` measures). When P > 0,
+    :data:`OBLIQUE_VIEWS` more give each pixel a view at θ_v = angle(N, V) in
+    (0, ``max_view_deg``], N = normalize(R + V), since the view-order (P) truncation rings at
+    oblique views too: for row i and extra view e, k = i·OBLIQUE_VIEWS + e, θ_v at
+    1 − frac((k + ½)·0.618…) of the range, and V = cos 2θ_v R + sin 2θ_v (cos ψ t + sin ψ b)
+    with ψ = 2π frac(k·√2), t = z × R / |z × R| and b = R × t. The choice depends on the row
+    only, so rotating the environment about z by whole columns shifts the sample with it (and
+    ``prefilter``'s ``auto`` decision does not change). For P = 0, B does not depend on V.
+    """
+    theta, _ = pixel_angles(height, width)
+    views = [(theta, np.zeros(height))]
+    if P > 0:
+        # R in the x-z plane (φ = 0): t = (0, 1, 0), b = R × t; then rotate by each column's φ
+        R0 = np.stack([np.sin(theta), np.zeros(height), np.cos(theta)], axis=-1)
+        t_axis = np.array([0.0, 1.0, 0.0])
+        b_axis = np.cross(R0, t_axis)
+        for extra in range(OBLIQUE_VIEWS):
+            k = np.arange(height, dtype=np.float64) * OBLIQUE_VIEWS + extra
+            two_theta = (2.0 * np.radians(max_view_deg) * (1.0 - ((k + 0.5) * _GOLDEN) % 1.0))[:, None]
+            psi = (2.0 * np.pi * ((k * np.sqrt(2.0)) % 1.0))[:, None]
+            V0 = np.cos(two_theta) * R0 + np.sin(two_theta) * (np.cos(psi) * t_axis + np.sin(psi) * b_axis)
+            views.append((np.arccos(np.clip(V0[:, 2], -1.0, 1.0)), np.arctan2(V0[:, 1], V0[:, 0])))
+    return views
+
+
+def _row_basis(P: int, theta: np.ndarray, offset: np.ndarray, phi: np.ndarray) -> np.ndarray:
+    """Real SH Y^r_k (k < (P+1)²) at the directions (θ[i], offset[i] + φ[j]): float32 (h, W, n_coef).
+
+    Y^r_lm = A_l|m|(θ) cos(mφ) for m >= 0 and A_l|m|(θ) sin(|m|φ) for m < 0 (the real basis of
+    ``analysis.sh``), so the θ part is evaluated once per row, at φ = 0."""
+    n = (P + 1) ** 2
+    l_of = np.floor(np.sqrt(np.arange(n))).astype(int)
+    m_of = np.arange(n) - l_of * l_of - l_of
+    at_zero = np.stack([np.sin(theta), np.zeros_like(theta), np.cos(theta)], axis=-1)
+    amplitude = real_sph_harm(P, at_zero)[:, l_of * l_of + l_of + np.abs(m_of)].astype(np.float32)  # (h, n)
+    angle = (offset[:, None, None] + phi[None, :, None]) * np.arange(P + 1)  # (h, W, P+1): mφ
+    trig = np.concatenate([np.cos(angle), np.sin(angle)], axis=-1).astype(np.float32)
+    pick = np.where(m_of < 0, P + 1 - m_of, m_of)  # cos(mφ) for m >= 0, sin(|m|φ) for m < 0
+    basis = trig[..., pick]
+    basis *= amplitude[:, None, :]
+    return basis
+
+
+def undershoot_samples(coeffs: np.ndarray, P: int, views: list | None = None) -> np.ndarray:
+    """B(R, V) of a global SHRM (unclamped) on its undershoot sample, channel-major float32
+    (3, n): R at every pixel centre (the renderer interpolates bilinearly between them, which
+    creates no new minimum at a fixed V), V from :func:`undershoot_views` (computed here when
+    not given); the first H·W columns are the normal views."""
+    height, width = coeffs.shape[1:3]
+    views = undershoot_views(height, width, P) if views is None else views
+    _, phi = pixel_angles(height, width)
+    out = np.empty((3, len(views) * height * width), dtype=np.float32)
+    for i, (theta_v, offset) in enumerate(views):
+        block = out[:, i * height * width : (i + 1) * height * width].reshape(3, height, width)
+        for r0 in range(0, height, 32):  # row blocks keep the basis array small at high P
+            rows = slice(r0, r0 + 32)
+            basis = _row_basis(P, theta_v[rows], offset[rows], phi)  # (h, W, n_coef)
+            block[:, rows] = np.einsum("hwk,khwc->chw", basis, coeffs[:, rows])
+    return out
+
+
+def undershoot(values: np.ndarray) -> float:
+    """−min / max of sampled radiance, channel-major (3, n); worst channel, 0 when nothing is
+    negative (the measure of ``eps["gibbs_negative"]`` and ``meta["negative_after"]``)."""
+    peak = values.max(axis=1)
+    low = values.min(axis=1)
+    live = peak > 0
+    return float(np.max(np.clip(-low[live] / peak[live], 0.0, None), initial=0.0))
+
+
+def _strength_for(before: np.ndarray, full: np.ndarray, threshold: float, t_max: float) -> float:
+    """The window strength t in [0, t_max] for ``auto``: the smallest t (to t_max·2⁻¹³) with
+    undershoot((1 − t)·before + t·full) <= threshold — the synthesis is linear in σ, so these are
+    the samples of the map at strength t — or, when no t reaches the threshold, the t of a 33-point
+    grid with the least undershoot (0 when the window does not reduce it: where the true radiance
+    is 0 over large regions, any ringing is negative).
+
+    Only two small subsets of the samples matter, per channel: those negative at some t
+    (min(before, full) < 0), and those that can be the maximum at some t
+    (max(before, full) >= max over samples of min(before, full))."""
+    low_side = np.minimum(before, full)
+    high_side = np.maximum(before, full)
+    floor = low_side.max(axis=1, keepdims=True)  # <= the maximum at every t
+    channels = []
+    for c in range(before.shape[0]):
+        keep = (low_side[c] < 0.0) | (high_side[c] >= floor[c])
+        channels.append((before[c, keep].astype(np.float64), full[c, keep].astype(np.float64)))
+
+    def under(t: float) -> float:
+        worst = 0.0
+        for b, f in channels:
+            value = b + t * (f - b)
+            peak = value.max(initial=0.0)
+            if peak > 0.0:
+                worst = max(worst, -value.min(initial=0.0) / peak)
+        return worst
+
+    grid = t_max * np.arange(33) / 32.0
+    values = np.array([under(t) for t in grid])
+    ok = np.flatnonzero(values <= threshold)
+    if ok.size == 0:
+        return float(grid[int(np.argmin(values))])
+    if ok[0] == 0:
+        return 0.0
+    lo, hi = float(grid[ok[0] - 1]), float(grid[ok[0]])
+    for _ in range(8):
+        mid = 0.5 * (lo + hi)
+        if under(mid) <= threshold:
+            hi = mid
+        else:
+            lo = mid
+    return hi
+
+
+def _windowed(coefficients: BRDFCoefficients, sigma: np.ndarray | None, F: int, P: int) -> BRDFCoefficients:
+    """ρ̂_lpq multiplied by σ_lp (l <= F, p <= P, every q); unchanged for None."""
+    if sigma is None:
+        return coefficients
+    damped = coefficients.coeffs.copy()
+    damped[: F + 1, : P + 1] *= sigma[:, :, None, None]
+    return BRDFCoefficients(coeffs=damped, energy=coefficients.energy, name=coefficients.name)
+
+
 # Cube faces in the z-up frame with OpenGL's texel axes (OpenGL 4.6 Table 8.19): face ->
 # (major axis, direction of increasing column u, direction of increasing row v).
 def cube_directions(size: int) -> np.ndarray:
@@ -457,7 +630,7 @@ def prefilter(
     max_P: int = DEFAULT_MAX_P,
     nthreads: int = 0,
     azimuth_free: bool = False,
-    window: str = "none",
+    window: str = DEFAULT_WINDOW,
     cube: bool = False,
     cube_size: int | None = None,
     progress: Any = None,
@@ -484,10 +657,22 @@ def prefilter(
     nthreads
         Threads for the SHTs (0: all available cores).
     window
-        ``"none"`` or ``"lanczos"``: multiply ρ̂_lpq by Lanczos σ-factors sinc(l/(F+1))
-        to damp the negative lobes (Gibbs ringing) a sharp truncation creates (DESIGN §7).
-        Its error cost is included in ``eps["reflected"]``; the ringing left is reported
-        as ``eps["gibbs_negative"]`` (most negative normal-view radiance / largest).
+        Damping of the negative lobes (Gibbs ringing) a sharp truncation creates (DESIGN §7),
+        one of :data:`WINDOWS`; the orders (F, P) are chosen first and never change.
+        ``"lanczos"``: multiply ρ̂_lpq by the Lanczos σ-factors
+        σ_lp = sinc(l/(F+1)) sinc(p/(P+1)) (:func:`~shrmkit.analysis.scene.lanczos_sigma`).
+        ``"auto"`` (default): synthesize without a window and measure the undershoot
+        (:func:`undershoot` on :func:`undershoot_samples`: every pixel's normal view and, for
+        P > 0, two oblique views per pixel up to θ_v = 85°); when it exceeds
+        :data:`WINDOW_THRESHOLD` (0.1 % of the peak), synthesize again with the Lanczos
+        σ-factors at the smallest strength t (σ(t) = 1 − t(1 − σ)) that brings it under the
+        threshold, but at most the strength whose cost stays within
+        :data:`WINDOW_BUDGET_EPS`·ε of added ε_B (when none reaches it: the strength of least
+        undershoot, possibly 0; :func:`_strength_for`). ``"none"``: no window. The window's cost is
+        included in ``eps["reflected"]`` and ``eps["bound"]``; ``meta`` records the window
+        used, its strength and why, and the undershoot before and after
+        (``data_specs/shrm_file.md``). What undershoot is left, :meth:`SHRM.radiance`,
+        :meth:`SHRM.view_map` and the renderer clamp to 0.
     cube, cube_size
         Also synthesize the SHRM on a 6 × S × S cube map (default S = rows // 2) through
         ducc0's general synthesis at the texel centres.
@@ -526,6 +711,7 @@ def prefilter(
     (0, True)
     """
     eps = check_eps(eps)
+    window = check_window(window)
 
     def stage(name: str) -> None:
         if progress is not None:
@@ -550,32 +736,75 @@ def prefilter(
     timings["lighting"] = time.perf_counter() - t0
     F_B = scene.F_B if F is None else int(min(F, lighting.lmax))
     P_B = scene.P_B if P is None else int(min(P, orders.coefficients.P0))
-    if window not in ("none", "lanczos"):
-        raise BadInputError(None, f"window={window!r}: choose 'none' or 'lanczos'")
-    sigma = lanczos_window(F_B) if window == "lanczos" else None
-    coefficients = orders.coefficients
-    if sigma is not None:
-        damped = coefficients.coeffs.copy()
-        damped[: F_B + 1] *= sigma[:, None, None, None]
-        coefficients = BRDFCoefficients(coeffs=damped, energy=coefficients.energy, name=coefficients.name)
+    sigma = lanczos_sigma(F_B, P_B) if window == "lanczos" else None
+    coefficients = _windowed(orders.coefficients, sigma, F_B, P_B)
     S = default_size(F_B, P_B) if size is None else int(size)
     size_note = "" if size is not None or S == default_size(F_B, 0) else (
         f"map rows lowered from {default_size(F_B, 0)} to {S} to fit the 256 MiB default budget (use size=)"
     )
     if S < 2 or S > 8192:
         raise BadInputError(None, f"SHRM size must be in [2, 8192] rows, got {S}")
+
+    def synthesize(coefficients: BRDFCoefficients) -> np.ndarray:
+        with np.errstate(over="ignore", invalid="ignore"):  # overflow is checked (and reported) below
+            coeffs = global_shrm_latlong(
+                lighting, coefficients, F_B, P_B, S, 2 * S, nthreads=nthreads, azimuth_free=azimuth_free
+            )
+        if not np.all(np.isfinite(coeffs)):
+            raise BadInputError(
+                getattr(env, "source", None) or env.name,
+                "the prefiltered radiance overflows float32 maps (radiance values near 1e38?): rescale the map",
+            )
+        return coeffs
+
+    q_max = 0 if azimuth_free else None
     stage("synthesis")
     t0 = time.perf_counter()
-    with np.errstate(over="ignore", invalid="ignore"):  # overflow is checked (and reported) below
-        coeffs = global_shrm_latlong(
-            lighting, coefficients, F_B, P_B, S, 2 * S, nthreads=nthreads, azimuth_free=azimuth_free
-        )
+    coeffs = synthesize(coefficients)
     timings["synthesis"] = time.perf_counter() - t0
-    if not np.all(np.isfinite(coeffs)):
-        raise BadInputError(
-            getattr(env, "source", None) or env.name,
-            "the prefiltered radiance overflows float32 maps (radiance values near 1e38?): rescale the map",
-        )
+    stage("window")
+    t0 = time.perf_counter()
+    views = undershoot_views(S, 2 * S, P_B)
+    values = undershoot_samples(coeffs, P_B, views)
+    before = undershoot(values)
+    strength = 1.0 if window == "lanczos" else 0.0
+    if window in ("none", "lanczos"):
+        reason = "requested"
+    elif before <= WINDOW_THRESHOLD:
+        reason = f"auto: undershoot {before:.3%} of the peak <= threshold {WINDOW_THRESHOLD:.1%}"
+    else:
+        full = lanczos_sigma(F_B, P_B)
+        truncation, cost = reflected_error_parts(lighting, orders.coefficients, F_B, P_B, full, q_max=q_max)
+        allowed = truncation.max() + WINDOW_BUDGET_EPS * eps  # ε_B may grow to this (worst channel)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t_budget = float(np.min(np.sqrt(np.clip(allowed - truncation, 0.0, None) / cost), initial=1.0))
+        del coeffs  # one map at a time: the 256 MiB default budget holds while windowing too
+        coefficients = _windowed(orders.coefficients, full, F_B, P_B)
+        coeffs = synthesize(coefficients)
+        values_full = undershoot_samples(coeffs, P_B, views)
+        strength = _strength_for(values, values_full, WINDOW_THRESHOLD, t_budget)
+        if strength == 1.0:
+            sigma, values = full, values_full
+        else:
+            del coeffs
+            sigma = lanczos_sigma(F_B, P_B, strength) if strength > 0.0 else None
+            coefficients = _windowed(orders.coefficients, sigma, F_B, P_B)
+            coeffs = synthesize(coefficients)
+            # the synthesis is linear in σ: these are the new map's samples (up to float32 rounding)
+            values += np.float32(strength) * (values_full - values)
+        del values_full
+        reason = f"auto: undershoot {before:.3%} of the peak > threshold {WINDOW_THRESHOLD:.1%}"
+        if strength == 0.0:
+            reason += ", not reduced by the Lanczos window"
+        elif undershoot(values) > WINDOW_THRESHOLD:
+            reason += (f", strength capped by the error budget ({WINDOW_BUDGET_EPS:g} eps of added eps_B)"
+                       if strength >= t_budget and t_budget < 1.0 else ", strength of the least undershoot")
+    after = undershoot(values)
+    negative_fraction = float(np.mean(values.min(axis=0) < 0.0))
+    if after > 0.0:
+        reason += (f"; undershoot left {after:.3%} of the peak on {negative_fraction:.2%} of the samples, "
+                   "clamped to 0 at the output")
+    timings["window"] = time.perf_counter() - t0
     cube_coeffs = None
     if cube:
         stage("cube map")
@@ -594,12 +823,13 @@ def prefilter(
         ).astype(np.float32)
         timings["cube"] = time.perf_counter() - t0
     t0 = time.perf_counter()
+    truncation, cost = reflected_error_parts(lighting, orders.coefficients, F_B, P_B, sigma, q_max=q_max)
     eps_info = {
         "brdf": float(orders.table[min(F_B, orders.F0), P_B]),
         "lighting": float(lighting.eps()[min(F_B, lighting.lmax)]),
-        "reflected": reflected_error(lighting, orders.coefficients, F_B, P_B, sigma, q_max=0 if azimuth_free else None),
-        "bound": residual_bound(lighting, orders.coefficients, F_B, P_B),
-        "gibbs_negative": gibbs_negative(coeffs, P_B),
+        "reflected": float((truncation + cost).max()),
+        "bound": residual_bound(lighting, orders.coefficients, F_B, P_B, sigma, q_max=q_max),
+        "gibbs_negative": undershoot(values[:, : S * 2 * S]),  # the normal views: gibbs_negative(coeffs, P_B)
     }
     timings["errors"] = time.perf_counter() - t0
     timings["total"] = time.perf_counter() - t
@@ -615,6 +845,16 @@ def prefilter(
         "shrmkit_version": __version__,
         "frame": "z-up; lat-long pixel centres theta=(i+1/2)pi/H, phi=2pi(j+1/2)/W",
         "azimuth_free": bool(azimuth_free),
-        "window": window,
+        "window": "lanczos" if strength > 0.0 else "none",
+        "window_requested": window,
+        "window_strength": float(strength),
+        "window_reason": reason,
+        "window_threshold": WINDOW_THRESHOLD,
+        "window_cost": float(cost.max()),
+        "eps_reflected_unwindowed": float(truncation.max()),
+        "negative_before": None if window == "lanczos" else before,
+        "negative_after": after,
+        "negative_fraction_after": negative_fraction,
+        "negative_max_view_deg": UNDERSHOOT_MAX_VIEW_DEG,
     }
     return SHRM(F=F_B, P=P_B, coeffs=coeffs, tolerance=float(eps), eps=eps_info, meta=meta, cube=cube_coeffs)

@@ -92,8 +92,8 @@ def main(argv: list[str] | None = None) -> int:
     for F in measured_F:
         if F > args.max_F:
             continue
-        shrm = prefilter(env, brdf, F=F, P=0)
-        measured[F] = (relative_rms(shrm.radiance(R, V), ref), shrm.height, shrm.eps["reflected"])
+        shrm = prefilter(env, brdf, F=F, P=0, window="none")  # the truncation alone, as ε_B(F)
+        measured[F] = (relative_rms(shrm.radiance(R, V, clamp=False), ref), shrm.height, shrm.eps["reflected"])
 
     table = Table(
         title=f"RH02 Fig. 6 analog: {env.name} {env.height}×{env.width}, {brdf.name}, P = 0; "

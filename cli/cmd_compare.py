@@ -25,7 +25,16 @@ from ..brdf_io.errors import BadInputError
 from ..brdf_io.specs import load_brdf
 from ..render.mesh import load_mesh
 from ..render.strip import write_comparison_strip
-from .common import add_env_orientation, load_env_arg, number_in, print_json, stderr, stdout, tolerance
+from .common import (
+    add_env_orientation,
+    add_window_option,
+    load_env_arg,
+    number_in,
+    print_json,
+    stderr,
+    stdout,
+    tolerance,
+)
 
 HELP = "compare the SHRM with Kautz-McCool, Cabral (12 maps) and Gaussian-lobe representations"
 
@@ -46,6 +55,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         "keep it small")
     parser.add_argument("--eps", type=tolerance, default=DEFAULT_EPS,
                         help=f"SHRM tolerance (default {DEFAULT_EPS:g})")
+    add_window_option(parser)
     parser.add_argument("--pairs", type=number_in(10, 10**6, integer=True), default=d.n_pairs,
                         help=f"sampled (R, V) pairs (default {d.n_pairs})")
     parser.add_argument("--max-view", type=number_in(1.0, 90.0, hi_open=True), default=d.max_view_deg,
@@ -83,7 +93,7 @@ def _options(args: argparse.Namespace) -> CompareOptions:
     return CompareOptions(
         eps=args.eps, env_height=args.env_height, n_pairs=args.pairs, max_view_deg=args.max_view, seed=args.seed,
         lower_P=args.lower_p, lobes=_lobes(args.lobes), n_elevations=args.elevations,
-        cabral_reference_height=args.cabral_reference_height or None,
+        cabral_reference_height=args.cabral_reference_height or None, window=args.window,
     )
 
 
@@ -116,7 +126,8 @@ def run(args: argparse.Namespace) -> int:
         print_json(result)
         return 0
     table = Table(title=f"{result['brdf']} under {result['environment']}, eps {result['eps']:g}, "
-                        f"{result['n_pairs']} pairs (reference {result['reference']['seconds']:.2f} s)")
+                        f"window {result['window']}, {result['n_pairs']} pairs "
+                        f"(reference {result['reference']['seconds']:.2f} s)")
     for key in ("representation", "rel RMS", "grazing >70°", "<45°", "storage MB", "precompute s", "update ms",
                 "eval µs"):
         table.add_column(key, justify="left" if key == "representation" else "right")

@@ -18,7 +18,7 @@ from ..analysis.tolerance import DEFAULT_EPS
 from ..brdf_io.atomic import check_writable
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.specs import load_brdf
-from .common import add_env_orientation, load_env_arg, stderr, stdout, tolerance
+from .common import add_env_orientation, add_window_option, load_env_arg, stderr, stdout, tolerance
 
 HELP = "prefilter an environment map with a BRDF into a global SHRM file (.shrm.npz)"
 
@@ -32,7 +32,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--max-P", type=int, default=DEFAULT_MAX_P)
     parser.add_argument("--cube", action="store_true", help="also store the SHRM on a 6 x S x S cube map")
     parser.add_argument("--cube-size", type=int, help="cube face size S (default: rows // 2)")
-    parser.add_argument("--window", choices=("none", "lanczos"), default="none", help="Lanczos damping of ringing")
+    add_window_option(parser)
     parser.add_argument("-o", "--output", required=True, help="output path, e.g. sky.shrm.npz")
     add_env_orientation(parser)
 
@@ -66,12 +66,13 @@ def run(args: argparse.Namespace) -> int:
     stdout.print(table)
     if shrm.cube is not None:
         stdout.print(f"cube map: 6 x {shrm.cube.shape[2]}^2 texels, {t['cube']:.3f} s")
-    if args.window == "lanczos":
-        stdout.print(f"note: the Lanczos window blurs: reported energy error {shrm.eps['reflected']:.3g} "
-                     f"(tolerance {args.eps:g})")
-    if shrm.eps.get("gibbs_negative", 0) > 0.01:
-        stdout.print(f"[yellow]note:[/yellow] ringing: negative lobes down to {shrm.eps['gibbs_negative']:.1%} of the "
-                     "peak (try --window lanczos)")
+    meta = shrm.meta
+    before = "not measured" if meta["negative_before"] is None else f"{meta['negative_before']:.3%}"
+    used = meta["window"] if meta["window"] == "none" else f"{meta['window']} x{meta['window_strength']:.3g}"
+    stdout.print(f"window: {used} ({meta['window_reason']})", markup=False, soft_wrap=True)
+    stdout.print(f"undershoot (most negative radiance / peak): before {before}, after {meta['negative_after']:.3%}; "
+                 f"eps reflected {shrm.eps['reflected']:.3g} includes the window's {meta['window_cost']:.3g}",
+                 markup=False, soft_wrap=True)
     if shrm.meta.get("orders_message"):
         stdout.print(f"[yellow]note:[/yellow] {shrm.meta['orders_message']}")
     stdout.print(f"wrote {out}")

@@ -15,7 +15,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 
 from ..analysis.tolerance import DEFAULT_EPS
 from ..render.mesh import load_mesh
-from .common import add_env_orientation, stderr, stdout, tolerance
+from .common import add_env_orientation, add_window_option, stderr, stdout, tolerance
 from .report.batch import run_batch
 from .report.options import load_report_env, profile
 
@@ -70,6 +70,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--max-F", type=_positive_int, default=None, help="cap on F (default 256, quick 96)")
     p.add_argument("--fit-samples", type=_positive_int, default=None, help="fit samples (default 16384, quick 4096)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_window_option(p)
     add_env_orientation(p)
     p.epilog = "exit status: 0 all reports made, 1 some BRDFs failed (see summary), 2 bad usage"
 
@@ -78,7 +79,8 @@ def options_from_args(args: argparse.Namespace):
     """ReportOptions from the parsed arguments (the quick profile when ``--quick``)."""
 
     changes = {"eps": args.eps, "lobes": args.lobes, "preview": args.preview, "seed": args.seed, "mesh": args.mesh,
-               "env_up": args.env_up, "env_flip": args.env_flip, "env_azimuth": args.env_azimuth}
+               "env_up": args.env_up, "env_flip": args.env_flip, "env_azimuth": args.env_azimuth,
+               "window": args.window}
     for key, value in (("tolerances", args.tolerances), ("envs", tuple(args.env) if args.env else None),
                        ("env_height", args.env_height), ("models", args.models), ("n_pairs", args.pairs),
                        ("max_F", args.max_F), ("fit_samples", args.fit_samples)):

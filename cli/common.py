@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 from rich.console import Console
 
+from ..analysis.shrm import DEFAULT_WINDOW, WINDOW_BUDGET_EPS, WINDOW_THRESHOLD, WINDOWS
 from ..analysis.tolerance import check_eps
 from ..brdf_io.envmap import load_env
 from ..brdf_io.errors import BadInputError
@@ -17,6 +18,7 @@ from ..brdf_io.jsonutil import to_jsonable
 
 __all__ = [
     "add_env_orientation",
+    "add_window_option",
     "env_orientation",
     "load_env_arg",
     "stdout",
@@ -77,6 +79,18 @@ def add_env_orientation(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--env-flip", action="store_true", help="reverse the rows of a lat-long file first")
     group.add_argument("--env-azimuth", type=float, default=0.0, metavar="DEG",
                        help="rotate the map about the up axis by this many degrees")
+
+
+def add_window_option(parser: argparse.ArgumentParser) -> None:
+    """``--window none|lanczos|auto``: the prefilter's window against Gibbs ringing, for every
+    verb that prefilters (the names are ``analysis.shrm.WINDOWS``; argparse exits 2 on others)."""
+    parser.add_argument(
+        "--window", choices=WINDOWS, default=DEFAULT_WINDOW,
+        help=f"damping of the SHRM's Gibbs ringing (negative lobes): auto (default) applies Lanczos sigma-factors "
+        f"just strong enough when the undershoot passes {100 * WINDOW_THRESHOLD:g}%% of the peak, within "
+        f"{WINDOW_BUDGET_EPS:g} eps of added error; lanczos: full Lanczos; none: the bare truncation. What is left "
+        "is clamped to 0 at the output",
+    )
 
 
 def env_orientation(args: argparse.Namespace) -> dict[str, Any]:

@@ -114,7 +114,10 @@ def render_scene(
     fps_frames
         Repeated frames for the frames-per-second figure (0 skips it).
     options
-        The builders' options (Gaussian lobes, elevations, self-shadowing); default ``RenderOptions()``.
+        The builders' options (Gaussian lobes, elevations, self-shadowing, the SHRM modes' window
+        against Gibbs ringing: ``RenderOptions(window="auto" | "lanczos" | "none")``); default
+        ``RenderOptions()`` (window ``"auto"``). The SHRM modes clamp the radiance at 0 in the
+        shader; ``built.info`` has the window used and the undershoot before and after it.
     progress
         Optional callable told the stage as each starts: ``"load"``, ``"build"``, ``"render"``.
 

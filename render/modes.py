@@ -42,7 +42,7 @@ import numpy as np
 from ..analysis.baselines.gaussian_lobes import GaussianLobeModel, fit_gaussian_lobes, sg_mip_stack
 from ..analysis.baselines.rsibr import RSIBRMaps, rsibr_from_shrm
 from ..analysis.baselines.selfshadow import vertex_visibility_sh
-from ..analysis.shrm import SHRM, prefilter
+from ..analysis.shrm import DEFAULT_WINDOW, SHRM, check_window, prefilter
 from ..brdf_io.brdf import BRDF
 from ..brdf_io.envmap import EnvironmentMap
 from ..brdf_io.errors import BadInputError
@@ -80,13 +80,18 @@ class RenderOptions:
     self_shadow
         Per-vertex SH visibility by ray casting (Green et al. 2007 eq. 7); only for the modes
         whose record has ``self_shadow`` (:func:`self_shadow_modes`).
+    window
+        The SHRM modes' window against Gibbs ringing, one of ``analysis.shrm.WINDOWS``
+        (``prefilter(window=)``; default ``"auto"``).
     """
 
     lobes: int = 3
     elevations: int = 15
     self_shadow: bool = False
+    window: str = DEFAULT_WINDOW
 
     def __post_init__(self) -> None:
+        check_window(self.window)
         for name, (lo, hi) in (("lobes", LOBES_RANGE), ("elevations", ELEVATIONS_RANGE)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, Integral) or not lo <= value <= hi:
@@ -155,31 +160,44 @@ class RenderMode:
 # ------------------------------------------------------------------------------------------
 
 
-def _prefiltered(env: EnvironmentMap, brdf: BRDF, eps: float, *, azimuth_free: bool = False) -> BuiltModel:
+#: ``BuiltModel.info`` keys copied from ``SHRM.meta`` (``data_specs/shrm_file.md``): the window
+#: and the Gibbs undershoot before and after it.
+WINDOW_INFO_KEYS = ("window", "window_requested", "window_strength", "window_reason", "negative_before",
+                    "negative_after", "negative_fraction_after")
+
+
+def _prefiltered(
+    env: EnvironmentMap, brdf: BRDF, eps: float, *, window: str = DEFAULT_WINDOW, azimuth_free: bool = False
+) -> BuiltModel:
     t0 = time.perf_counter()
-    shrm = prefilter(env, brdf, eps=eps, azimuth_free=azimuth_free)
+    shrm = prefilter(env, brdf, eps=eps, azimuth_free=azimuth_free, window=window)
     seconds = time.perf_counter() - t0
     info = {"F": shrm.F, "P": shrm.P, "height": shrm.height, "width": shrm.width, "eps": eps,
-            "achieved_eps": dict(shrm.eps), "azimuth_free": azimuth_free, "prefilter_seconds": seconds}
-    lines = (f"SHRM F={shrm.F} P={shrm.P} on {shrm.height}x{shrm.width} (eps {eps:g})", f"prefilter: {seconds:.3f} s")
+            "achieved_eps": dict(shrm.eps), "azimuth_free": azimuth_free, "prefilter_seconds": seconds,
+            **{key: shrm.meta[key] for key in WINDOW_INFO_KEYS}}
+    meta = shrm.meta
+    used = meta["window"] if meta["window"] == "none" else f"{meta['window']} x{meta['window_strength']:.3g}"
+    lines = (f"SHRM F={shrm.F} P={shrm.P} on {shrm.height}x{shrm.width} (eps {eps:g}, achieved eps_B "
+             f"{shrm.eps['reflected']:.3g})", f"window: {used} ({meta['window_reason']})",
+             f"prefilter: {seconds:.3f} s")
     return BuiltModel(shrm, info, lines)
 
 
 def build_shrm(env: EnvironmentMap, brdf: BRDF, mesh: Mesh, *, eps: float, options: RenderOptions) -> BuiltModel:
-    """The global SHRM of ``env`` and ``brdf`` at tolerance ``eps`` (RH02 §4–5)."""
-    return _prefiltered(env, brdf, eps)
+    """The global SHRM of ``env`` and ``brdf`` at tolerance ``eps`` (RH02 §4–5), ``options.window``."""
+    return _prefiltered(env, brdf, eps, window=options.window)
 
 
 def build_kautz_mccool(
     env: EnvironmentMap, brdf: BRDF, mesh: Mesh, *, eps: float, options: RenderOptions
 ) -> BuiltModel:
     """The azimuth-free (q = 0) SHRM of Kautz & McCool 2000: ``prefilter(..., azimuth_free=True)``."""
-    return _prefiltered(env, brdf, eps, azimuth_free=True)
+    return _prefiltered(env, brdf, eps, window=options.window, azimuth_free=True)
 
 
 def build_rsibr(env: EnvironmentMap, brdf: BRDF, mesh: Mesh, *, eps: float, options: RenderOptions) -> BuiltModel:
     """Cabral et al. 1999: the SHRM, then its twelve maps at the icosahedron's vertices."""
-    built = _prefiltered(env, brdf, eps)
+    built = _prefiltered(env, brdf, eps, window=options.window)
     maps = rsibr_from_shrm(built.model)
     return BuiltModel(maps, {**built.info, "rsibr_seconds": float(maps.meta["seconds"])}, built.description)
 

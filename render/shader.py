@@ -15,6 +15,9 @@ doi:10.1145/566654.566611. Per fragment, after the shared prelude of ``render.gl
   blend of the twelve maps of ``analysis.baselines.rsibr`` (:func:`rsibr_update`).
 
 All maps are looked up with the bilinear lat-long rule of ``render.glsl`` (four ``texelFetch``es).
+The SHRM modes clamp the radiance at 0 (``max(shrmRad, 0)`` in the fragment shader, and the
+per-frame map of ``distant``), as :meth:`SHRM.radiance` does: the undershoot the prefilter's
+window left (``SHRM.meta["negative_after"]``, ``data_specs/shrm_file.md``) never reaches an image.
 """
 
 from __future__ import annotations
@@ -106,6 +109,8 @@ def shrm_fragment_replacements(lmax: int, height: int, width: int, *, per_pixel:
         ]
     else:
         body.append("  vec3 shrmRad = shrm_fetch(ivec2(0, 0), shrmIdx, shrmF);")
+    # the Gibbs undershoot the prefilter's window left (SHRM.meta "negative_after") ends here
+    body.append("  shrmRad = max(shrmRad, vec3(0.0));")
     return fragment_replacements(dec, body)
 
 
@@ -131,6 +136,7 @@ def distant_update(state: tuple[int, np.ndarray], view: np.ndarray, out: np.ndar
     P, flat = state
     basis = real_sph_harm(P, view).astype(np.float32)
     np.matmul(basis, flat, out=out.reshape(-1))
+    np.maximum(out, 0.0, out=out)  # as SHRM.view_map: no negative radiance (the window's leftover undershoot)
 
 
 def perpixel_shading(shrm: SHRM, mesh: Mesh) -> Shading:

@@ -6,6 +6,7 @@ import math
 from dataclasses import dataclass
 
 from ...brdf_io.errors import BadInputError
+from ..shrm import DEFAULT_WINDOW, check_window
 from ..tolerance import DEFAULT_EPS, check_eps
 
 __all__ = ["CompareOptions", "DEFAULT_ENV_HEIGHT"]
@@ -44,6 +45,10 @@ class CompareOptions:
     update_view
         View direction (need not be unit) at which the per-frame update of the distant
         viewer is timed.
+    window
+        The window of every SHRM of the comparison (the SHRM rows, Kautz–McCool, Cabral's
+        maps from the SHRM) against Gibbs ringing, one of ``analysis.shrm.WINDOWS``
+        (:func:`~shrmkit.analysis.shrm.prefilter`; default ``"auto"``).
     """
 
     eps: float = DEFAULT_EPS
@@ -56,10 +61,12 @@ class CompareOptions:
     n_elevations: int = 15
     cabral_reference_height: int | None = 32
     update_view: tuple[float, float, float] = (1.0, 0.0, 0.3)
+    window: str = DEFAULT_WINDOW
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
         set_(self, "eps", check_eps(self.eps))
+        check_window(self.window)
         set_(self, "lobes", tuple(int(k) for k in self.lobes))
         set_(self, "update_view", tuple(float(x) for x in self.update_view))
         if self.n_pairs < 10:

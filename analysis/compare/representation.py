@@ -156,7 +156,7 @@ class BuildContext:
         if self._base is None:
             self.stage("SHRM")
             t0 = time.perf_counter()
-            shrm = prefilter(self.env, self.brdf, eps=self.options.eps)
+            shrm = prefilter(self.env, self.brdf, eps=self.options.eps, window=self.options.window)
             self._base = (shrm, time.perf_counter() - t0)
         return self._base
 

@@ -22,14 +22,19 @@ __all__ = ["build_shrm", "build_shrm_low_p", "build_kautz_mccool"]
 
 
 def _params(shrm: SHRM, **extra: Any) -> dict[str, Any]:
-    return {"F": shrm.F, "P": shrm.P, "map": f"{shrm.height}x{shrm.width}", **extra}
+    meta = shrm.meta
+    return {"F": shrm.F, "P": shrm.P, "map": f"{shrm.height}x{shrm.width}", "window": meta["window"],
+            "window_strength": meta["window_strength"], "eps_B": shrm.eps["reflected"],
+            "negative_before": meta["negative_before"], "negative_after": meta["negative_after"], **extra}
 
 
 def _same_grid(ctx: BuildContext, P: int, **kwargs: Any) -> tuple[SHRM, float]:
-    """An SHRM at the base SHRM's F and map size with view order P, and its seconds."""
+    """An SHRM at the base SHRM's F and map size with view order P (window ``options.window``,
+    decided for this SHRM), and its seconds."""
     base, _ = ctx.base_shrm()
     t0 = time.perf_counter()
-    shrm = prefilter(ctx.env, ctx.brdf, eps=ctx.options.eps, F=base.F, P=P, size=base.height, **kwargs)
+    shrm = prefilter(ctx.env, ctx.brdf, eps=ctx.options.eps, F=base.F, P=P, size=base.height,
+                     window=ctx.options.window, **kwargs)
     return shrm, time.perf_counter() - t0
 
 

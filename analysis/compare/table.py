@@ -132,6 +132,7 @@ def compare_representations(
         "brdf": brdf.name,
         "environment": f"{env.name} ({env.height}x{env.width})",
         "eps": options.eps,
+        "window": options.window,
         "n_pairs": int(n),
         "max_view_deg": float(options.max_view_deg),
         "grazing_deg": GRAZING_DEG,
@@ -160,7 +161,8 @@ def compare(brdf: Any, env: Any, *, progress: Callable[[str], None] | None = Non
         Keyword-only fields of :class:`~.options.CompareOptions`: ``eps`` (default
         ``DEFAULT_EPS``, checked by ``check_eps``), ``env_height``, ``n_pairs``,
         ``max_view_deg``, ``seed``, ``lower_P``, ``lobes``, ``n_elevations``,
-        ``cabral_reference_height``, ``update_view``.
+        ``cabral_reference_height``, ``update_view``, ``window`` (``"auto"``, ``"lanczos"`` or
+        ``"none"``: the SHRMs' window against Gibbs ringing).
 
     The image strip is not written here any more (this layer computes numbers only):
     ``strip``, ``strip_size`` and ``mesh`` raise ``TypeError``. To get the strip, call
@@ -171,7 +173,7 @@ def compare(brdf: Any, env: Any, *, progress: Callable[[str], None] | None = Non
     Returns
     -------
     dict
-        JSON-able: ``brdf``, ``environment``, ``eps``, ``n_pairs``, ``reference`` (timings),
+        JSON-able: ``brdf``, ``environment``, ``eps``, ``window``, ``n_pairs``, ``reference`` (timings),
         ``rows`` (one dict per representation), ``markdown`` (a table for reports). Layout:
         ``data_specs/compare_json.md``.
 

