@@ -840,6 +840,7 @@ def prefilter(
         "F_rho": orders.F,
         "P_rho": orders.P,
         "F_L": scene.F_L,
+        "lighting_capped": bool(scene.lighting_capped),
         "orders_message": "; ".join(m for m in (orders.message, size_note) if m),
         "timings": timings,
         "shrmkit_version": __version__,

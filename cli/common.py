@@ -21,6 +21,7 @@ __all__ = [
     "add_window_option",
     "env_orientation",
     "load_env_arg",
+    "load_oriented_env",
     "stdout",
     "stderr",
     "number_in", "positive_float", "tolerance", "print_json", "to_jsonable"]
@@ -73,7 +74,9 @@ def print_json(doc: dict[str, Any]) -> None:
 def add_env_orientation(parser: argparse.ArgumentParser) -> None:
     """``--env-up``, ``--env-flip``, ``--env-azimuth``: how a lat-long *file* is oriented
     (data_specs/environment_maps.md; the shared Grace probe needs ``--env-up y --env-flip``)."""
-    group = parser.add_argument_group("environment file orientation (ignored for builtin: maps)")
+    group = parser.add_argument_group(
+        "environment orientation (--env-up/--env-flip: map files only, refused for builtin: maps; "
+        "--env-azimuth: any map)")
     group.add_argument("--env-up", choices=("z", "y"), default=None,
                        help="lat-long file convention: z (top row = zenith, default) or y (y-up files)")
     group.add_argument("--env-flip", action="store_true", help="reverse the rows of a lat-long file first")
@@ -98,11 +101,17 @@ def env_orientation(args: argparse.Namespace) -> dict[str, Any]:
     return {"up": args.env_up, "flip": args.env_flip, "azimuth": args.env_azimuth}
 
 
-def load_env_arg(spec: str, args: argparse.Namespace, **kwargs: Any):
-    """``load_env(spec)`` with the orientation options applied to files (not to built-ins)."""
-
+def load_oriented_env(spec: str, *, up: str | None, flip: bool, azimuth: float, **kwargs: Any):
+    """``load_env(spec)`` with the orientation options: ``up`` and ``flip`` describe how a map
+    *file* is stored and are refused for built-ins (which have no file); ``azimuth`` rotates any
+    map. The one rule of every verb (``shrm report`` included)."""
     if spec.strip().startswith("builtin:"):
-        if args.env_up or args.env_flip:
+        if up or flip:
             raise BadInputError(spec, "--env-up/--env-flip apply to map files, not to built-in environments")
-        return load_env(spec, azimuth=args.env_azimuth, **kwargs)
-    return load_env(spec, **env_orientation(args), **kwargs)
+        return load_env(spec, azimuth=azimuth, **kwargs)
+    return load_env(spec, up=up, flip=flip, azimuth=azimuth, **kwargs)
+
+
+def load_env_arg(spec: str, args: argparse.Namespace, **kwargs: Any):
+    """:func:`load_oriented_env` with the options of :func:`add_env_orientation`."""
+    return load_oriented_env(spec, **env_orientation(args), **kwargs)

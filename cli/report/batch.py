@@ -31,7 +31,7 @@ from typing import Any
 
 from ...brdf_io.errors import BadInputError
 from ...render.preview import resolve_preview_mode
-from .collect import collect_report, failed_report
+from .collect import collect_report, failed_report, unique_names
 from .options import ReportOptions
 from .writer import report_files, summary_row, write_folder, write_summary
 
@@ -81,16 +81,12 @@ class BatchResult:
 
 def report_names(sources: Sequence[str]) -> list[str]:
     """Folder names: the file stem or the sanitized spec, made unique with ``-2``, ``-3``…"""
-    names: list[str] = []
+    bases = []
     for source in sources:
         path = Path(source)
         base = path.stem if path.suffix.lower() in _BRDF_SUFFIXES or path.exists() else source
-        base = re.sub(r"[^A-Za-z0-9._-]+", "_", base).strip("._") or "brdf"
-        name, k = base, 2
-        while name in names:
-            name, k = f"{base}-{k}", k + 1
-        names.append(name)
-    return names
+        bases.append(re.sub(r"[^A-Za-z0-9._-]+", "_", base).strip("._") or "brdf")
+    return unique_names(bases)
 
 
 def run_task(task: ReportTask, progress: Callable[[str], None] | None = None) -> ReportOutcome:

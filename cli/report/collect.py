@@ -28,6 +28,7 @@ SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Callable
@@ -57,6 +58,7 @@ __all__ = [
     "REPORT_FORMAT_VERSION",
     "SLICE_VIEWS_DEG",
     "collect_report",
+    "unique_names",
     "failed_report",
     "REPORT_DIGITS",
     "strip_timings",
@@ -208,11 +210,26 @@ def _orders(brdf: BRDF, options: ReportOptions) -> tuple[list[dict[str, Any]], d
 # --------------------------------------------------------------------------- prefilter
 
 
+def unique_names(names: list[str]) -> list[str]:
+    """``names`` with repeats made unique by ``-2``, ``-3``… in order (report folders, and the
+    environments of one report, whose names key the summary columns)."""
+    out: list[str] = []
+    for base in names:
+        name, k = base, 2
+        while name in out:
+            name, k = f"{base}-{k}", k + 1
+        out.append(name)
+    return out
+
+
 def _environments(brdf: BRDF, options: ReportOptions, progress: Progress | None):
     R, V, _ = sample_pairs(options.n_pairs, seed=options.seed, max_view_deg=REPORT_MAX_VIEW_DEG)
     env_entries, speed_rows, main_shrms = [], [], []
-    for spec in options.envs:
-        env = load_report_env(spec, options)
+    envs = [load_report_env(spec, options) for spec in options.envs]
+    names = unique_names([env.name for env in envs])
+    for spec, env, name in zip(options.envs, envs, names, strict=True):
+        if name != env.name:
+            env = dataclasses.replace(env, name=name)
         _stage(progress, f"reference {env.name}")
         t0 = time.perf_counter()
         reference = reference_radiance(env, brdf, R, V)
@@ -267,6 +284,7 @@ def _environments(brdf: BRDF, options: ReportOptions, progress: Progress | None)
                 entry.update({
                     "tolerance": tol,
                     "F_L": row["F_L"],
+                    "lighting_capped": bool(shrm.meta["lighting_capped"]),
                     "F_B": row["F_B"],
                     "P_B": row["P_B"],
                     "bound": row["bound"],

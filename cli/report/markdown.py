@@ -88,12 +88,16 @@ def report_sections(doc: dict[str, Any], image_link: Any = None) -> Iterator[tup
     body += "\n\n" + link("accuracy_by_p", "plot_accuracy_by_p.png", PLOT_TITLES["accuracy_by_p"])
     yield "Orders (RH02 §5.1)", body
 
-    rows = [[e["name"], f"{e['height']}×{e['width']}", e["F_L"], e["F_B"], e["P_B"], e["eps_B"], e["bound"],
+    rows = [[e["name"], f"{e['height']}×{e['width']}", f"≥ {e['F_L']}" if e.get("lighting_capped") else e["F_L"],
+             e["F_B"], e["P_B"], e["eps_B"], e["bound"],
              e["measured_rel_rms"], e["n_pairs"]] for e in doc["environments"]]
     body = (f"At ε = {fmt(doc['main']['tolerance'])}: F_L is the lighting's own order, F_B = min(F_ρ, F_L), "
             "P_B = P_ρ; ε_B the predicted relative energy error of the reflected light field, the bound its "
             "residual upper bound; the measured error is the relative RMS of the SHRM against brute-force "
-            "angular integration on random (R, V) pairs.\n\n")
+            "angular integration on random (R, V) pairs. Maps are resampled to the size shown (`--env-height`; "
+            "the angular reference costs O(W·S_L²)), so `shrm orders --env` and `shrm prefilter` on the full-size "
+            "file can give another F_L and bound; \"≥ F_L\": ε_L stays above the tolerance up to the largest "
+            "degree computed.\n\n")
     body += md_table(["environment", "size", "F_L", "F_B", "P_B", "ε_B", "bound", "measured rel. RMS", "pairs"], rows)
     yield "Environments", body
 

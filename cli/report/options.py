@@ -13,8 +13,8 @@ from typing import Any
 from ...analysis.fit.models_param import MODELS
 from ...analysis.shrm import DEFAULT_WINDOW, check_window
 from ...analysis.tolerance import DEFAULT_EPS, check_eps
-from ...brdf_io.envmap import load_env
 from ...brdf_io.errors import BadInputError
+from ..common import load_oriented_env
 
 __all__ = ["ReportOptions", "DEFAULT_TOLERANCES", "DEFAULT_MODELS", "PREVIEW_MODES", "profile"]
 
@@ -150,9 +150,7 @@ def profile(name: str = "full", **changes: Any) -> ReportOptions:
 
 
 def load_report_env(spec: str, options: ReportOptions):  # -> EnvironmentMap
-    """Load one of ``options.envs`` at ``env_height`` rows with the orientation options."""
-
-    if spec.strip().startswith("builtin:"):
-        return load_env(spec, azimuth=options.env_azimuth, height=options.env_height)
-    return load_env(spec, up=options.env_up, flip=options.env_flip, azimuth=options.env_azimuth,
-                    height=options.env_height)
+    """Load one of ``options.envs`` at ``env_height`` rows with the orientation options
+    (the CLI's one rule, :func:`~shrmkit.cli.common.load_oriented_env`)."""
+    return load_oriented_env(spec, up=options.env_up, flip=options.env_flip, azimuth=options.env_azimuth,
+                             height=options.env_height)

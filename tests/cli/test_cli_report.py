@@ -78,3 +78,13 @@ def test_bench_runs_a_script_entry_point(tmp_path, capsys):
     (tmp_path / "fit_speed.py").write_text("def main(argv=None):\n    raise RuntimeError('boom')\n")
     assert main(["bench", "--only", "fit", "--benchmarks", str(tmp_path)]) == 1
     assert "FAILED: RuntimeError: boom" in capsys.readouterr().out
+
+
+def test_report_refuses_file_orientation_for_builtin_maps(tmp_path, capsys):
+    """The same orientation rule as every other verb (cli.common.load_oriented_env): exit 2,
+    one line, nothing written."""
+    out = tmp_path / "r"
+    assert main(["report", "phong:s=8", "--quick", "--env", "builtin:sky", "--env-flip", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "apply to map files" in err and err.count("\n") == 1
+    assert not out.exists()

@@ -179,3 +179,15 @@ def test_worker_processes_lose_no_report(serial_many):
     result = run_batch(MANY, serial_many / "workers", tiny_options(), workers=2)
     assert result.n_failed == 0
     assert reports(serial_many / "workers") == reports(serial_many / "serial")
+
+
+def test_two_environments_with_one_name_get_two_columns(tmp_path):
+    """Two maps both named 'constant' (different radiance) keep their own summary columns."""
+    options = profile("quick", preview="none", models=("lafortune",), tolerances=(0.1,), eps=0.1, n_pairs=30,
+                      fit_samples=1024, albedo_nodes=16,
+                      envs=("builtin:constant,height=16", "builtin:constant,height=16,value=2"))
+    result = run_batch(["lambert:albedo=0.5"], tmp_path / "r", options)
+    doc = json.loads((tmp_path / "r" / "lambert_albedo_0.5" / "report.json").read_text())
+    assert [e["name"] for e in doc["environments"]] == ["constant", "constant-2"]
+    row = result.rows[0]
+    assert {"shrm_rel_rms_constant", "shrm_rel_rms_constant-2"} <= set(row)
