@@ -10,13 +10,15 @@ from __future__ import annotations
 
 import argparse
 import time
+from pathlib import Path
 
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from ..analysis.tolerance import DEFAULT_EPS
+from ..brdf_io.errors import BadInputError
 from ..render.mesh import load_mesh
 from .common import add_env_orientation, add_window_option, stderr, stdout, tolerance
-from .report.batch import run_batch
+from .report.batch import BRDF_SUFFIXES, run_batch
 from .report.options import load_report_env, profile
 
 HELP = "accuracy reports (orders, scene errors, fits, speed vs error, preview) for BRDFs, with a summary"
@@ -118,6 +120,7 @@ def say(text: str) -> None:
 def run(args: argparse.Namespace) -> int:
     options = options_from_args(args)
     _check_shared_inputs(options)
+    _check_brdf_files(args.brdfs)
     t0 = time.perf_counter()
     result = run_with_progress(list(args.brdfs), args.out, options, workers=args.workers,
                                scheduler=args.dask_scheduler, show=not args.no_progress)
@@ -131,6 +134,15 @@ def run(args: argparse.Namespace) -> int:
     say(f"{len(result.rows) - result.n_failed} of {len(result.rows)} reports made in "
                  f"{time.perf_counter() - t0:.1f} s ({result.engine})")
     return 0 if result.ok else 1
+
+
+def _check_brdf_files(sources: list[str]) -> None:
+    """A BRDF named by a file path that does not exist is a usage error (exit 2, nothing
+    written); a file that exists but cannot be read is one failed report in the batch."""
+    for source in sources:
+        path = Path(source)
+        if path.suffix.lower() in BRDF_SUFFIXES and not path.exists():
+            raise BadInputError(path, "no such BRDF file")
 
 
 def _check_shared_inputs(options) -> None:

@@ -35,12 +35,13 @@ from .collect import collect_report, failed_report, unique_names
 from .options import ReportOptions
 from .writer import report_files, summary_row, write_folder, write_summary
 
-__all__ = ["ReportTask", "ReportOutcome", "BatchResult", "report_names", "run_task", "run_batch"]
+__all__ = ["BRDF_SUFFIXES", "ReportTask", "ReportOutcome", "BatchResult", "report_names", "run_task", "run_batch"]
 
 #: ``progress(event, name, detail)``: event ``"start"``, ``"stage"`` (serial only) or ``"done"``.
 BatchProgress = Callable[[str, str, str], None]
 
-_BRDF_SUFFIXES = (".binary", ".npz", ".brdf", ".json")
+#: File suffixes of the BRDF files `shrm report` takes (MERL, our table, Cornell, a fitted model).
+BRDF_SUFFIXES = (".binary", ".npz", ".brdf", ".json")
 
 
 @dataclass(frozen=True)
@@ -84,7 +85,7 @@ def report_names(sources: Sequence[str]) -> list[str]:
     bases = []
     for source in sources:
         path = Path(source)
-        base = path.stem if path.suffix.lower() in _BRDF_SUFFIXES or path.exists() else source
+        base = path.stem if path.suffix.lower() in BRDF_SUFFIXES or path.exists() else source
         bases.append(re.sub(r"[^A-Za-z0-9._-]+", "_", base).strip("._") or "brdf")
     return unique_names(bases)
 

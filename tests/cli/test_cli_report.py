@@ -88,3 +88,11 @@ def test_report_refuses_file_orientation_for_builtin_maps(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "apply to map files" in err and err.count("\n") == 1
     assert not out.exists()
+
+
+def test_report_missing_brdf_file_is_a_usage_error(tmp_path, capsys):
+    out = tmp_path / "r"
+    assert main(["report", "phong:s=8", str(tmp_path / "nope.binary"), "--quick", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "nope.binary" in err and "no such BRDF file" in err and err.count("\n") == 1
+    assert not out.exists()
