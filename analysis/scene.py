@@ -62,15 +62,6 @@ class SceneOrders:
     tolerance: float
 
 
-def _brdf_band_energies(
-    coefficients: BRDFCoefficients, P: int, q_max: int | None = None
-) -> tuple[np.ndarray, np.ndarray]:
-    """r_l kept (p <= P, |q| <= q_max) and not kept, per channel: two arrays (F0+1, 3)."""
-    kept_lp, total = _brdf_lp_energies(coefficients, P, q_max)
-    kept = kept_lp.sum(axis=1)
-    return kept, total - kept
-
-
 def _brdf_lp_energies(
     coefficients: BRDFCoefficients, P: int, q_max: int | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -90,6 +81,19 @@ def _window_matrix(window: np.ndarray, F: int, P: int) -> np.ndarray:
     return w
 
 
+def _kept_energy(a: np.ndarray, kept_lp: np.ndarray, F: int) -> np.ndarray:
+    """Λ_l² a_l r_lp of the kept terms (l <= F), per (l, p, channel): (F+1, P+1, 3)."""
+    lam2 = Lambda(np.arange(F + 1))[:, None, None] ** 2
+    return lam2 * a[: F + 1, None] * kept_lp[: F + 1]
+
+
+def _window_cost(window: np.ndarray | None, kept: np.ndarray, F: int, P: int) -> np.ndarray:
+    """Energy a window σ_lp removes from the kept terms, Σ (1 − σ_lp)² Λ_l² a_l r_lp, per channel."""
+    if window is None:
+        return np.zeros(kept.shape[-1])
+    return ((1.0 - _window_matrix(window, F, P))[..., None] ** 2 * kept).sum(axis=(0, 1))
+
+
 def reflected_error_parts(
     lighting: LightingCoefficients,
     coefficients: BRDFCoefficients,
@@ -107,12 +111,10 @@ def reflected_error_parts(
     n = min(a.shape[0], all_l.shape[0])
     lam2 = Lambda(np.arange(n))[:, None] ** 2
     full = lam2 * a[:n] * all_l[:n]
-    kept = lam2[: F + 1, None] * a[: F + 1, None] * kept_lp[: F + 1]  # (F+1, P+1, 3)
+    kept = _kept_energy(a, kept_lp, F)
     total = full.sum(axis=0)
     error = total - kept.sum(axis=(0, 1))
-    cost = np.zeros_like(total)
-    if window is not None:
-        cost = ((1.0 - _window_matrix(window, F, P))[..., None] ** 2 * kept).sum(axis=(0, 1))
+    cost = _window_cost(window, kept, F, P)
     live = total > 1e-300
     safe = np.where(live, total, 1.0)
     return np.where(live, error / safe, 0.0), np.where(live, cost / safe, 0.0)
@@ -172,7 +174,9 @@ def residual_bound(
     """Conservative upper bound U/(C + U) on ε_B from residual energies (module docs); with a
     ``window`` (as in :func:`reflected_error`), (U + W)/(C + U) with its exact cost W."""
     a = lighting.band_energy()
-    r_in, r_out = _brdf_band_energies(coefficients, P, q_max)
+    kept_lp, all_l = _brdf_lp_energies(coefficients, P, q_max)
+    r_in = kept_lp.sum(axis=1)
+    r_out = all_l - r_in
     E_L = lighting.energy
     E_rho = coefficients.energy
     lam = Lambda(np.arange(F + 2))
@@ -182,11 +186,7 @@ def residual_bound(
     kept = (lam[: F + 1, None] ** 2 * a[: F + 1] * r_in[: F + 1]).sum(axis=0)
     peak = (lam[: F + 1, None] ** 2 * a[: F + 1]).max(axis=0)
     U = lam[F + 1] ** 2 * beyond_L * beyond_rho_l + peak * beyond_rho_p
-    W = np.zeros_like(U)
-    if window is not None:
-        kept_lp, _ = _brdf_lp_energies(coefficients, P, q_max)
-        w = (1.0 - _window_matrix(window, F, P))[..., None] ** 2
-        W = (w * lam[: F + 1, None, None] ** 2 * a[: F + 1, None] * kept_lp[: F + 1]).sum(axis=(0, 1))
+    W = _window_cost(window, _kept_energy(a, kept_lp, F), F, P)
     live = (kept + U) > 1e-300
     return float(((U[live] + W[live]) / (kept[live] + U[live])).max())
 

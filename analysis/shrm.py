@@ -455,8 +455,7 @@ def gibbs_negative(coeffs: np.ndarray, P: int) -> float:
         normal_view = np.einsum("hwk,khwc->hwc", basis, coeffs[:, r0 : r0 + 32])
         peak = np.maximum(peak, normal_view.max(axis=(0, 1)))
         low = np.minimum(low, normal_view.min(axis=(0, 1)))
-    live = peak > 0
-    return float(np.max(np.clip(-low[live] / peak[live], 0.0, None), initial=0.0))
+    return undershoot(np.stack([low, peak], axis=1))
 
 
 _GOLDEN = (np.sqrt(5.0) - 1.0) / 2.0
@@ -594,8 +593,6 @@ def _windowed(coefficients: BRDFCoefficients, sigma: np.ndarray | None, F: int, 
     return BRDFCoefficients(coeffs=damped, energy=coefficients.energy, name=coefficients.name)
 
 
-# Cube faces in the z-up frame with OpenGL's texel axes (OpenGL 4.6 Table 8.19): face ->
-# (major axis, direction of increasing column u, direction of increasing row v).
 def cube_directions(size: int) -> np.ndarray:
     """Unit texel-centre directions (6, S, S, 3) of the SHRM cube map, faces +x, −x, +y, −y,
     +z, −z of the z-up frame with OpenGL texel axes (the one table: ``brdf_io.cubemap``)."""
