@@ -21,8 +21,6 @@ from ..render.camera import Camera
 from ..render.mesh import load_mesh
 from ..render.modes import (
     DEFAULT_MODE,
-    ELEVATIONS_RANGE,
-    LOBES_RANGE,
     RENDER_MODES,
     RenderOptions,
     mode_names,
@@ -98,10 +96,6 @@ def _validate(args: argparse.Namespace) -> tuple[list[Camera], RenderOptions]:
         raise BadInputError(args.output, "output must be a .png file")
     if args.exr and Path(args.exr).suffix.lower() != ".exr":
         raise BadInputError(args.exr, "--exr must name a .exr file")
-    (klo, khi), (elo, ehi) = LOBES_RANGE, ELEVATIONS_RANGE
-    if not (klo <= args.lobes <= khi and elo <= args.elevations <= ehi):
-        raise BadInputError(None, f"--lobes must be in [{klo}, {khi}] and --elevations in [{elo}, {ehi}], got "
-                                  f"{args.lobes}, {args.elevations}")
     if args.self_shadow and args.mode not in self_shadow_modes():
         raise BadInputError(None, f"--self-shadow needs --mode {' or '.join(self_shadow_modes())}")
     view, up = _vector(args.view, "--view"), _vector(args.up, "--up")
@@ -110,6 +104,7 @@ def _validate(args: argparse.Namespace) -> tuple[list[Camera], RenderOptions]:
     except ValueError as err:
         raise BadInputError(None, f"--view/--up: {err}") from None
     cameras = turntable_cameras(camera, args.turntable) if args.turntable else [camera]
+    # RenderOptions checks --lobes/--elevations (its ranges, one home) before anything is loaded
     options = RenderOptions(lobes=args.lobes, elevations=args.elevations, self_shadow=args.self_shadow,
                             window=args.window)
     return cameras, options
