@@ -26,7 +26,10 @@ import numpy as np
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.latlong import row_solid_angles
 
-__all__ = ["LightingCoefficients", "lighting_coefficients", "alm_index", "area_downsample", "eps_lighting"]
+__all__ = [
+    "LightingCoefficients", "lighting_coefficients", "alm_index", "area_downsample", "eps_lighting",
+    "point_band_energy",
+]
 
 
 def alm_index(l: int | np.ndarray, m: int | np.ndarray, lmax: int) -> np.ndarray:
@@ -46,12 +49,22 @@ class LightingCoefficients:
         Largest degree stored.
     energy
         ∫ L² dω per channel, by the pixel sum (shape (3,)).
+    rows, source_rows
+        Rows of the map the SHT ran on (after area averaging) and of the map given
+        (0: unknown).
+    beyond
+        Optional (n, 3): a_l = Σ_m |L_lm|² for l = lmax+1 … lmax+n of the pixels taken as
+        point lights (the angular reference's reading of the map;
+        :func:`point_band_energy`) — beyond what the map resolves, for error statements.
     """
 
     alm: np.ndarray
     lmax: int
     energy: np.ndarray
     name: str = ""
+    rows: int = 0
+    source_rows: int = 0
+    beyond: np.ndarray | None = None
 
     def band_energy(self) -> np.ndarray:
         """Σ_m |L_lm|² for each l (both signs of m), shape (lmax+1, 3)."""
@@ -61,6 +74,11 @@ class LightingCoefficients:
             power = np.abs(self.alm[:, idx]) ** 2
             out[m:] += (1.0 if m == 0 else 2.0) * power.T
         return out
+
+    def band_energy_all(self) -> np.ndarray:
+        """:meth:`band_energy` followed by ``beyond`` when present: (lmax+1+n, 3)."""
+        own = self.band_energy()
+        return own if self.beyond is None else np.concatenate([own, self.beyond])
 
     def eps(self) -> np.ndarray:
         """ε_L(F) for F = 0..lmax, worst channel (RH02 §5.1)."""
@@ -133,4 +151,31 @@ def lighting_coefficients(
             phi0=np.pi / w2,
             nthreads=nthreads,
         )[0]
-    return LightingCoefficients(alm=alm, lmax=lmax, energy=energy, name=name)
+    return LightingCoefficients(alm=alm, lmax=lmax, energy=energy, name=name, rows=h2, source_rows=height)
+
+
+def point_band_energy(radiance: np.ndarray, l_from: int, l_to: int, *, nthreads: int = 1) -> np.ndarray:
+    """a_l = Σ_m |L_lm|² for l_from <= l <= l_to of the pixels of a lat-long map taken as point
+    lights of flux L·Ω at their centres — exactly what the angular reference integrates — at
+    any degree (beyond the rows' Nyquist limit too), by ducc0's adjoint general synthesis
+    (agrees with :func:`lighting_coefficients` to 1e-13 where both apply). Shape
+    (l_to − l_from + 1, 3)."""
+    radiance = np.asarray(radiance, dtype=np.float64)
+    height, width = radiance.shape[:2]
+    if l_to < l_from:
+        return np.zeros((0, 3))
+    theta = (np.arange(height) + 0.5) * np.pi / height
+    phi = 2.0 * np.pi * (np.arange(width) + 0.5) / width
+    loc = np.stack(np.meshgrid(theta, phi, indexing="ij"), axis=-1).reshape(-1, 2)
+    flux = (radiance * row_solid_angles(height, width)[:, None, None]).reshape(-1, 3)
+    lit = np.any(flux != 0.0, axis=1)
+    out = np.zeros((l_to + 1, 3))
+    for c in range(3) if lit.any() else ():
+        alm = ducc0.sht.experimental.adjoint_synthesis_general(
+            map=np.ascontiguousarray(flux[lit, c][None]), spin=0, lmax=l_to, loc=np.ascontiguousarray(loc[lit]),
+            epsilon=1e-10, nthreads=nthreads,
+        )[0]
+        for m in range(l_to + 1):
+            idx = alm_index(np.arange(m, l_to + 1), m, l_to)
+            out[m:, c] += (1.0 if m == 0 else 2.0) * np.abs(alm[idx]) ** 2
+    return out[l_from:]

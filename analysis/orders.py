@@ -9,6 +9,16 @@ material is as hard as its sharpest channel); channels with no energy are ignore
 Choice rule (RH02 §5.1): with (F0, P0) large enough that ε(F0, P0) <= tol,
 P = min{p : ε(F0, p) <= tol}, then F = min{f : ε(f, P) <= tol}.
 
+Two tables ε(F, P) feed that rule (``criterion``):
+
+- ``"bands"`` (default): the worst view band θ_v inside the view limit ``max_view_deg``
+  (default 80°) under a point light (:func:`~shrmkit.analysis.view_bands.band_eps_table`),
+  with the view dependence fitted to those views
+  (:func:`~shrmkit.analysis.view_bands.fit_view_coefficients`) — every band the user looks
+  at meets the tolerance, grazing views included;
+- ``"rh02"``: RH02's unweighted energy over all views, with the projected coefficients
+  (reproduces RH02 Table 5 and the Phong closed form F ≈ sqrt(−s ln ε)).
+
 (F0, P0) are the full capacity of the quadrature grid (every order the grid integrates
 orthonormally), so the rule sees all the energy the samples hold. When ε(F0, P0) > tol
 the grid is refined (doubled) until the tolerance is met or the caps ``max_F``/``max_P``
@@ -33,6 +43,17 @@ from ..brdf_io.reparam import ReparamBRDF, ReparamGrid, reparameterize
 from ..brdf_io.specs import load_brdf
 from .brdf_coeffs import BRDFCoefficients, rho_lpq
 from .tolerance import DEFAULT_EPS, check_eps
+from .view_bands import (
+    DEFAULT_CRITERION,
+    DEFAULT_MAX_VIEW_DEG,
+    ViewProfile,
+    band_eps_table,
+    brdf_view_bands,
+    check_criterion,
+    check_max_view,
+    fit_view_coefficients,
+    view_profile,
+)
 
 __all__ = [
     "OrderChoice",
@@ -45,7 +66,7 @@ __all__ = [
 ]
 
 DEFAULT_MAX_F = 512
-DEFAULT_MAX_P = 16
+DEFAULT_MAX_P = 20
 
 
 @dataclass(frozen=True, eq=False)
@@ -57,11 +78,11 @@ class OrderChoice:
     F, P
         Chosen orders.
     eps
-        Achieved ε(F, P) (worst channel).
+        Achieved ε(F, P) of the rule's table (worst channel; worst band for ``"bands"``).
     tolerance
         Requested tolerance.
     table
-        ε[F, P] for F <= F0, P <= P0 (worst channel).
+        ε[F, P] for F <= F0, P <= P0 of the rule (``criterion``), worst channel.
     capped
         True when the tolerance could not be met within ``max_F``/``max_P``; (F, P) are
         then the caps and ``eps`` what they achieve.
@@ -70,7 +91,14 @@ class OrderChoice:
     message
         Human-readable notes (caps, convergence, missing data).
     coefficients
-        The ρ̂_lpq used (on the final grid).
+        The projected ρ̂_lpq (RH02 eq. 13) on the final grid; :meth:`coefficients_for` gives
+        the ones a representation at view order P uses.
+    criterion, max_view_deg
+        The order rule and its view limit (degrees of θ_v).
+    profile
+        ρ̂ resolved by view band (:class:`~shrmkit.analysis.view_bands.ViewProfile`).
+    rh02_table
+        RH02's unweighted ε[F, P] (the ``"rh02"`` table), whatever the criterion.
     """
 
     F: int
@@ -85,6 +113,10 @@ class OrderChoice:
     grid: ReparamGrid
     n_without_data: int
     coefficients: BRDFCoefficients = field(repr=False)
+    criterion: str = DEFAULT_CRITERION
+    max_view_deg: float = DEFAULT_MAX_VIEW_DEG
+    profile: ViewProfile | None = field(default=None, repr=False)
+    rh02_table: np.ndarray | None = field(default=None, repr=False)
 
     @property
     def F0(self) -> int:
@@ -93,6 +125,29 @@ class OrderChoice:
     @property
     def P0(self) -> int:
         return self.table.shape[1] - 1
+
+    @property
+    def eps_rh02(self) -> float:
+        """RH02's unweighted ε at the chosen (F, P) (energy fraction over all views)."""
+        table = self.table if self.rh02_table is None else self.rh02_table
+        return float(table[self.F, self.P])
+
+    def coefficients_for(self, P: int) -> BRDFCoefficients:
+        """ρ̂_lpq for a representation of view order ``P``: the projection (``"rh02"``) or the
+        fit to the views inside the limit (``"bands"``, depends on P)."""
+        if self.criterion == "rh02" or self.profile is None:
+            return self.coefficients
+        return fit_view_coefficients(self.profile, self.coefficients, int(P), self.max_view_deg)
+
+    def view_bands(self, F: int | None = None, P: int | None = None) -> list[dict]:
+        """Per θ_v band at (F, P) (default: the chosen orders) under a point light:
+        ``eps``, ``rel_rms_point_light`` (= √ε), ``inside``, ``extrapolated_samples``
+        (:func:`~shrmkit.analysis.view_bands.brdf_view_bands`)."""
+        F = self.F if F is None else int(F)
+        P = self.P if P is None else int(P)
+        if self.profile is None:
+            return []
+        return brdf_view_bands(self.profile, self.coefficients_for(P), F, P, self.max_view_deg)
 
 
 def eps_table(coefficients: BRDFCoefficients) -> np.ndarray:
@@ -127,30 +182,53 @@ def choose_from_table(table: np.ndarray, tolerance: float) -> tuple[int, int, bo
     can see — Phong needs no P > 0 at any F, and a view-dependent lobe held at P = 0 gains
     only ~1e-8 from F beyond its own band limit — while a lobe whose error still falls keeps
     the cap. The error reported is that of the chosen entry.
+
+    RH02's table falls monotonically in F and P, so "a column meets the tolerance" is its
+    F0 row; the bands table (worst band of a fit) need not, so each column's minimum is used.
     """
-    last_row = table[-1]
-    ok_p = np.nonzero(last_row <= tolerance)[0]
+    column_best = table.min(axis=0)
+    ok_p = np.nonzero(column_best <= tolerance)[0]
     if ok_p.size:
         P = int(ok_p[0])
         F = int(np.nonzero(table[:, P] <= tolerance)[0][0])
         return F, P, False
-    best = float(last_row.min())
-    reach = best + CAPPED_SLACK * tolerance
-    P = int(np.nonzero(last_row <= reach)[0][0])
+    reach = float(column_best.min()) + CAPPED_SLACK * tolerance
+    P = int(np.nonzero(column_best <= reach)[0][0])
     F = int(np.nonzero(table[:, P] <= reach)[0][0])
     return F, P, True
 
 
-def _coefficients_on(brdf: BRDF, grid: ReparamGrid, max_F: int, max_P: int) -> tuple[BRDFCoefficients, int]:
+@dataclass(frozen=True, eq=False)
+class _OnGrid:
+    """Everything one quadrature grid gives: coefficients, profile, both tables."""
+
+    grid: ReparamGrid
+    coefficients: BRDFCoefficients
+    profile: ViewProfile
+    rh02_table: np.ndarray
+    table: np.ndarray
+    missing: int
+
+
+def _on_grid(brdf: BRDF, grid: ReparamGrid, max_F: int, max_P: int, criterion: str, max_view_deg: float) -> _OnGrid:
     reparam: ReparamBRDF = reparameterize(brdf, grid)
     F0 = min(grid.n_theta_i - 1, max_F)
     P0 = min(grid.n_theta_o - 1, (grid.n_phi - 1) // 2, max_P)
-    return rho_lpq(reparam, F0, P0), reparam.n_without_data
+    coefficients = rho_lpq(reparam, F0, P0)
+    profile = view_profile(brdf, grid, F0, P0)
+    if not np.any(coefficients.energy > 0):
+        return _OnGrid(grid, coefficients, profile, np.zeros((0, 0)), np.zeros((0, 0)), reparam.n_without_data)
+    rh02 = eps_table(coefficients)
+    table = rh02 if criterion == "rh02" else band_eps_table(profile, coefficients, max_view_deg)
+    return _OnGrid(grid, coefficients, profile, rh02, table, reparam.n_without_data + int(profile.missing.sum()))
 
 
-def _validate(tolerance: float, max_F: int, max_P: int) -> float:
-    """The tolerance as a float (``check_eps``) after checking the caps."""
+def _validate(tolerance: float, max_F: int, max_P: int, criterion: str = DEFAULT_CRITERION,
+              max_view_deg: float = DEFAULT_MAX_VIEW_DEG) -> float:
+    """The tolerance as a float (``check_eps``) after checking the caps and the rule."""
     tolerance = check_eps(tolerance)
+    check_criterion(criterion)
+    check_max_view(max_view_deg)
     if int(max_F) < 1 or int(max_F) > 2000:
         raise BadInputError(None, f"max_F must be in [1, 2000], got {max_F!r}")
     if int(max_P) < 0 or int(max_P) > 64:
@@ -166,6 +244,8 @@ def choose_orders(
     max_P: int = DEFAULT_MAX_P,
     start_F: int = 24,
     start_P: int = 4,
+    criterion: str = DEFAULT_CRITERION,
+    max_view_deg: float = DEFAULT_MAX_VIEW_DEG,
 ) -> OrderChoice:
     """Choose (F, P) for ``brdf`` at tolerance ``eps`` (RH02 §5.1, Appendix C).
 
@@ -180,27 +260,38 @@ def choose_orders(
         Caps on the orders; beyond them the result is ``capped`` (documented, no loop).
     start_F, start_P
         Orders the first quadrature grid is sized for.
+    criterion
+        ``"bands"`` (default): every θ_v band that starts below ``max_view_deg`` meets ``eps``
+        under a point light; ``"rh02"``: RH02's energy over all views (module docs).
+    max_view_deg
+        View limit of the ``"bands"`` rule in degrees of θ_v, in (0, 90] (default 80).
 
     Returns
     -------
     OrderChoice
+
+    Raises
+    ------
+    BadInputError
+        ε outside (0, 1), caps or view limit out of range, an unknown criterion, an all-zero
+        or non-finite BRDF.
     """
-    eps = _validate(eps, max_F, max_P)
+    eps = _validate(eps, max_F, max_P, criterion, max_view_deg)
     if isinstance(brdf, str | Path):
         brdf = load_brdf(brdf)
     t0 = time.perf_counter()
     notes: list[str] = []
     F_goal, P_goal = min(start_F, max_F), min(start_P, max_P)
     for _ in range(24):
-        grid = ReparamGrid.for_orders(F_goal, P_goal)
-        coefficients, missing = _coefficients_on(brdf, grid, max_F, max_P)
-        at_caps = coefficients.F0 >= max_F and coefficients.P0 >= max_P
-        if not np.any(coefficients.energy > 0) and not at_caps:
+        on = _on_grid(brdf, ReparamGrid.for_orders(F_goal, P_goal), max_F, max_P, criterion, max_view_deg)
+        at_caps = on.coefficients.F0 >= max_F and on.coefficients.P0 >= max_P
+        if not np.any(on.coefficients.energy > 0) and not at_caps:
             # a lobe far sharper than this grid (Phong s = 1e6) can fall between its nodes
             F_goal, P_goal = min(2 * F_goal, max_F), min(P_goal + 4, max_P)
             continue
-        table = eps_table(coefficients)
-        F, P, capped = choose_from_table(table, eps)
+        if not np.any(on.coefficients.energy > 0):
+            eps_table(on.coefficients)  # raises: the BRDF is zero everywhere
+        F, P, capped = choose_from_table(on.table, eps)
         if capped and not at_caps:
             F_goal, P_goal = min(2 * F_goal, max_F), min(P_goal + 4, max_P)
         elif F > F_goal or P > P_goal:
@@ -211,14 +302,13 @@ def choose_orders(
     # convergence check on a 1.5x finer grid
     converged = False
     for _ in range(3):
+        grid = on.grid
         fine = ReparamGrid(
             int(grid.n_theta_i * 1.5), int(grid.n_theta_o * 1.5), int(grid.n_phi * 1.5) + (grid.n_phi % 2)
         )
-        fine_coeffs, fine_missing = _coefficients_on(brdf, fine, max_F, max_P)
-        fine_table = eps_table(fine_coeffs)
-        F2, P2, capped2 = choose_from_table(fine_table, eps)
+        on = _on_grid(brdf, fine, max_F, max_P, criterion, max_view_deg)
+        F2, P2, capped2 = choose_from_table(on.table, eps)
         same = abs(F2 - F) <= 1 and P2 == P and capped2 == capped
-        grid, coefficients, table, missing = fine, fine_coeffs, fine_table, fine_missing
         F, P, capped = F2, P2, capped2
         if same:
             converged = True
@@ -226,46 +316,43 @@ def choose_orders(
     if capped:
         notes.append(
             f"tolerance {eps:g} not met within the caps F<={max_F}, P<={max_P}: "
-            f"ε({F}, {P}) = {table[F, P]:.3g}; raise --max-F/--max-P"
+            f"ε({F}, {P}) = {on.table[F, P]:.3g}; raise --max-F/--max-P"
         )
     if not converged:
         notes.append("the order choice did not settle under quadrature refinement (table too coarse?)")
-    if missing:
-        notes.append(f"{missing} reparameterized samples had no measurement to interpolate (set to 0)")
+    if on.missing:
+        notes.append(f"{on.missing} reparameterized samples had no measurement to interpolate (set to 0)")
+    return _choice(on, F, P, eps, capped, converged, notes, time.perf_counter() - t0, criterion, max_view_deg)
+
+
+def _choice(on: _OnGrid, F: int, P: int, eps: float, capped: bool, converged: bool, notes: list[str],
+            seconds: float, criterion: str, max_view_deg: float) -> OrderChoice:
     return OrderChoice(
-        F=F,
-        P=P,
-        eps=float(table[F, P]),
-        tolerance=float(eps),
-        table=table,
-        capped=capped,
-        converged=converged,
-        message="; ".join(notes),
-        seconds=time.perf_counter() - t0,
-        grid=grid,
-        n_without_data=missing,
-        coefficients=coefficients,
+        F=F, P=P, eps=float(on.table[F, P]), tolerance=float(eps), table=on.table, capped=capped,
+        converged=converged, message="; ".join(notes), seconds=seconds, grid=on.grid,
+        n_without_data=on.missing, coefficients=on.coefficients, criterion=criterion,
+        max_view_deg=float(max_view_deg), profile=on.profile, rh02_table=on.rh02_table,
     )
 
 
-def orders_on_grid_for(brdf: BRDF, F: int, P: int, *, eps: float = DEFAULT_EPS) -> OrderChoice:
+def orders_on_grid_for(
+    brdf: BRDF, F: int, P: int, *, eps: float = DEFAULT_EPS, criterion: str = DEFAULT_CRITERION,
+    max_view_deg: float = DEFAULT_MAX_VIEW_DEG,
+) -> OrderChoice:
     """ρ̂_lpq and ε(F, P) on one quadrature grid sized for given orders (no search).
 
-    For callers that force (F, P): the RH02 choice on this grid is still reported in
+    For callers that force (F, P): the rule's choice on this grid is still reported in
     ``F``/``P`` (capped if the grid cannot meet ``eps``), but the grid is neither grown
     nor refined (``converged`` is False and ``message`` says so).
     """
-    eps = _validate(eps, max(F, 1), P)
+    eps = _validate(eps, max(F, 1), P, criterion, max_view_deg)
     t0 = time.perf_counter()
     grid = ReparamGrid.for_orders(F, P)
-    coefficients, missing = _coefficients_on(brdf, grid, grid.n_theta_i - 1, max(P, 1))
-    table = eps_table(coefficients)
-    F_rule, P_rule, capped = choose_from_table(table, eps)
+    on = _on_grid(brdf, grid, grid.n_theta_i - 1, max(P, 1), criterion, max_view_deg)
+    if not np.any(on.coefficients.energy > 0):
+        eps_table(on.coefficients)  # raises: the BRDF is zero everywhere
+    F_rule, P_rule, capped = choose_from_table(on.table, eps)
     notes = [f"orders given (F={F}, P={P}): the grid was sized for them and not refined"]
-    if missing:
-        notes.append(f"{missing} reparameterized samples had no measurement to interpolate (set to 0)")
-    return OrderChoice(
-        F=F_rule, P=P_rule, eps=float(table[F_rule, P_rule]), tolerance=float(eps), table=table, capped=capped,
-        converged=False, message="; ".join(notes), seconds=time.perf_counter() - t0, grid=grid,
-        n_without_data=missing, coefficients=coefficients,
-    )
+    if on.missing:
+        notes.append(f"{on.missing} reparameterized samples had no measurement to interpolate (set to 0)")
+    return _choice(on, F_rule, P_rule, eps, capped, False, notes, time.perf_counter() - t0, criterion, max_view_deg)

@@ -31,15 +31,17 @@ SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..brdf_io.envmap import EnvironmentMap
 from .brdf_coeffs import BRDFCoefficients
-from .lighting import LightingCoefficients, lighting_coefficients
-from .orders import OrderChoice
+from .lighting import LightingCoefficients, lighting_coefficients, point_band_energy
+from .orders import CAPPED_SLACK, OrderChoice
 from .sh import Lambda
+from .view_bands import bands_inside, scene_error_curve, shrm_view_bands
 
 __all__ = [
     "SceneOrders", "scene_orders", "scene_for", "lighting_lmax", "reflected_error", "reflected_error_parts",
@@ -49,7 +51,12 @@ __all__ = [
 
 @dataclass(frozen=True)
 class SceneOrders:
-    """Orders a scene needs: F_B = min(F_ρ, F_L), P_B = P_ρ (RH02 §5.1)."""
+    """Orders a scene needs (:func:`scene_orders`): F_B, P_B = P_ρ, and what they achieve.
+
+    ``bound`` is RH02's residual bound on ε_B (energy, all views; ``"rh02"``) or the worst
+    ``bound_rel_rms`` inside the view limit (relative RMS; ``"bands"``), as ``bound_units``
+    says. ``view_bands`` holds the per-band statement without the map's own loss (that needs
+    the map size: :func:`~shrmkit.analysis.shrm.prefilter`)."""
 
     F_rho: int
     P_rho: int
@@ -60,6 +67,10 @@ class SceneOrders:
     lighting_capped: bool
     bound: float
     tolerance: float
+    criterion: str = "rh02"
+    capped: bool = False
+    bound_units: str = "energy fraction (RH02 eps)"
+    view_bands: tuple = ()
 
 
 def _brdf_lp_energies(
@@ -192,32 +203,55 @@ def residual_bound(
 
 
 def scene_orders(orders: OrderChoice, lighting: LightingCoefficients) -> SceneOrders:
-    """F_L, F_B = min(F_ρ, F_L), P_B = P_ρ and the residual bound at (F_B, P_B)."""
+    """F_L, F_B, P_B = P_ρ and what they achieve, by the orders' criterion.
+
+    - ``"rh02"``: F_B = min(F_ρ, F_L) (RH02 §5.1) and the residual bound (module docs).
+    - ``"bands"``: F_B = the smallest F <= the lighting's lmax whose reflected field meets the
+      tolerance in every view band inside the limit, from the product spectrum
+      Λ_l² a_l ρ̂² per band (:func:`~shrmkit.analysis.view_bands.scene_error_curve`):
+      a sharp light under a sharp BRDF gets the F it needs (the min rule ignores the lighting
+      energy above F_L that the BRDF passes), a smooth one the F it needs. When no F reaches
+      the tolerance (``capped``), the smallest F within CAPPED_SLACK·ε of the best.
+    """
     tol = orders.tolerance
     eps_L = lighting.eps()
     ok = np.nonzero(eps_L <= tol)[0]
-    capped = ok.size == 0
+    light_capped = ok.size == 0
     F_L = int(ok[0]) if ok.size else lighting.lmax
-    F_B = min(orders.F, F_L)
     P_B = orders.P
-    bound = residual_bound(lighting, orders.coefficients, F_B, P_B)
+    if orders.criterion == "rh02" or orders.profile is None:
+        F_B = min(orders.F, F_L)
+        return SceneOrders(
+            F_rho=orders.F, P_rho=orders.P, F_L=F_L, F_B=F_B, P_B=P_B, eps_L=float(eps_L[F_L]),
+            lighting_capped=light_capped, bound=residual_bound(lighting, orders.coefficients, F_B, P_B),
+            tolerance=tol, criterion="rh02",
+        )
+    coefficients = orders.coefficients_for(P_B)
+    band_energy = lighting.band_energy_all()
+    curve = scene_error_curve(orders.profile, coefficients, band_energy, P_B)
+    inside = bands_inside(orders.profile, orders.max_view_deg)
+    top = min(lighting.lmax, curve.shape[1] - 1)
+    worst = curve[inside, : top + 1].max(axis=0)
+    meets = np.nonzero(worst <= tol)[0]
+    capped = meets.size == 0
+    F_B = int(meets[0]) if meets.size else int(np.nonzero(worst <= worst.min() + CAPPED_SLACK * tol)[0][0])
+    bands = shrm_view_bands(orders.profile, coefficients, band_energy, F_B, P_B, max_view_deg=orders.max_view_deg).bands
     return SceneOrders(
-        F_rho=orders.F,
-        P_rho=orders.P,
-        F_L=F_L,
-        F_B=F_B,
-        P_B=P_B,
-        eps_L=float(eps_L[F_L]),
-        lighting_capped=capped,
-        bound=bound,
-        tolerance=tol,
+        F_rho=orders.F, P_rho=orders.P, F_L=F_L, F_B=F_B, P_B=P_B, eps_L=float(eps_L[F_L]),
+        lighting_capped=light_capped, bound=max(b["bound_rel_rms"] for b in bands if b["inside"]),
+        tolerance=tol, criterion="bands", capped=capped, bound_units="relative RMS (worst band inside the view limit)",
+        view_bands=tuple(bands),
     )
 
 
 def lighting_lmax(orders: OrderChoice, env_height: int, F: int | None = None) -> int:
-    """The lighting order computed for a scene: beyond F_ρ (max(2F_ρ, F_ρ + 16), or a forced
-    ``F``), so that the achieved error and the bound see the residual energy, but never above
-    what the map resolves (rows − 1) or what the BRDF coefficients hold (F0)."""
+    """The lighting order computed for a scene: beyond F_ρ, so that the achieved error and the
+    bound see the residual energy, but never above what the map resolves (rows − 1) or what
+    the BRDF coefficients hold (F0). ``"rh02"``: max(2F_ρ, F_ρ + 16) (or a forced ``F``);
+    ``"bands"``: all of F0, so that F_B may exceed F_ρ where a sharp light needs it and the
+    per-band statement knows the lighting wherever the BRDF has energy."""
+    if orders.criterion != "rh02":
+        return int(min(env_height - 1, orders.coefficients.F0))
     return int(min(max(2 * orders.F, orders.F + 16, F or 0), env_height - 1, orders.coefficients.F0))
 
 
@@ -229,4 +263,9 @@ def scene_for(
     ``shrm report``."""
     lmax = lighting_lmax(orders, env.radiance.shape[0], F)
     lighting = lighting_coefficients(env.radiance, lmax, name=env.name, nthreads=nthreads)
+    if orders.criterion != "rh02" and orders.coefficients.F0 > lmax:
+        # the per-band statement needs the lighting wherever the BRDF has energy: the pixels'
+        # point-light spectrum beyond the map's Nyquist limit (what the angular reference sees)
+        beyond = point_band_energy(env.radiance, lmax + 1, orders.coefficients.F0, nthreads=max(nthreads, 1))
+        lighting = dataclasses.replace(lighting, beyond=beyond)
     return lighting, scene_orders(orders, lighting)

@@ -32,10 +32,11 @@ from ..brdf_io.specs import load_brdf
 from .brdf_coeffs import BRDFCoefficients
 from .lighting import LightingCoefficients, alm_index
 from .orders import DEFAULT_MAX_F, DEFAULT_MAX_P, choose_orders, orders_on_grid_for
-from .scene import lanczos_sigma, reflected_error_parts, residual_bound, scene_for
+from .scene import lanczos_sigma, lanczos_window, reflected_error_parts, residual_bound, scene_for
 from .sh import Lambda, real_index, real_sph_harm
 from .shrm_file import read_shrm_fields, save_shrm
 from .tolerance import DEFAULT_EPS, check_eps
+from .view_bands import DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG, bands_inside, shrm_view_bands
 from .wigner import rotation_D, wigner_d_tilde
 
 __all__ = [
@@ -584,6 +585,56 @@ def _strength_for(before: np.ndarray, full: np.ndarray, threshold: float, t_max:
     return hi
 
 
+def _order_for_window(
+    orders: Any, base: BRDFCoefficients, band_energy: np.ndarray, F: int, P: int, eps: float, q_max: int | None,
+    top: int,
+) -> int | None:
+    """The smallest F' in [F, top] whose field with the full Lanczos window σ_lp(F', P) is
+    predicted to meet ``eps`` in every view band inside the limit, or None (then the window's
+    cost is only budgeted, :func:`_band_window_budget`). Scans with a growing step, then back."""
+    inside = bands_inside(orders.profile, orders.max_view_deg)
+    top = min(top, orders.profile.F0, base.F0)
+
+    def meets(f: int) -> bool:
+        # the window in l (its cost falls as F grows); the view part's cost does not depend on F
+        sigma = np.repeat(lanczos_window(f)[:, None], P + 1, axis=1)
+        bands = shrm_view_bands(orders.profile, base, band_energy, f, P, sigma=sigma, q_max=q_max).bands
+        return max(bands[b]["predicted_rel_rms"] ** 2 for b in inside) <= eps
+
+    prev, f, step = F, F, 1
+    while f <= top:
+        if meets(f):
+            for g in range(prev + 1, f):
+                if meets(g):
+                    return g
+            return f
+        prev, f, step = f, f + step, step * 2
+    return None
+
+
+def _band_window_budget(
+    orders: Any, base: BRDFCoefficients, band_energy: np.ndarray, F: int, P: int, eps: float, q_max: int | None
+) -> float:
+    """The largest Lanczos strength t whose window adds at most :data:`WINDOW_BUDGET_EPS`·ε to
+    the predicted error energy ε_b of every view band inside the limit (bisection on t; the
+    prediction of :func:`~shrmkit.analysis.view_bands.shrm_view_bands` without the map term)."""
+    inside = bands_inside(orders.profile, orders.max_view_deg)
+
+    def worst_excess(t: float) -> float:
+        sigma = lanczos_sigma(F, P, t) if t > 0.0 else None
+        bands = shrm_view_bands(orders.profile, base, band_energy, F, P, sigma=sigma, q_max=q_max).bands
+        return max(bands[b]["predicted_rel_rms"] ** 2 for b in inside)
+
+    limit = worst_excess(0.0) + WINDOW_BUDGET_EPS * eps
+    if worst_excess(1.0) <= limit:
+        return 1.0
+    lo, hi = 0.0, 1.0
+    for _ in range(10):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if worst_excess(mid) <= limit else (lo, mid)
+    return lo
+
+
 def _windowed(coefficients: BRDFCoefficients, sigma: np.ndarray | None, F: int, P: int) -> BRDFCoefficients:
     """ρ̂_lpq multiplied by σ_lp (l <= F, p <= P, every q); unchanged for None."""
     if sigma is None:
@@ -631,6 +682,8 @@ def prefilter(
     cube: bool = False,
     cube_size: int | None = None,
     progress: Any = None,
+    criterion: str = DEFAULT_CRITERION,
+    max_view_deg: float = DEFAULT_MAX_VIEW_DEG,
 ) -> SHRM:
     """Prefilter an environment into a global SHRM (RH02 §4–5, Appendix C).
 
@@ -641,8 +694,13 @@ def prefilter(
     brdf
         A BRDF, or a spec/path for ``load_brdf``.
     eps
-        Tolerance: orders come from :func:`~shrmkit.analysis.orders.choose_orders` and
-        F_B = min(F_ρ, F_L), P_B = P_ρ (:func:`~shrmkit.analysis.scene.scene_orders`).
+        Tolerance: orders come from :func:`~shrmkit.analysis.orders.choose_orders` and the
+        scene's F_B, P_B = P_ρ from :func:`~shrmkit.analysis.scene.scene_orders`.
+    criterion, max_view_deg
+        The order rule (``"bands"``: every view band θ_v below ``max_view_deg`` meets ε, the
+        default; ``"rh02"``: RH02's energy rule and F_B = min(F_ρ, F_L)); see
+        :mod:`~shrmkit.analysis.view_bands`. ``meta["view_bands"]`` states the predicted and
+        bounded relative RMS per band for either.
     size
         Rows S_B of the S_B × 2S_B output (default :func:`default_size`: 10 F_B, within
         [32, 1024] rows and a 256 MiB map budget; the meta says when the budget applied).
@@ -723,9 +781,10 @@ def prefilter(
     stage("orders")
     t0 = time.perf_counter()
     if F is not None and P is not None:
-        orders = orders_on_grid_for(brdf, int(F), int(P), eps=eps)
+        orders = orders_on_grid_for(brdf, int(F), int(P), eps=eps, criterion=criterion, max_view_deg=max_view_deg)
     else:
-        orders = choose_orders(brdf, eps=eps, max_F=max_F, max_P=max_P)
+        orders = choose_orders(brdf, eps=eps, max_F=max_F, max_P=max_P, criterion=criterion,
+                               max_view_deg=max_view_deg)
     timings["orders"] = time.perf_counter() - t0
     stage("lighting")
     t0 = time.perf_counter()
@@ -734,11 +793,10 @@ def prefilter(
     F_B = scene.F_B if F is None else int(min(F, lighting.lmax))
     P_B = scene.P_B if P is None else int(min(P, orders.coefficients.P0))
     sigma = lanczos_sigma(F_B, P_B) if window == "lanczos" else None
-    coefficients = _windowed(orders.coefficients, sigma, F_B, P_B)
+    base = orders.coefficients_for(P_B)  # projected (rh02) or fitted to the views that matter (bands)
+    band_energy = lighting.band_energy_all()
+    coefficients = _windowed(base, sigma, F_B, P_B)
     S = default_size(F_B, P_B) if size is None else int(size)
-    size_note = "" if size is not None or S == default_size(F_B, 0) else (
-        f"map rows lowered from {default_size(F_B, 0)} to {S} to fit the 256 MiB default budget (use size=)"
-    )
     if S < 2 or S > 8192:
         raise BadInputError(None, f"SHRM size must be in [2, 8192] rows, got {S}")
 
@@ -765,18 +823,38 @@ def prefilter(
     values = undershoot_samples(coeffs, P_B, views)
     before = undershoot(values)
     strength = 1.0 if window == "lanczos" else 0.0
+    raised = ""
+    if window == "auto" and before > WINDOW_THRESHOLD and orders.criterion != "rh02" and F is None:
+        # a window costs accuracy: find the F at which the fully windowed field still meets ε in
+        # every band inside the view limit, and prefilter there instead (Lanczos costs ~F⁻⁴)
+        # the F the full field needs with the window (an azimuth-free SHRM is judged by the
+        # same F: its own q > 0 loss does not fall with F)
+        F_W = _order_for_window(orders, base, band_energy, F_B, P_B, eps, None, lighting.lmax)
+        if F_W is not None and F_W > F_B:
+            raised = f"F_B raised from {F_B} to {F_W} so that the windowed field meets eps in every view band"
+            F_B = F_W
+            if size is None:
+                S = default_size(F_B, P_B)
+            del coeffs
+            coeffs = synthesize(_windowed(base, None, F_B, P_B))
+            views = undershoot_views(S, 2 * S, P_B)
+            values = undershoot_samples(coeffs, P_B, views)
+            before = undershoot(values)
     if window in ("none", "lanczos"):
         reason = "requested"
     elif before <= WINDOW_THRESHOLD:
         reason = f"auto: undershoot {before:.3%} of the peak <= threshold {WINDOW_THRESHOLD:.1%}"
     else:
         full = lanczos_sigma(F_B, P_B)
-        truncation, cost = reflected_error_parts(lighting, orders.coefficients, F_B, P_B, full, q_max=q_max)
-        allowed = truncation.max() + WINDOW_BUDGET_EPS * eps  # ε_B may grow to this (worst channel)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t_budget = float(np.min(np.sqrt(np.clip(allowed - truncation, 0.0, None) / cost), initial=1.0))
+        if orders.criterion == "rh02":
+            truncation, cost = reflected_error_parts(lighting, orders.coefficients, F_B, P_B, full, q_max=q_max)
+            allowed = truncation.max() + WINDOW_BUDGET_EPS * eps  # ε_B may grow to this (worst channel)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                t_budget = float(np.min(np.sqrt(np.clip(allowed - truncation, 0.0, None) / cost), initial=1.0))
+        else:
+            t_budget = _band_window_budget(orders, base, band_energy, F_B, P_B, eps, q_max)
         del coeffs  # one map at a time: the 256 MiB default budget holds while windowing too
-        coefficients = _windowed(orders.coefficients, full, F_B, P_B)
+        coefficients = _windowed(base, full, F_B, P_B)
         coeffs = synthesize(coefficients)
         values_full = undershoot_samples(coeffs, P_B, views)
         strength = _strength_for(values, values_full, WINDOW_THRESHOLD, t_budget)
@@ -785,7 +863,7 @@ def prefilter(
         else:
             del coeffs
             sigma = lanczos_sigma(F_B, P_B, strength) if strength > 0.0 else None
-            coefficients = _windowed(orders.coefficients, sigma, F_B, P_B)
+            coefficients = _windowed(base, sigma, F_B, P_B)
             coeffs = synthesize(coefficients)
             # the synthesis is linear in σ: these are the new map's samples (up to float32 rounding)
             values += np.float32(strength) * (values_full - values)
@@ -794,8 +872,10 @@ def prefilter(
         if strength == 0.0:
             reason += ", not reduced by the Lanczos window"
         elif undershoot(values) > WINDOW_THRESHOLD:
-            reason += (f", strength capped by the error budget ({WINDOW_BUDGET_EPS:g} eps of added eps_B)"
+            reason += (f", strength capped by the error budget ({WINDOW_BUDGET_EPS:g} eps of added error energy)"
                        if strength >= t_budget and t_budget < 1.0 else ", strength of the least undershoot")
+    if raised:
+        reason += f"; {raised}"
     after = undershoot(values)
     negative_fraction = float(np.mean(values.min(axis=0) < 0.0))
     if after > 0.0:
@@ -820,16 +900,29 @@ def prefilter(
         ).astype(np.float32)
         timings["cube"] = time.perf_counter() - t0
     t0 = time.perf_counter()
+    statement = shrm_view_bands(
+        orders.profile, base, band_energy, F_B, P_B, sigma=sigma, q_max=q_max, map_rows=S,
+        lighting_rows=(lighting.rows, lighting.source_rows), max_view_deg=orders.max_view_deg,
+    )
     truncation, cost = reflected_error_parts(lighting, orders.coefficients, F_B, P_B, sigma, q_max=q_max)
+    if orders.criterion == "rh02":
+        reflected = float((truncation + cost).max())
+        bound = residual_bound(lighting, orders.coefficients, F_B, P_B, sigma, q_max=q_max)
+    else:  # fitted coefficients: Parseval no longer splits the error; the view-band sums do
+        reflected, bound = statement.eps_predicted, statement.eps_bound
     eps_info = {
         "brdf": float(orders.table[min(F_B, orders.F0), P_B]),
+        "brdf_rh02": float(orders.rh02_table[min(F_B, orders.F0), P_B]),
         "lighting": float(lighting.eps()[min(F_B, lighting.lmax)]),
-        "reflected": float((truncation + cost).max()),
-        "bound": residual_bound(lighting, orders.coefficients, F_B, P_B, sigma, q_max=q_max),
+        "reflected": reflected,
+        "bound": bound,
         "gibbs_negative": undershoot(values[:, : S * 2 * S]),  # the normal views: gibbs_negative(coeffs, P_B)
     }
     timings["errors"] = time.perf_counter() - t0
     timings["total"] = time.perf_counter() - t
+    size_note = "" if size is not None or S == default_size(F_B, 0) else (
+        f"map rows lowered from {default_size(F_B, 0)} to {S} to fit the 256 MiB default budget (use size=)"
+    )
     meta = {
         "brdf": brdf.name,
         "environment": env.name,
@@ -854,5 +947,10 @@ def prefilter(
         "negative_after": after,
         "negative_fraction_after": negative_fraction,
         "negative_max_view_deg": UNDERSHOOT_MAX_VIEW_DEG,
+        "criterion": orders.criterion,
+        "max_view_deg": orders.max_view_deg,
+        "scene_capped": bool(scene.capped),
+        "view_bands": statement.bands,
+        "extrapolated_samples": int(orders.n_without_data),
     }
     return SHRM(F=F_B, P=P_B, coeffs=coeffs, tolerance=float(eps), eps=eps_info, meta=meta, cube=cube_coeffs)

@@ -29,7 +29,7 @@ from scipy.special import roots_legendre
 from .brdf import BRDF
 from .errors import BadInputError
 
-__all__ = ["ReparamGrid", "ReparamBRDF", "reparameterize", "reparam_directions"]
+__all__ = ["ReparamGrid", "ReparamBRDF", "reparameterize", "reparam_directions", "sample_rho_hat"]
 
 
 @dataclass(frozen=True)
@@ -162,13 +162,30 @@ def reparameterize(brdf: BRDF, grid: ReparamGrid) -> ReparamBRDF:
     """
     xi, _ = grid.theta_i()
     xo, _ = grid.theta_o()
-    ph = grid.phi()
-    L, V = reparam_directions(xi[:, None, None], xo[None, :, None], ph[None, None, :])
+    values, missing = sample_rho_hat(brdf, xi, xo, grid.phi())
+    return ReparamBRDF(values=values, grid=grid, name=brdf.name, n_without_data=missing)
+
+
+def sample_rho_hat(
+    brdf: BRDF, cos_theta_i: np.ndarray, cos_theta_o: np.ndarray, phi: np.ndarray
+) -> tuple[np.ndarray, int]:
+    """ρ̂ on the product of 1-D node sets: values (n_i, n_o, n_phi, 3) and the number of
+    points where a tabulated source had no measurement (they hold 0).
+
+    Raises
+    ------
+    BadInputError
+        If the BRDF evaluates to NaN or infinity anywhere on the nodes.
+    """
+    L, V = reparam_directions(
+        np.asarray(cos_theta_i, float)[:, None, None], np.asarray(cos_theta_o, float)[None, :, None],
+        np.asarray(phi, float)[None, None, :],
+    )
     values, missing = _rho_hat_counted(brdf, L, V)
     if not np.all(np.isfinite(values)):
         bad = int(np.count_nonzero(~np.isfinite(values)))
         raise BadInputError(brdf.name, f"BRDF evaluates to {bad} non-finite values on the reparameterized grid")
-    return ReparamBRDF(values=values, grid=grid, name=brdf.name, n_without_data=missing)
+    return values, missing
 
 
 def _rho_hat_counted(brdf: BRDF, L: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, int]:

@@ -15,7 +15,8 @@ from ..analysis.orders import DEFAULT_MAX_F, DEFAULT_MAX_P, choose_orders
 from ..analysis.scene import scene_for
 from ..analysis.tolerance import DEFAULT_EPS
 from ..brdf_io.specs import load_brdf
-from .common import add_env_orientation, load_env_arg, print_json, stderr, stdout, tolerance
+from .common import add_env_orientation, add_order_rule, load_env_arg, order_rule, print_json, stderr, stdout, tolerance
+from .view_bands_table import print_view_bands
 
 HELP = "choose the SH orders (F, P) a BRDF needs at a tolerance eps (RH02 §5.1)"
 
@@ -28,13 +29,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--max-P", type=int, default=DEFAULT_MAX_P, help=f"cap on P (default {DEFAULT_MAX_P})")
     parser.add_argument("--env", help="environment (builtin:sky or a map file): also report F_L, F_B and the bound")
     parser.add_argument("--json", action="store_true", help="print one JSON object instead of tables")
+    add_order_rule(parser)
     add_env_orientation(parser)
 
 
 def run(args: argparse.Namespace) -> int:
     brdf = load_brdf(args.brdf)
     with stderr.status(f"choosing orders for {brdf.name} ...", spinner="dots") if not args.json else _null():
-        orders = choose_orders(brdf, eps=args.eps, max_F=args.max_F, max_P=args.max_P)
+        orders = choose_orders(brdf, eps=args.eps, max_F=args.max_F, max_P=args.max_P, **order_rule(args))
     doc = {
         "brdf": brdf.name,
         "F": orders.F,
@@ -45,6 +47,11 @@ def run(args: argparse.Namespace) -> int:
         "converged": orders.converged,
         "message": orders.message,
         "seconds": orders.seconds,
+        "criterion": orders.criterion,
+        "max_view_deg": orders.max_view_deg,
+        "eps_rh02": orders.eps_rh02,
+        "view_bands": orders.view_bands(),
+        "extrapolated_samples": orders.n_without_data,
         "table": orders.table,
     }
     if args.env:
@@ -52,7 +59,8 @@ def run(args: argparse.Namespace) -> int:
         _, scene = scene_for(env, orders)
         doc.update(
             environment=env.name, F_L=scene.F_L, F_B=scene.F_B, P_B=scene.P_B, eps_L=scene.eps_L,
-            lighting_capped=scene.lighting_capped, bound=scene.bound,
+            lighting_capped=scene.lighting_capped, bound=scene.bound, bound_units=scene.bound_units,
+            scene_capped=scene.capped, scene_view_bands=list(scene.view_bands),
         )
     if args.json:
         print_json(doc)
@@ -70,17 +78,21 @@ class _null:
 
 
 def _print_tables(doc: dict, table: np.ndarray) -> None:
-    summary = Table(title=f"orders for {doc['brdf']} at eps = {doc['tolerance']:g}")
-    for key in ("F", "P", "eps", "capped", "converged", "seconds"):
+    rule = ("every view band to " f"{doc['max_view_deg']:g}°" if doc["criterion"] == "bands" else "RH02, all views")
+    summary = Table(title=f"orders for {doc['brdf']} at eps = {doc['tolerance']:g} ({rule})")
+    for key in ("F", "P", "eps", "eps RH02", "capped", "converged", "seconds"):
         summary.add_column(key, justify="right")
     summary.add_row(
-        str(doc["F"]), str(doc["P"]), f"{doc['eps']:.4g}", str(doc["capped"]), str(doc["converged"]),
-        f"{doc['seconds']:.2f}",
+        str(doc["F"]), str(doc["P"]), f"{doc['eps']:.4g}", f"{doc['eps_rh02']:.4g}", str(doc["capped"]),
+        str(doc["converged"]), f"{doc['seconds']:.2f}",
     )
     stdout.print(summary)
+    print_view_bands(doc["view_bands"], f"error by view band at (F, P) = ({doc['F']}, {doc['P']}) under a point light",
+                     point_light=True)
     if "F_B" in doc:
         scene = Table(title=f"scene orders with {doc['environment']}")
-        for key in ("F_L", "F_B", "P_B", "eps_L(F_L)", "residual bound"):
+        bound_name = "residual bound (eps)" if doc["criterion"] == "rh02" else "bound (rel. RMS, worst band)"
+        for key in ("F_L", "F_B", "P_B", "eps_L(F_L)", bound_name):
             scene.add_column(key, justify="right")
         # a capped F_L means ε_L > tol up to the largest order computed: F_L is at least that
         scene.add_row(
@@ -91,12 +103,16 @@ def _print_tables(doc: dict, table: np.ndarray) -> None:
             f"{doc['bound']:.3g}",
         )
         stdout.print(scene)
+        if doc["scene_view_bands"]:
+            print_view_bands(doc["scene_view_bands"], f"reflected field by view band at (F_B, P_B) = "
+                             f"({doc['F_B']}, {doc['P_B']}), exact lookup")
     if doc["message"]:
         stdout.print(f"[yellow]note:[/yellow] {doc['message']}")
     F, P = doc["F"], doc["P"]
     rows = sorted(set(np.unique(np.linspace(0, min(table.shape[0] - 1, max(2 * F, 8)), 9).astype(int))) | {F})
     cols = range(min(table.shape[1], max(P + 3, 5)))
-    eps_tab = Table(title="eps(F, P): uncaptured energy fraction (worst channel)")
+    what = "worst view band inside the limit, point light" if doc["criterion"] == "bands" else "all views"
+    eps_tab = Table(title=f"eps(F, P): uncaptured energy fraction ({what}, worst channel)")
     eps_tab.add_column("F \\ P", justify="right")
     for p in cols:
         eps_tab.add_column(str(p), justify="right")

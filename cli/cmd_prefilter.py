@@ -18,7 +18,18 @@ from ..analysis.tolerance import DEFAULT_EPS
 from ..brdf_io.atomic import check_writable
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.specs import load_brdf
-from .common import add_env_orientation, add_window_option, load_env_arg, stderr, stdout, tolerance
+from .common import (
+    add_env_orientation,
+    add_order_rule,
+    add_window_option,
+    load_env_arg,
+    order_rule,
+    print_json,
+    stderr,
+    stdout,
+    tolerance,
+)
+from .view_bands_table import print_view_bands
 
 HELP = "prefilter an environment map with a BRDF into a global SHRM file (.shrm.npz)"
 
@@ -33,6 +44,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--cube", action="store_true", help="also store the SHRM on a 6 x S x S cube map")
     parser.add_argument("--cube-size", type=int, help="cube face size S (default: rows // 2)")
     add_window_option(parser)
+    add_order_rule(parser)
+    parser.add_argument("--json", action="store_true",
+                        help="print one JSON object (orders, errors, view bands, meta) instead of tables")
     parser.add_argument("-o", "--output", required=True, help="output path, e.g. sky.shrm.npz")
     add_env_orientation(parser)
 
@@ -46,14 +60,19 @@ def run(args: argparse.Namespace) -> int:
     check_writable(out)
     env = load_env_arg(args.env, args)
     brdf = load_brdf(args.brdf)
-    with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=stderr) as bar:
+    with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=stderr,
+                  disable=args.json) as bar:
         task = bar.add_task("prefiltering", total=None)
         shrm = prefilter(
             env, brdf, eps=args.eps, size=args.size, max_F=args.max_F, max_P=args.max_P, cube=args.cube,
-            cube_size=args.cube_size, window=args.window,
+            cube_size=args.cube_size, window=args.window, **order_rule(args),
             progress=lambda stage: bar.update(task, description=f"prefiltering: {stage}"),
         )
     shrm.save(out)
+    if args.json:
+        print_json({"output": str(out), "F": shrm.F, "P": shrm.P, "height": shrm.height, "width": shrm.width,
+                    "eps": shrm.eps, "bytes": out.stat().st_size, "meta": shrm.meta})
+        return 0
     table = Table(title=f"SHRM {brdf.name} x {env.name}")
     for key in ("F", "P", "map", "eps brdf", "eps reflected", "bound", "orders s", "lighting s", "synthesis s", "MB"):
         table.add_column(key, justify="right")
@@ -64,6 +83,8 @@ def run(args: argparse.Namespace) -> int:
         f"{t['synthesis']:.3f}", f"{out.stat().st_size / 1e6:.2f}",
     )
     stdout.print(table)
+    limit = f"view limit {shrm.meta['max_view_deg']:g}°, rule {shrm.meta['criterion']}"
+    print_view_bands(shrm.meta["view_bands"], f"error by view band ({limit})")
     if shrm.cube is not None:
         stdout.print(f"cube map: 6 x {shrm.cube.shape[2]}^2 texels, {t['cube']:.3f} s")
     meta = shrm.meta

@@ -12,6 +12,7 @@ from rich.console import Console
 
 from ..analysis.shrm import DEFAULT_WINDOW, WINDOW_BUDGET_EPS, WINDOW_THRESHOLD, WINDOWS
 from ..analysis.tolerance import check_eps
+from ..analysis.view_bands import CRITERIA, DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG
 from ..brdf_io.envmap import load_env
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.jsonutil import to_jsonable
@@ -19,6 +20,8 @@ from ..brdf_io.jsonutil import to_jsonable
 __all__ = [
     "add_env_orientation",
     "add_window_option",
+    "add_order_rule",
+    "order_rule",
     "env_orientation",
     "load_env_arg",
     "load_oriented_env",
@@ -94,6 +97,25 @@ def add_window_option(parser: argparse.ArgumentParser) -> None:
         f"{WINDOW_BUDGET_EPS:g} eps of added error; lanczos: full Lanczos; none: the bare truncation. What is left "
         "is clamped to 0 at the output",
     )
+
+
+def add_order_rule(parser: argparse.ArgumentParser) -> None:
+    """``--criterion bands|rh02`` and ``--max-view-angle DEG``: the order rule of every verb that
+    chooses orders (``analysis.view_bands``; README, accuracy)."""
+    parser.add_argument(
+        "--criterion", choices=CRITERIA, default=DEFAULT_CRITERION,
+        help="order rule: bands (default) meets eps in every view band up to --max-view-angle; rh02 is "
+        "RH02's energy over all views with F_B = min(F_rho, F_L) (reproduces RH02 Table 5)")
+    parser.add_argument(
+        "--max-view-angle", type=number_in(0.0, 90.0, lo_open=True, unit=" degrees"), default=DEFAULT_MAX_VIEW_DEG,
+        metavar="DEG", dest="max_view_deg",
+        help=f"view limit of the bands rule, degrees between view and normal (default {DEFAULT_MAX_VIEW_DEG:g}); "
+        "beyond it errors are stated, not promised")
+
+
+def order_rule(args: argparse.Namespace) -> dict[str, Any]:
+    """Keyword arguments ``criterion``/``max_view_deg`` from :func:`add_order_rule`'s options."""
+    return {"criterion": args.criterion, "max_view_deg": args.max_view_deg}
 
 
 def env_orientation(args: argparse.Namespace) -> dict[str, Any]:

@@ -43,6 +43,7 @@ from ..analysis.baselines.gaussian_lobes import GaussianLobeModel, fit_gaussian_
 from ..analysis.baselines.rsibr import RSIBRMaps, rsibr_from_shrm
 from ..analysis.baselines.selfshadow import vertex_visibility_sh
 from ..analysis.shrm import DEFAULT_WINDOW, SHRM, check_window, prefilter
+from ..analysis.view_bands import DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG, check_criterion, check_max_view
 from ..brdf_io.brdf import BRDF
 from ..brdf_io.envmap import EnvironmentMap
 from ..brdf_io.errors import BadInputError
@@ -83,15 +84,22 @@ class RenderOptions:
     window
         The SHRM modes' window against Gibbs ringing, one of ``analysis.shrm.WINDOWS``
         (``prefilter(window=)``; default ``"auto"``).
+    criterion, max_view_deg
+        The SHRM modes' order rule and its view limit (``prefilter(criterion=, max_view_deg=)``,
+        :mod:`shrmkit.analysis.view_bands`).
     """
 
     lobes: int = 3
     elevations: int = 15
     self_shadow: bool = False
     window: str = DEFAULT_WINDOW
+    criterion: str = DEFAULT_CRITERION
+    max_view_deg: float = DEFAULT_MAX_VIEW_DEG
 
     def __post_init__(self) -> None:
         check_window(self.window)
+        check_criterion(self.criterion)
+        object.__setattr__(self, "max_view_deg", check_max_view(self.max_view_deg))
         for name, (lo, hi) in (("lobes", LOBES_RANGE), ("elevations", ELEVATIONS_RANGE)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, Integral) or not lo <= value <= hi:
@@ -167,14 +175,16 @@ WINDOW_INFO_KEYS = ("window", "window_requested", "window_strength", "window_rea
 
 
 def _prefiltered(
-    env: EnvironmentMap, brdf: BRDF, eps: float, *, window: str = DEFAULT_WINDOW, azimuth_free: bool = False
+    env: EnvironmentMap, brdf: BRDF, eps: float, options: RenderOptions, *, azimuth_free: bool = False
 ) -> BuiltModel:
     t0 = time.perf_counter()
-    shrm = prefilter(env, brdf, eps=eps, azimuth_free=azimuth_free, window=window)
+    shrm = prefilter(env, brdf, eps=eps, azimuth_free=azimuth_free, window=options.window,
+                     criterion=options.criterion, max_view_deg=options.max_view_deg)
     seconds = time.perf_counter() - t0
     info = {"F": shrm.F, "P": shrm.P, "height": shrm.height, "width": shrm.width, "eps": eps,
             "achieved_eps": dict(shrm.eps), "azimuth_free": azimuth_free, "prefilter_seconds": seconds,
-            **{key: shrm.meta[key] for key in WINDOW_INFO_KEYS}}
+            "criterion": shrm.meta["criterion"], "max_view_deg": shrm.meta["max_view_deg"],
+            "view_bands": shrm.meta["view_bands"], **{key: shrm.meta[key] for key in WINDOW_INFO_KEYS}}
     meta = shrm.meta
     used = meta["window"] if meta["window"] == "none" else f"{meta['window']} x{meta['window_strength']:.3g}"
     lines = (f"SHRM F={shrm.F} P={shrm.P} on {shrm.height}x{shrm.width} (eps {eps:g}, achieved eps_B "
@@ -185,19 +195,19 @@ def _prefiltered(
 
 def build_shrm(env: EnvironmentMap, brdf: BRDF, mesh: Mesh, *, eps: float, options: RenderOptions) -> BuiltModel:
     """The global SHRM of ``env`` and ``brdf`` at tolerance ``eps`` (RH02 §4–5), ``options.window``."""
-    return _prefiltered(env, brdf, eps, window=options.window)
+    return _prefiltered(env, brdf, eps, options)
 
 
 def build_kautz_mccool(
     env: EnvironmentMap, brdf: BRDF, mesh: Mesh, *, eps: float, options: RenderOptions
 ) -> BuiltModel:
     """The azimuth-free (q = 0) SHRM of Kautz & McCool 2000: ``prefilter(..., azimuth_free=True)``."""
-    return _prefiltered(env, brdf, eps, window=options.window, azimuth_free=True)
+    return _prefiltered(env, brdf, eps, options, azimuth_free=True)
 
 
 def build_rsibr(env: EnvironmentMap, brdf: BRDF, mesh: Mesh, *, eps: float, options: RenderOptions) -> BuiltModel:
     """Cabral et al. 1999: the SHRM, then its twelve maps at the icosahedron's vertices."""
-    built = _prefiltered(env, brdf, eps, window=options.window)
+    built = _prefiltered(env, brdf, eps, options)
     maps = rsibr_from_shrm(built.model)
     return BuiltModel(maps, {**built.info, "rsibr_seconds": float(maps.meta["seconds"])}, built.description)
 

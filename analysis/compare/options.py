@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from ...brdf_io.errors import BadInputError
 from ..shrm import DEFAULT_WINDOW, check_window
 from ..tolerance import DEFAULT_EPS, check_eps
+from ..view_bands import DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG, check_criterion, check_max_view
 
 __all__ = ["CompareOptions", "DEFAULT_ENV_HEIGHT"]
 
@@ -45,6 +46,9 @@ class CompareOptions:
     update_view
         View direction (need not be unit) at which the per-frame update of the distant
         viewer is timed.
+    criterion, rule_max_view_deg
+        The order rule of every SHRM of the comparison and its view limit
+        (:mod:`~shrmkit.analysis.view_bands`; ``max_view_deg`` above is the sampling range).
     window
         The window of every SHRM of the comparison (the SHRM rows, Kautz–McCool, Cabral's
         maps from the SHRM) against Gibbs ringing, one of ``analysis.shrm.WINDOWS``
@@ -62,11 +66,15 @@ class CompareOptions:
     cabral_reference_height: int | None = 32
     update_view: tuple[float, float, float] = (1.0, 0.0, 0.3)
     window: str = DEFAULT_WINDOW
+    criterion: str = DEFAULT_CRITERION
+    rule_max_view_deg: float = DEFAULT_MAX_VIEW_DEG
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
         set_(self, "eps", check_eps(self.eps))
         check_window(self.window)
+        check_criterion(self.criterion)
+        set_(self, "rule_max_view_deg", check_max_view(self.rule_max_view_deg))
         set_(self, "lobes", tuple(int(k) for k in self.lobes))
         set_(self, "update_view", tuple(float(x) for x in self.update_view))
         if self.n_pairs < 10:

@@ -6,9 +6,11 @@ on the same distribution of reflection and view directions.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
-__all__ = ["sample_pairs"]
+__all__ = ["sample_pairs", "sample_pairs_focused"]
 
 
 def sample_pairs(n: int, *, seed: int = 0, max_view_deg: float = 88.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -73,3 +75,82 @@ def sample_pairs(n: int, *, seed: int = 0, max_view_deg: float = 88.0) -> tuple[
     R = 2.0 * np.sum(N * V, axis=1, keepdims=True) * N - V
     R /= np.linalg.norm(R, axis=1, keepdims=True)
     return R, V, theta_v
+
+
+def sample_pairs_focused(
+    per_band: int, edges_deg: Sequence[float], *, centre: np.ndarray | None = None,
+    centre_weights: np.ndarray | None = None, caps_deg: Sequence[float] = (2.0, 6.0, 20.0), seed: int = 0,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(R, V) pairs for per-band error measurements, with importance weights, for lighting
+    whose reflection is concentrated (a one-pixel sun, the bright windows of a light probe):
+    ``per_band`` pairs in each θ_v band.
+
+    In band [a, b): θ_v uniform in angle on [a, b) (as :func:`sample_pairs`); R from a mixture:
+    with probability ¼ uniform on the sphere, else uniform in one of the caps of half-angle
+    ``caps_deg`` (equally likely) about one of the ``centre`` directions ((3,) or (k, 3) unit
+    vectors; picked with probability ∝ ``centre_weights``, default equal); None: uniform only.
+    V is at angle 2θ_v from R with uniform azimuth (so N = normalize(R + V) is at θ_v from V).
+    The weight of a pair is (1/4π) / mixture pdf of its R, so weighted sums estimate the
+    uniform-R averages of :func:`sample_pairs` (pass them to
+    :func:`~.metrics.band_relative_rms`).
+
+    Returns
+    -------
+    R, V
+        (n, 3) unit vectors, n = per_band × number of bands.
+    theta_v
+        (n,) radians.
+    weights
+        (n,) importance weights (all 1 when ``centre`` is None).
+    """
+    rng = np.random.default_rng(seed)
+    edges = np.radians(np.asarray(edges_deg, dtype=np.float64))
+    theta_v = np.concatenate([lo + (hi - lo) * (np.arange(per_band) + rng.random(per_band)) / per_band
+                              for lo, hi in zip(edges[:-1], edges[1:], strict=True)])
+    n = theta_v.size
+    R = rng.normal(size=(n, 3))
+    R /= np.linalg.norm(R, axis=1, keepdims=True)
+    weights = np.ones(n)
+    if centre is not None:
+        centres = np.atleast_2d(np.asarray(centre, dtype=np.float64))
+        centres = centres / np.linalg.norm(centres, axis=1, keepdims=True)
+        cw = np.ones(len(centres)) if centre_weights is None else np.asarray(centre_weights, dtype=np.float64)
+        cw = cw / cw.sum()
+        cos_caps = np.cos(np.radians(np.asarray(caps_deg, dtype=np.float64)))
+        # component probabilities: uniform ¼, cap (c, k) ¾·cw_c/len(caps)
+        prob = 0.75 * cw[:, None] / cos_caps.size * np.ones((1, cos_caps.size))
+        pick = rng.random(n)
+        flat = np.concatenate([[0.25], prob.ravel()])
+        component = np.searchsorted(np.cumsum(flat), pick, side="right")  # 0: uniform
+        component = np.minimum(component, flat.size - 1)
+        for index in range(1, flat.size):
+            sel = component == index
+            m = int(sel.sum())
+            if m == 0:
+                continue
+            c = centres[(index - 1) // cos_caps.size]
+            cos_cap = cos_caps[(index - 1) % cos_caps.size]
+            cos_t = 1.0 - rng.random(m) * (1.0 - cos_cap)
+            phi = rng.random(m) * 2.0 * np.pi
+            t, b = _perpendicular_pair(np.broadcast_to(c, (m, 3)))
+            sin_t = np.sqrt(1.0 - cos_t**2)[:, None]
+            R[sel] = cos_t[:, None] * c + sin_t * (np.cos(phi)[:, None] * t + np.sin(phi)[:, None] * b)
+        pdf = np.full(n, 0.25 / (4.0 * np.pi))
+        cos_r = R @ centres.T  # (n, k)
+        for k, cos_cap in enumerate(cos_caps):
+            pdf += ((cos_r >= cos_cap) * prob[:, k]).sum(axis=1) / (2.0 * np.pi * (1.0 - cos_cap))
+        weights = (1.0 / (4.0 * np.pi)) / pdf
+    t, b = _perpendicular_pair(R)
+    psi = rng.random(n) * 2.0 * np.pi
+    two = 2.0 * theta_v[:, None]
+    V = np.cos(two) * R + np.sin(two) * (np.cos(psi)[:, None] * t + np.sin(psi)[:, None] * b)
+    V /= np.linalg.norm(V, axis=1, keepdims=True)
+    return R, V, theta_v, weights
+
+
+def _perpendicular_pair(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Unit vectors (t, b) perpendicular to each unit row of ``d`` and to each other."""
+    helper = np.where(np.abs(d[:, 2:3]) < 0.9, [0.0, 0.0, 1.0], [1.0, 0.0, 0.0])
+    t = np.cross(d, helper)
+    t /= np.linalg.norm(t, axis=1, keepdims=True)
+    return t, np.cross(d, t)

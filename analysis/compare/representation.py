@@ -152,11 +152,12 @@ class BuildContext:
         return view / np.linalg.norm(view)
 
     def base_shrm(self) -> tuple[SHRM, float]:
-        """(the SHRM at ``options.eps`` with RH02's order rule, its prefilter seconds)."""
+        """(the SHRM at ``options.eps`` with the options' order rule, its prefilter seconds)."""
         if self._base is None:
             self.stage("SHRM")
             t0 = time.perf_counter()
-            shrm = prefilter(self.env, self.brdf, eps=self.options.eps, window=self.options.window)
+            shrm = prefilter(self.env, self.brdf, eps=self.options.eps, window=self.options.window,
+                             criterion=self.options.criterion, max_view_deg=self.options.rule_max_view_deg)
             self._base = (shrm, time.perf_counter() - t0)
         return self._base
 

@@ -38,12 +38,13 @@ from typing import Any
 import numpy as np
 
 from ..._version import __version__
-from ...analysis.compare import relative_rms, sample_pairs
+from ...analysis.compare import band_relative_rms, relative_rms, sample_pairs
 from ...analysis.fit import fit_brdf
 from ...analysis.lighting import lighting_coefficients
 from ...analysis.orders import choose_orders
 from ...analysis.reference import reference_radiance
 from ...analysis.shrm import prefilter
+from ...analysis.view_bands import DEFAULT_MAX_VIEW_DEG, worst_inside
 from ...brdf_io.brdf import BRDF
 from ...brdf_io.errors import BadInputError
 from ...brdf_io.jsonutil import to_jsonable
@@ -69,7 +70,16 @@ REPORT_FORMAT = "shrmkit-report"
 REPORT_FORMAT_VERSION = 1
 #: Largest view angle θ_v of the error sample (``analysis.compare.sample_pairs``, the sampler
 #: ``shrm compare`` uses too); stated in report.json as ``error_sample``.
-REPORT_MAX_VIEW_DEG = 80.0
+REPORT_MAX_VIEW_DEG = DEFAULT_MAX_VIEW_DEG
+#: The report samples (R, V) pairs up to this θ_v, so that every view band has measurements.
+SAMPLE_MAX_VIEW_DEG = 89.9
+
+
+def merge_measured(bands: list[dict], measured: list[dict]) -> list[dict]:
+    """Per-band statements (``SHRM.meta["view_bands"]``) with the measured relative RMS, its
+    standard error and the pair count beside the prediction and the bound."""
+    return [{**b, "measured_rel_rms": m["measured_rel_rms"], "measured_stderr": m["stderr"], "n_pairs": m["n"]}
+            for b, m in zip(bands, measured, strict=True)]
 SLICE_VIEWS_DEG = (0.0, 30.0, 60.0, 75.0)
 _SLICE_THETA_DEG = np.arange(-85.0, 85.0 + 1e-9, 2.5)
 #: Significant digits of every float in report.json (``to_jsonable(..., digits=)``).
@@ -185,13 +195,18 @@ def _slices(brdf: BRDF, fitted: list[Any], models: tuple[str, ...]) -> dict[str,
 def _orders(brdf: BRDF, options: ReportOptions) -> tuple[list[dict[str, Any]], dict[str, Any], Any]:
     rows, choices = [], []
     for tol in options.all_tolerances:
-        choice = choose_orders(brdf, eps=tol, max_F=options.max_F, max_P=options.max_P)
+        choice = choose_orders(brdf, eps=tol, max_F=options.max_F, max_P=options.max_P,
+                               criterion=options.criterion, max_view_deg=options.max_view_deg)
         choices.append(choice)
         rows.append({
             "tolerance": tol,
             "F": choice.F,
             "P": choice.P,
             "eps": choice.eps,
+            "eps_rh02": choice.eps_rh02,
+            "criterion": choice.criterion,
+            "max_view_deg": choice.max_view_deg,
+            "view_bands": choice.view_bands(),
             "capped": bool(choice.capped),
             "converged": bool(choice.converged),
             "n_without_data": int(choice.n_without_data),
@@ -223,7 +238,10 @@ def unique_names(names: list[str]) -> list[str]:
 
 
 def _environments(brdf: BRDF, options: ReportOptions, progress: Progress | None):
-    R, V, _ = sample_pairs(options.n_pairs, seed=options.seed, max_view_deg=REPORT_MAX_VIEW_DEG)
+    # pairs over every view band (to 89.9°): the headline measured error uses those inside the view
+    # limit, the per-band table all of them
+    R, V, theta_v = sample_pairs(options.n_pairs, seed=options.seed, max_view_deg=SAMPLE_MAX_VIEW_DEG)
+    inside = np.degrees(theta_v) < options.max_view_deg
     env_entries, speed_rows, main_shrms = [], [], []
     envs = [load_report_env(spec, options) for spec in options.envs]
     names = unique_names([env.name for env in envs])
@@ -245,8 +263,12 @@ def _environments(brdf: BRDF, options: ReportOptions, progress: Progress | None)
         }
         for tol in options.all_tolerances:
             _stage(progress, f"prefilter {env.name} eps={tol:g}")
-            shrm = prefilter(env, brdf, eps=tol, max_F=options.max_F, max_P=options.max_P, window=options.window)
-            err = relative_rms(shrm.radiance(R, V), reference)  # clamped at 0, as rendered
+            shrm = prefilter(env, brdf, eps=tol, max_F=options.max_F, max_P=options.max_P, window=options.window,
+                             criterion=options.criterion, max_view_deg=options.max_view_deg)
+            radiance = shrm.radiance(R, V)  # clamped at 0, as rendered
+            err = relative_rms(radiance[inside], reference[inside])
+            bands = merge_measured(shrm.meta["view_bands"], band_relative_rms(
+                radiance, reference, theta_v, [b["theta_v_deg"][0] for b in shrm.meta["view_bands"]] + [90.0]))
             t = shrm.meta["timings"]
             n_out = shrm.height * shrm.width
             row = {
@@ -263,7 +285,11 @@ def _environments(brdf: BRDF, options: ReportOptions, progress: Progress | None)
                 "eps_B": shrm.eps["reflected"],
                 "bound": shrm.eps["bound"],
                 "sqrt_eps_B": math.sqrt(max(shrm.eps["reflected"], 0.0)),
+                "predicted_rel_rms": worst_inside(bands, "predicted_rel_rms"),
+                "bound_rel_rms": worst_inside(bands, "bound_rel_rms"),
                 "measured_rel_rms": err,
+                "view_bands": bands,
+                "criterion": shrm.meta["criterion"],
                 "window": shrm.meta["window"],
                 "window_strength": shrm.meta["window_strength"],
                 "window_reason": shrm.meta["window_reason"],
@@ -289,12 +315,15 @@ def _environments(brdf: BRDF, options: ReportOptions, progress: Progress | None)
                     "P_B": row["P_B"],
                     "bound": row["bound"],
                     "eps_B": row["eps_B"],
+                    "predicted_rel_rms": row["predicted_rel_rms"],
+                    "bound_rel_rms": row["bound_rel_rms"],
+                    "view_bands": bands,
                     "measured_rel_rms": err,
                     "window": row["window"],
                     "window_strength": row["window_strength"],
                     "negative_after": row["negative_after"],
                     "n_pairs": options.n_pairs,
-                    "max_view_deg": REPORT_MAX_VIEW_DEG,
+                    "max_view_deg": options.max_view_deg,
                 })
                 main_shrms.append((env, shrm))
         env_entries.append(entry)

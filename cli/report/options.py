@@ -11,8 +11,10 @@ from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 from ...analysis.fit.models_param import MODELS
+from ...analysis.orders import DEFAULT_MAX_P
 from ...analysis.shrm import DEFAULT_WINDOW, check_window
 from ...analysis.tolerance import DEFAULT_EPS, check_eps
+from ...analysis.view_bands import DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG, check_criterion, check_max_view
 from ...brdf_io.errors import BadInputError
 from ..common import load_oriented_env
 
@@ -63,6 +65,9 @@ class ReportOptions:
     window
         The prefilter's window against Gibbs ringing (``analysis.shrm.WINDOWS``, default
         ``"auto"``) of every SHRM of the report (errors and preview).
+    criterion, max_view_deg
+        The order rule and its view limit (``analysis.view_bands``); the measured errors are
+        sampled up to the same view limit.
     """
 
     eps: float = DEFAULT_EPS
@@ -79,17 +84,21 @@ class ReportOptions:
     n_pairs: int = 300
     seed: int = 0
     max_F: int = 256
-    max_P: int = 16
+    max_P: int = DEFAULT_MAX_P
     preview: str = "auto"
     preview_size: int = 192
     mesh: str | None = None
     albedo_nodes: int = 64
     window: str = DEFAULT_WINDOW
+    criterion: str = DEFAULT_CRITERION
+    max_view_deg: float = DEFAULT_MAX_VIEW_DEG
     profile: str = field(default="full")
 
     def __post_init__(self) -> None:
         check_eps(self.eps)
         check_window(self.window)
+        check_criterion(self.criterion)
+        check_max_view(self.max_view_deg)
         for tol in self.tolerances:
             check_eps(tol, "every tolerance")
         if not 4 <= self.env_height <= 2048:

@@ -231,7 +231,7 @@ def test_cube_map_matches_explicit_path_and_latlong(tmp_path):
 
     env = shrmkit.load_env("builtin:studio,height=32")
     brdf = shrmkit.load_brdf("microfacet:sigma=0.35")
-    m = shrmkit.prefilter(env, brdf, eps=0.05, cube=True, cube_size=12, size=96, window="none")
+    m = shrmkit.prefilter(env, brdf, eps=0.05, cube=True, cube_size=12, size=96, window="none", criterion="rh02")
     assert m.cube.shape == ((m.P + 1) ** 2, 6, 12, 12, 3)
     dirs = cube_directions(12)
     np.testing.assert_allclose(np.linalg.norm(dirs, axis=-1), 1.0)
@@ -239,7 +239,7 @@ def test_cube_map_matches_explicit_path_and_latlong(tmp_path):
     np.testing.assert_allclose(dirs[:, 5:7, 5:7].mean(axis=(1, 2)) / 0.99, np.array(
         [[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]]), atol=0.02)
     lc = lighting_coefficients(env.radiance, m.F)
-    o = shrmkit.choose_orders(brdf, eps=0.05)
+    o = shrmkit.choose_orders(brdf, eps=0.05, criterion="rh02")
     picks = [(0, 3, 4), (2, 0, 11), (4, 6, 6), (5, 11, 0)]
     d = np.array([dirs[f, i, j] for f, i, j in picks])
     alpha, beta = np.arccos(d[:, 2]), np.arctan2(d[:, 1], d[:, 0])

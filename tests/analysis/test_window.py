@@ -8,6 +8,10 @@ undershoot (most negative radiance / largest, worst channel).
 Measured (README, accuracy): Grace (64 rows) with Phong s = 32 at ε = 0.03 rings to 1.2 % of
 the peak without a window; auto applies the Lanczos σ-factors at strength ≈ 0.94, leaving
 ≈ 0.1 %, for a relative RMS of 0.22 against 0.06 without it (√ε_B predicts 0.235).
+
+These tests run RH02's order rule (``criterion="rh02"``), whose window is budgeted in ε_B;
+the default bands rule first raises F_B until the windowed field meets ε in every view band
+(``tests/analysis/test_view_bands.py``).
 """
 
 from __future__ import annotations
@@ -56,8 +60,8 @@ def _check_auto_against_none(env, brdf_spec: str, *, n_pairs: int = 2000, ratio:
     sits where the bright lights blur, on few pairs: 2000 pairs measure √ε_B to a few % for the
     Phong cases (``ratio``: the band of tests/cli/report/test_report.py)."""
     brdf = shrmkit.load_brdf(brdf_spec)
-    bare = shrmkit.prefilter(env, brdf, eps=EPS, window="none")
-    auto = shrmkit.prefilter(env, brdf, eps=EPS)  # the default
+    bare = shrmkit.prefilter(env, brdf, eps=EPS, criterion="rh02", window="none")
+    auto = shrmkit.prefilter(env, brdf, eps=EPS, criterion="rh02")  # the default
     assert auto.meta["window_requested"] == "auto" and auto.meta["window"] == "lanczos"
     # orders are chosen first and never change
     assert (auto.F, auto.P, auto.height) == (bare.F, bare.P, bare.height)
@@ -75,8 +79,9 @@ def _check_auto_against_none(env, brdf_spec: str, *, n_pairs: int = 2000, ratio:
     # the window's cost is in eps["reflected"] (and the bound), within the budget
     t = auto.meta["window_strength"]
     assert 0.0 < t <= 1.0
-    lighting, _ = scene_for(env, choose_orders(brdf, eps=EPS))
-    coefficients = choose_orders(brdf, eps=EPS).coefficients
+    rh02 = choose_orders(brdf, eps=EPS, criterion="rh02")
+    lighting, _ = scene_for(env, rh02)
+    coefficients = rh02.coefficients
     sigma = lanczos_sigma(auto.F, auto.P, t)
     assert auto.eps["reflected"] == pytest.approx(reflected_error(lighting, coefficients, auto.F, auto.P, sigma))
     assert auto.eps["reflected"] > bare.eps["reflected"]
@@ -110,7 +115,7 @@ def test_auto_window_one_pixel_sun():
     left is clamped."""
     env = shrmkit.load_env("builtin:sun,height=64")
     got = _check_auto_against_none(env, "phong:s=200")
-    auto = shrmkit.prefilter(env, "phong:s=200", eps=EPS)
+    auto = shrmkit.prefilter(env, "phong:s=200", eps=EPS, criterion="rh02")
     assert got["strength"] < 1.0 and "error budget" in auto.meta["window_reason"]
     assert auto.meta["negative_after"] < 0.4 * auto.meta["negative_before"]
     assert auto.meta["negative_fraction_after"] > 0.0 and "clamped to 0" in auto.meta["window_reason"]
@@ -121,7 +126,7 @@ def test_view_dependent_ringing_is_measured_and_damped():
     oblique ones do (the P truncation); the undershoot sample sees them and the (l, p) window
     brings them under the threshold."""
     env = shrmkit.load_env("builtin:sky,height=48")
-    bare = shrmkit.prefilter(env, "microfacet:sigma=0.2", eps=EPS, window="none")
+    bare = shrmkit.prefilter(env, "microfacet:sigma=0.2", eps=EPS, criterion="rh02", window="none")
     assert bare.P == 2 and bare.eps["gibbs_negative"] == 0.0
     assert bare.meta["negative_after"] > 10 * WINDOW_THRESHOLD
     # builtin:sky's small sun on a view-dependent lobe: 2000 pairs measure √ε_B only to ±30 %
@@ -134,8 +139,8 @@ def test_no_window_when_nothing_rings():
     """A smooth scene below the threshold keeps the bare expansion (same numbers as "none"): a sky
     whose sun is only 10× the zenith (the default 10⁴× rings)."""
     env = shrmkit.load_env("builtin:sky,height=32,sun_ratio=10")
-    auto = shrmkit.prefilter(env, "microfacet:sigma=0.4", eps=EPS)
-    bare = shrmkit.prefilter(env, "microfacet:sigma=0.4", eps=EPS, window="none")
+    auto = shrmkit.prefilter(env, "microfacet:sigma=0.4", eps=EPS, criterion="rh02")
+    bare = shrmkit.prefilter(env, "microfacet:sigma=0.4", eps=EPS, criterion="rh02", window="none")
     assert auto.meta["window"] == "none" and auto.meta["window_strength"] == 0.0
     assert auto.meta["negative_before"] <= WINDOW_THRESHOLD and "threshold" in auto.meta["window_reason"]
     assert np.array_equal(auto.coeffs, bare.coeffs) and auto.eps == bare.eps
@@ -143,10 +148,10 @@ def test_no_window_when_nothing_rings():
 
 def test_explicit_windows_and_meta_round_trip(tmp_path):
     env = shrmkit.load_env("builtin:sun,height=32")
-    lanczos = shrmkit.prefilter(env, "phong:s=100", eps=EPS, window="lanczos")
+    lanczos = shrmkit.prefilter(env, "phong:s=100", eps=EPS, criterion="rh02", window="lanczos")
     assert lanczos.meta["window"] == "lanczos" and lanczos.meta["window_strength"] == 1.0
     assert lanczos.meta["negative_before"] is None and lanczos.meta["window_reason"].startswith("requested")
-    bare = shrmkit.prefilter(env, "phong:s=100", eps=EPS, window="none")
+    bare = shrmkit.prefilter(env, "phong:s=100", eps=EPS, criterion="rh02", window="none")
     assert bare.meta["negative_before"] == bare.meta["negative_after"] == pytest.approx(bare.eps["gibbs_negative"])
     back = shrmkit.load_shrm(lanczos.save(tmp_path / "w.shrm.npz"))
     for key in ("window", "window_requested", "window_strength", "window_reason", "negative_before",
@@ -158,13 +163,14 @@ def test_undershoot_sample_matches_gibbs_negative_and_rotates_with_the_map():
     """The first H·W samples are the normal views (gibbs_negative); rotating the environment by
     whole columns rotates the SHRM, its sample and so the auto decision."""
     env = shrmkit.load_env("builtin:studio,height=32")
-    m = shrmkit.prefilter(env, "microfacet:sigma=0.2", eps=EPS, size=32, window="none")
+    m = shrmkit.prefilter(env, "microfacet:sigma=0.2", eps=EPS, criterion="rh02", size=32, window="none")
     values = undershoot_samples(m.coeffs, m.P)
     assert values.shape == (3, 3 * m.height * m.width)  # normal + 2 oblique views per pixel
     assert undershoot(values[:, : m.height * m.width]) == pytest.approx(gibbs_negative(m.coeffs, m.P), abs=1e-7)
     sun = shrmkit.load_env("builtin:sun,height=32,elevation=30")
-    a = shrmkit.prefilter(sun, "microfacet:sigma=0.2", eps=EPS, size=32)
-    b = shrmkit.prefilter(sun.rotated_z(2 * np.pi * 8 / 64), "microfacet:sigma=0.2", eps=EPS, size=32)
+    a = shrmkit.prefilter(sun, "microfacet:sigma=0.2", eps=EPS, criterion="rh02", size=32)
+    b = shrmkit.prefilter(sun.rotated_z(2 * np.pi * 8 / 64), "microfacet:sigma=0.2", eps=EPS, criterion="rh02",
+                          size=32)
     assert a.meta["window"] == "lanczos"
     assert b.meta["window_strength"] == pytest.approx(a.meta["window_strength"], rel=1e-9)
     R, V = _views(300, seed=4)

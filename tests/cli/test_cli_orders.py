@@ -7,6 +7,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 
 from shrmkit.cli.main import main
 
@@ -25,9 +26,34 @@ def test_orders_json(capsys):
 
 
 def test_orders_with_env_json(capsys):
-    assert main(["orders", "microfacet:sigma=0.3", "--env", "builtin:studio,height=32", "--json"]) == 0
+    assert main(["orders", "microfacet:sigma=0.3", "--env", "builtin:studio,height=32", "--json",
+                 "--criterion", "rh02"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["F_B"] == min(doc["F"], doc["F_L"]) and doc["P_B"] == doc["P"] and 0 <= doc["bound"] <= 1
+    assert doc["criterion"] == "rh02"
+
+
+def test_orders_bands_json_states_every_view_band(capsys):
+    """The default rule: the worst band inside the 80° limit meets eps under a point light, and the
+    per-band statement says so (eps = rel_rms²); the scene's bands are relative RMS."""
+    assert main(["orders", "microfacet:sigma=0.3", "--env", "builtin:studio,height=32", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["criterion"] == "bands" and doc["max_view_deg"] == 80.0 and not doc["capped"]
+    bands = doc["view_bands"]
+    assert [b["theta_v_deg"][0] for b in bands] == [0, 15, 30, 45, 60, 70, 75, 80, 85]
+    inside = [b for b in bands if b["inside"]]
+    assert len(inside) == 7 and max(b["eps"] for b in inside) == pytest.approx(doc["eps"])
+    assert doc["eps"] <= 0.03 and all(abs(b["rel_rms_point_light"] ** 2 - b["eps"]) < 1e-12 for b in bands)
+    scene = doc["scene_view_bands"]
+    assert all(0.0 < b["predicted_rel_rms"] <= b["bound_rel_rms"] for b in scene)
+    assert max(b["predicted_rel_rms"] for b in scene if b["inside"]) <= np.sqrt(0.03) + 1e-9
+    assert doc["bound_units"].startswith("relative RMS")
+
+
+def test_max_view_angle_and_criterion_are_validated():
+    for args in (["--max-view-angle", "95"], ["--max-view-angle", "0"], ["--criterion", "rh03"]):
+        proc = run_cli("orders", "phong:s=8", *args)
+        assert proc.returncode == 2 and ("max-view-angle" in proc.stderr or "criterion" in proc.stderr)
 
 
 def test_orders_table_output(capsys):

@@ -49,7 +49,8 @@ def test_grace_phong_render_has_no_negative_pixel(offscreen, shared_data, mode):
     assert np.all(linear >= 0.0)
     info = result.built.info
     assert info["window_requested"] == "auto" and info["window"] == "lanczos"
-    assert info["negative_before"] > 10 * WINDOW_THRESHOLD and info["negative_after"] <= WINDOW_THRESHOLD * 1.01
+    # the bands rule first raises F_B so that the windowed field meets eps (8 -> 13); it still rings
+    assert info["negative_before"] > WINDOW_THRESHOLD and info["negative_after"] <= WINDOW_THRESHOLD * 1.01
     assert any(line.startswith("window: lanczos") for line in result.built.description)
     # the bare truncation rings on this very image (the issue: ~19 % of the covered pixels) ...
     bare, bare_linear, _ = _render(env, "phong:s=32", mode, window="none")
@@ -64,14 +65,17 @@ def test_grace_phong_render_has_no_negative_pixel(offscreen, shared_data, mode):
 
 
 def test_one_pixel_sun_render_has_no_negative_pixel(offscreen):
-    """CI-independent: a one-pixel sun with a sharp Phong lobe rings (2.8 % of the peak); the
-    window is capped by its error budget and the clamp removes what is left."""
+    """CI-independent: a one-pixel sun with a sharp Phong lobe rings (2.8 % of the peak at the
+    rule's F_B = 26); ``auto`` raises F_B until the windowed field meets eps in every view band
+    (47), where the ringing is below the threshold and no window is needed; the clamp removes
+    the rest."""
     env = shrmkit.load_env("builtin:sun,height=64")
     for mode in ("perpixel", "distant"):
         result, linear, covered = _render(env, "phong:s=200", mode)
         assert np.all(linear >= 0.0) and linear.max() > 0.0
-        assert result.built.info["window"] == "lanczos"
-        assert _unclamped_negative_pixels(result.model, covered) > 0  # what the clamp removed
+        info = result.built.info
+        assert "F_B raised" in info["window_reason"] and info["negative_after"] <= WINDOW_THRESHOLD
+        assert max(b["predicted_rel_rms"] for b in info["view_bands"]) < 0.01
     bare, bare_linear, covered = _render(env, "phong:s=200", "perpixel", window="none")
     assert np.all(bare_linear >= 0.0)
     assert _unclamped_negative_pixels(bare.model, covered) > 0.2 * covered.sum()

@@ -23,8 +23,9 @@ from shrmkit.brdf_io.specs import load_brdf
 def sharp():
     env = load_env("builtin:studio,height=32")
     brdf = load_brdf("microfacet:sigma=0.15")
-    shrm = prefilter(env, brdf, eps=0.01, P=5)
-    km = prefilter(env, brdf, eps=0.01, F=shrm.F, P=shrm.P, size=shrm.height, azimuth_free=True)
+    # RH02 Fig. 9's comparison: the projected coefficients of RH02's rule
+    shrm = prefilter(env, brdf, eps=0.01, P=5, criterion="rh02")
+    km = prefilter(env, brdf, eps=0.01, F=shrm.F, P=shrm.P, size=shrm.height, azimuth_free=True, criterion="rh02")
     R, V, tv = sample_pairs(600, seed=3, max_view_deg=85.0)
     ref = reference_radiance(env, brdf, R, V)
     return {"shrm": shrm, "km": km, "R": R, "V": V, "tv": tv, "ref": ref}

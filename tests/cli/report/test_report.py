@@ -167,15 +167,20 @@ def test_phong_is_flagged_non_reciprocal_and_albedo_is_one_at_normal_view(phong_
 
 
 def test_measured_error_matches_predicted_energy_error(phong_report):
-    """For uniformly distributed R the expected squared error of the truncated SHRM is the
-    truncated energy fraction, so the relative RMS against the brute-force angular reference
-    (RH02 eq. 2) is about √ε_B (the SHRM's bilinear interpolation adds a little)."""
+    """The predicted relative RMS per view band is the expected squared error of the SHRM over
+    uniform R (analysis.view_bands); the brute-force angular reference (RH02 eq. 2) on the
+    report's pairs measures it within its Monte Carlo error, and the bound is in the same units.
+    Phong's ρ̂ does not depend on the view: every band states the same error."""
     doc, _, _ = phong_report
     rows = sorted(doc["speed_vs_error"], key=lambda r: -r["tolerance"])
     for r in rows:
-        assert 0.8 * r["sqrt_eps_B"] <= r["measured_rel_rms"] <= 1.4 * r["sqrt_eps_B"], r
-        assert r["F_B"] == min(r["F_rho"], r["F_L"]) and r["P_B"] == r["P_rho"]
-        assert r["bound"] >= r["eps_B"] - 1e-12  # the residual bound is never below the error
+        assert 0.7 * r["predicted_rel_rms"] <= r["measured_rel_rms"] <= 1.3 * r["bound_rel_rms"], r
+        assert r["predicted_rel_rms"] <= r["bound_rel_rms"] and r["P_B"] == r["P_rho"] == 0
+        assert r["bound"] >= r["eps_B"] - 1e-12  # energy bound (all views) never below the prediction
+        predicted = [b["predicted_rel_rms"] for b in r["view_bands"]]
+        assert max(predicted) - min(predicted) < 1e-3 * max(predicted)
+        for b in r["view_bands"]:
+            assert b["measured_rel_rms"] - 3 * b["measured_stderr"] <= b["bound_rel_rms"], b
     assert rows[-1]["measured_rel_rms"] < rows[0]["measured_rel_rms"]
 
 

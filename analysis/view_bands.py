@@ -1,0 +1,574 @@
+"""Error by view band: how accurate a truncated BRDF or SHRM is at each view elevation θ_v.
+
+RH02's ε is one number, an energy average over all views, and hides where the error lives:
+physically based lobes put most of their ρ̂ energy at grazing views and are poorly
+represented exactly there (DESIGN §4). This module states the error per band of the view
+elevation θ_v = θ_o'/2 (the angle between the view and the normal N = normalize(R + V'),
+RH02 §3.1), from the coefficients alone — no brute force.
+
+**The identity.** Let T_lq(θ_o') = 2π ∫∫ ρ̂(θ_i', θ_o', φ') f_lq(θ_i') cos(qφ') sin θ_i' dθ_i' dφ'
+(the first and last passes of RH02 Appendix C, without the θ_o' pass), so that
+T_lq(θ_o') = 2π Σ_p ρ̂_lpq f_pq(θ_o'). For the reflected field B = Σ L_lm ρ̂_lpq 𝒟^l_mq Y_pq
+(DESIGN §5), orthogonality of 𝒟^l_mq over R (∫|𝒟^l_mq|² dΩ = Λ_l²) and of e^{iqφ_o'}
+gives, at a fixed θ_o', the mean square over all reflection directions R and view azimuths
+
+    D(θ_o') = Σ_{l,q} mult_q Λ_l² a_l T_lq(θ_o')² / (2π) / (8π²),    a_l = Σ_m |L_lm|²,
+
+(mult_q = 1 for q = 0, 2 otherwise; the constant 8π² cancels in every ratio below). The
+error of a truncated, windowed SHRM is the same sum with T_lq − T̂_lq, where
+T̂_lq = 2π Σ_{p<=P} σ_lp ρ̂_lpq f_pq for l <= F and 0 beyond. The relative RMS in a band
+[θ_a, θ_b] of θ_v is sqrt(∫ D_err dθ_v / ∫ D dθ_v), with θ_v uniform in angle and R
+uniform on the sphere — exactly the distribution of
+:func:`~shrmkit.analysis.compare.sample_pairs`, so the stated number and the measured
+relative RMS of ``shrm compare`` are the same quantity. Each band is integrated by
+Gauss–Legendre nodes in θ_v, where ρ̂ is sampled afresh (the orders' grid in θ_i' and φ').
+
+**Lighting weights.** Λ_l² a_l = ∫∫ L(ω) L(ω') P_l(ω·ω') dω dω' <= (∫ L dω)² = Λ_0² a_0 for
+non-negative lighting (addition theorem, |P_l| <= 1). A single distant point light (a
+one-pixel sun) has Λ_l² a_l = Λ_0² a_0 for every l, so unit weights — the BRDF-only tables
+below — state the error under a point light, the hardest lighting. Where the lighting
+coefficients are not known (l beyond what the map or the computed lighting holds) the
+bound takes the ceiling Λ_0² a_0; the prediction takes the mean of the last known weights.
+
+**What else is counted** (the SHRM statement, :func:`shrm_view_bands`):
+- the energy the profile does not resolve (l > F0 or q > P0: the node's energy by direct
+  quadrature minus the resolved part — discrete Bessel, non-negative) is error;
+- bilinear lookup in an S × 2S map: the mean square error of a degree-l field is
+  κ_l ≈ (l(l+1))² h⁴/160, h = π/S (measured: 0.0035–0.0095 × (l(l+1))² h⁴ for
+  S = 32–128, l = 1..S−1); the bound takes h⁴/100 at degree l + P;
+- the area-averaging of large maps before the SHT (lighting amplitude error
+  δ_l ≈ l(l+1)h_L²/24 of a block h_L; the bound doubles it);
+- float32 storage ((P+1)² terms, each rounded to 2⁻²⁴ relative).
+The bound adds the map terms to the truncation in amplitude, (√a + √b)², divides by the
+resolved signal only and takes a :data:`BOUND_MARGIN` of 5 % for the band quadrature; the
+prediction adds energies and includes the estimated tail. Measured against brute force
+(``tests/analysis/test_view_bands.py``, ``benchmarks/view_bands.py``) the prediction agrees
+with the measured relative RMS to its Monte Carlo error.
+
+Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
+SIGGRAPH 2002 (RH02), §3.1, §5.1 and Appendices B–C, doi:10.1145/566654.566611.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+from scipy.special import roots_legendre
+
+from ..brdf_io.brdf import BRDF
+from ..brdf_io.errors import BadInputError
+from ..brdf_io.reparam import ReparamGrid, sample_rho_hat
+from .brdf_coeffs import BRDFCoefficients
+from .sh import Lambda, legendre_f
+
+__all__ = [
+    "DEFAULT_BAND_EDGES_DEG", "DEFAULT_MAX_VIEW_DEG", "CRITERIA", "DEFAULT_CRITERION", "ViewProfile",
+    "view_profile", "fit_view_coefficients", "band_eps_table", "brdf_view_bands", "scene_error_curve",
+    "shrm_view_bands", "check_max_view", "check_criterion", "bands_inside", "worst_inside", "BandStatement",
+]
+
+#: Band edges of θ_v in degrees: 15° wide up to 60°, then 10° and 5° toward grazing.
+DEFAULT_BAND_EDGES_DEG = (0.0, 15.0, 30.0, 45.0, 60.0, 70.0, 75.0, 80.0, 85.0, 90.0)
+#: Default view limit: the order rule meets the tolerance in every band that starts below it.
+DEFAULT_MAX_VIEW_DEG = 80.0
+#: Order rules: ``"bands"`` (every band inside the view limit meets ε) and ``"rh02"``
+#: (RH02 §5.1: the unweighted energy over all views, and F_B = min(F_ρ, F_L) for a scene).
+CRITERIA = ("bands", "rh02")
+DEFAULT_CRITERION = "bands"
+
+_FLOAT32_REL = 2.0**-24
+#: Relative margin of every bound over its computed value: covers the Gauss–Legendre
+#: quadrature of each band (doubling the nodes changes the per-band errors by < 0.6 %,
+#: Cook–Torrance, microfacet σ = 0.05 and 0.3) and the rounding of a float64 reference.
+BOUND_MARGIN = 1.05
+
+
+def check_max_view(value: float) -> float:
+    """The view limit as a float in (0, 90] degrees, else :class:`BadInputError`."""
+    try:
+        deg = float(value)
+    except (TypeError, ValueError):
+        raise BadInputError(None, f"max view angle must be a number of degrees, got {value!r}") from None
+    if not 0.0 < deg <= 90.0:
+        raise BadInputError(None, f"max view angle must be in (0, 90] degrees, got {value!r}")
+    return deg
+
+
+def check_criterion(value: str) -> str:
+    """``value`` if it names an order rule of :data:`CRITERIA`, else :class:`BadInputError`."""
+    if value not in CRITERIA:
+        raise BadInputError(None, f"criterion must be one of {', '.join(CRITERIA)}, got {value!r}")
+    return value
+
+
+def _band_nodes(edges_deg: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Gauss–Legendre nodes in θ_v per band: (θ_v rad (K,), dθ_v weights (K,), band index (K,))."""
+    theta, weight, band = [], [], []
+    for b, (lo, hi) in enumerate(zip(edges_deg[:-1], edges_deg[1:], strict=True)):
+        n = max(4, int(np.ceil((hi - lo) / 2.5)))
+        x, w = roots_legendre(n)
+        half = np.radians(hi - lo) / 2.0
+        theta.append(np.radians(lo) + half * (x + 1.0))
+        weight.append(half * w)
+        band.append(np.full(n, b))
+    return np.concatenate(theta), np.concatenate(weight), np.concatenate(band)
+
+
+def _mult(n: int) -> np.ndarray:
+    return np.where(np.arange(n) == 0, 1.0, 2.0)
+
+
+@dataclass(frozen=True, eq=False)
+class ViewProfile:
+    """ρ̂ resolved by view elevation: T_lq(θ_o') at Gauss–Legendre nodes of each θ_v band.
+
+    Attributes
+    ----------
+    edges_deg
+        Band edges of θ_v in degrees, (n_bands + 1,), from 0 to 90.
+    theta_v, weight, band
+        Nodes θ_v (radians), their dθ_v quadrature weights and band index, each (K,).
+    T
+        float64 (F0+1, K, P0+1, 3): T_lq at each node (module docs), q <= P0.
+    beyond
+        (K, 3): the energy density 𝓔(θ_o') − Σ_{l<=F0, q<=P0} mult T²/(2π) the table does
+        not resolve (l > F0 or q > P0), >= 0.
+    missing
+        (n_bands,) int: samples per band where a measured table had no data (extrapolated).
+    """
+
+    edges_deg: np.ndarray
+    theta_v: np.ndarray
+    weight: np.ndarray
+    band: np.ndarray
+    T: np.ndarray
+    beyond: np.ndarray
+    missing: np.ndarray
+    name: str = ""
+
+    @property
+    def n_bands(self) -> int:
+        return len(self.edges_deg) - 1
+
+    @property
+    def F0(self) -> int:
+        return self.T.shape[0] - 1
+
+    @property
+    def P0(self) -> int:
+        return self.T.shape[2] - 1
+
+    @cached_property
+    def _full(self) -> np.ndarray:
+        out = np.tensordot(self.T**2, _mult(self.P0 + 1), axes=(2, 0)) / (2.0 * np.pi)
+        out.setflags(write=False)
+        return out
+
+    def full(self) -> np.ndarray:
+        """Σ_q mult T²/(2π) per (l, node, channel): (F0+1, K, 3) (read-only, computed once)."""
+        return self._full
+
+    @cached_property
+    def _band_matrix(self) -> np.ndarray:
+        m = np.zeros((self.n_bands, self.theta_v.size))
+        m[self.band, np.arange(self.theta_v.size)] = self.weight
+        return m
+
+    def band_sum(self, per_node: np.ndarray) -> np.ndarray:
+        """Σ over each band's nodes of weight × value; ``per_node`` has the nodes on axis 0."""
+        return np.tensordot(self._band_matrix, per_node, axes=(1, 0))
+
+    @cached_property
+    def T_by_q(self) -> list[np.ndarray]:
+        """T_lq as one (K, (F0+1)·3) matrix per q (the right-hand sides of the view fit)."""
+        K = self.theta_v.size
+        return [np.ascontiguousarray(self.T[:, :, q, :].transpose(1, 0, 2)).reshape(K, -1) for q in range(self.P0 + 1)]
+
+    @cached_property
+    def band_full(self) -> np.ndarray:
+        """Band sums of :meth:`full`: (n_bands, F0+1, 3)."""
+        return self.band_sum(np.moveaxis(self.full(), 1, 0))
+
+    @cached_property
+    def band_beyond(self) -> np.ndarray:
+        """Band sums of ``beyond``: (n_bands, 3)."""
+        return self.band_sum(self.beyond)
+
+
+def view_profile(
+    brdf: BRDF, grid: ReparamGrid, F0: int, P0: int, edges_deg: tuple[float, ...] = DEFAULT_BAND_EDGES_DEG
+) -> ViewProfile:
+    """Sample ρ̂ at Gauss–Legendre nodes of every θ_v band (the θ_i' and φ' nodes of ``grid``)
+    and transform it in φ' and θ_i' to T_lq (module docs), l <= F0, q <= P0.
+
+    Cost: n_theta_i × K × n_phi BRDF evaluations (K ≈ 57 nodes for the default bands).
+
+    Raises
+    ------
+    BadInputError
+        Non-finite BRDF values; band edges not increasing from 0 to 90.
+    """
+    edges = np.asarray(edges_deg, dtype=np.float64)
+    if edges.ndim != 1 or edges.size < 2 or edges[0] != 0.0 or edges[-1] != 90.0 or np.any(np.diff(edges) <= 0):
+        raise BadInputError(None, f"view band edges must increase from 0 to 90 degrees, got {edges_deg!r}")
+    if grid.n_theta_i <= F0 or grid.n_phi <= 2 * P0:
+        raise ValueError(f"grid {grid} too coarse for orders F0={F0}, P0={P0}")
+    theta_v, weight, band = _band_nodes(edges)
+    xi, wi = grid.theta_i()
+    phi = grid.phi()
+    fi = legendre_f(F0, P0, xi) * wi  # (F0+1, P0+1, n_i)
+    K = theta_v.size
+    T = np.empty((F0 + 1, K, P0 + 1, 3))
+    energy = np.empty((K, 3))
+    missing = np.zeros(len(edges) - 1, dtype=np.int64)
+    dphi = 2.0 * np.pi / grid.n_phi
+    for b in range(len(edges) - 1):
+        idx = np.nonzero(band == b)[0]
+        values, n_missing = sample_rho_hat(brdf, xi, np.cos(2.0 * theta_v[idx]), phi)  # (n_i, k, n_phi, 3)
+        missing[b] = n_missing
+        g = np.fft.rfft(values, axis=2).real[:, :, : P0 + 1] * dphi  # (n_i, k, P0+1, 3)
+        n_i, k = g.shape[:2]
+        for q in range(P0 + 1):
+            # Σ_i fi[l, q, i] g[i, k, q, c]: one matrix product (BLAS)
+            rhs = np.ascontiguousarray(g[:, :, q, :]).reshape(n_i, k * 3)
+            T[:, idx, q, :] = 2.0 * np.pi * (fi[:, q, :] @ rhs).reshape(-1, k, 3)
+        # 𝓔(θ_o') = 2π ∫ dω_i ρ̂²: the density whose sin θ_o' dθ_o' integral is ∫∫ ρ̂² (ReparamBRDF.energy)
+        energy[idx] = 2.0 * np.pi * dphi * np.tensordot(wi, (values**2).sum(axis=2), axes=(0, 0))
+    resolved = np.tensordot(T**2, _mult(P0 + 1), axes=(2, 0)).sum(axis=0) / (2.0 * np.pi)
+    return ViewProfile(
+        edges_deg=edges, theta_v=theta_v, weight=weight, band=band, T=T,
+        beyond=np.clip(energy - resolved, 0.0, None), missing=missing, name=brdf.name,
+    )
+
+
+def _approximation(
+    profile: ViewProfile, coefficients: BRDFCoefficients, F: int, P: int,
+    sigma: np.ndarray | None = None, q_max: int | None = None,
+) -> np.ndarray:
+    """T̂_lq at the nodes, l <= F, q <= P: 2π Σ_{p<=P} σ_lp ρ̂_lpq f_pq(θ_o'), (F+1, K, P+1, 3)."""
+    c = coefficients.coeffs[: F + 1, : P + 1, : P + 1, :].copy()
+    if sigma is not None:
+        s = np.asarray(sigma, dtype=np.float64)
+        if s.ndim == 1:
+            s = np.repeat(s[: F + 1, None], P + 1, axis=1)
+        c *= s[:, :, None, None]
+    if q_max is not None:
+        c[:, :, q_max + 1 :, :] = 0.0
+    fo = legendre_f(P, P, np.cos(2.0 * profile.theta_v))  # (P+1, P+1, K)
+    out = np.empty((F + 1, profile.theta_v.size, P + 1, 3))
+    for q in range(P + 1):
+        # Σ_p c[l, p, q, ch] fo[p, q, k] -> (l, ch, k)
+        out[:, :, q, :] = np.tensordot(c[:, q:, q, :], fo[q:, q, :], axes=(1, 0)).transpose(0, 2, 1)
+    return 2.0 * np.pi * out
+
+
+def _residual(profile: ViewProfile, approx: np.ndarray) -> np.ndarray:
+    """Σ_q mult (T − T̂)²/(2π) per (l, node, channel) for l <= F (= approx.shape[0] − 1)."""
+    F1, _, Q1, _ = approx.shape
+    diff = profile.T[:F1].copy()
+    diff[:, :, :Q1, :] -= approx
+    return np.tensordot(diff**2, _mult(profile.P0 + 1), axes=(2, 0)) / (2.0 * np.pi)
+
+
+def _live(total: np.ndarray) -> np.ndarray:
+    return total > 1e-12 * max(float(total.max(initial=0.0)), 1e-300)
+
+
+def bands_inside(profile: ViewProfile, max_view_deg: float) -> np.ndarray:
+    """Indices of the bands that start below ``max_view_deg`` (those a rule must meet)."""
+    return np.nonzero(profile.edges_deg[:-1] < max_view_deg)[0]
+
+
+#: Weight of the bands beyond the view limit in the view fit (relative to those inside):
+#: small, so that the grazing singularity of physically based lobes (ρ̂ ∝ 1/cos θ_v) does not
+#: spoil the views inside, but not zero, so that the fit stays tame beyond the limit.
+OUTSIDE_WEIGHT = 0.02
+#: Reweighting passes of the view fit toward the worst band inside the limit (Lawson-style,
+#: square-root damped), stopped early when a pass gains < 0.5 %: the least-squares fit alone
+#: leaves the band next to the limit worst (Cook–Torrance α = 0.1, f0 = 0.04: ε 0.031 after
+#: 4 passes, 0.030 after 8).
+FIT_PASSES = 8
+
+
+def fit_view_coefficients(
+    profile: ViewProfile, coefficients: BRDFCoefficients, P: int, max_view_deg: float
+) -> BRDFCoefficients:
+    """ρ̂_lpq (p <= P) fitted to T_lq over the views that matter, instead of projected.
+
+    RH02's coefficients are the orthogonal projection over *all* views θ_o' ∈ [0, π]; for a
+    physically based lobe ρ̂ grows like 1/cos θ_v toward grazing (Smith G and Fresnel keep
+    it large), so the projection spends its P orders on the last few degrees and converges
+    slowly everywhere (measured, Cook–Torrance α = 0.092: ε_b 0.03–0.09 in *every* band at
+    P = 16). Here, for each (l, q), the coefficients minimize Σ_k W_k (T_lq(θ_k) − T̂_lq(θ_k))²
+    over the profile's nodes, with W_k = dθ_v weight / the band's signal (each band's relative
+    error counts alike), bands beyond ``max_view_deg`` down-weighted by
+    :data:`OUTSIDE_WEIGHT`, then :data:`FIT_PASSES` passes that raise the weight of the bands
+    inside with the largest error. The l-expansion is still the projection (exact in l).
+    Same shape as ``coefficients`` (entries p > P zero); the energy is the BRDF's.
+    """
+    F0 = min(profile.F0, coefficients.F0)
+    inside = np.zeros(profile.n_bands, dtype=bool)
+    inside[bands_inside(profile, max_view_deg)] = True
+    signal = (profile.band_full.sum(axis=1) + profile.band_beyond).sum(axis=1)
+    band_w = np.where(inside, 1.0, OUTSIDE_WEIGHT) / np.where(signal > 0, signal, 1.0)
+    fo = legendre_f(P, P, np.cos(2.0 * profile.theta_v))  # (P+1, P+1, K)
+    out = np.zeros_like(coefficients.coeffs)
+    fitted = BRDFCoefficients(coeffs=out, energy=coefficients.energy, name=coefficients.name)
+    prev_worst = np.inf
+    for npass in range(FIT_PASSES + 1):
+        sw = np.sqrt(profile.weight * band_w[profile.band])
+        for q in range(P + 1):
+            A = 2.0 * np.pi * fo[q : P + 1, q, :].T * sw[:, None]  # (K, P+1−q), well conditioned
+            # weighted least squares through the pseudo-inverse of the small matrix: one product
+            # with all (l, channel) right-hand sides
+            sol = (np.linalg.pinv(A) * sw[None, :]) @ profile.T_by_q[q]
+            out[:, q : P + 1, q, :] = sol.reshape(P + 1 - q, -1, 3)[:, : F0 + 1].transpose(1, 0, 2)
+        if npass == FIT_PASSES or not inside.any():
+            break
+        eps = _band_eps_all(profile, fitted, p_list=[P])[:, F0, 0]
+        worst = eps[inside].max()
+        if worst <= 0.0 or worst > 0.995 * prev_worst:  # nothing to gain (a view-independent lobe)
+            break
+        prev_worst = worst
+        band_w = band_w * np.where(inside, np.sqrt(np.clip(eps / worst, 1e-3, 1.0)), 1.0)
+    return fitted
+
+
+def band_eps_table(
+    profile: ViewProfile, coefficients: BRDFCoefficients, max_view_deg: float, *, fit: bool = True
+) -> np.ndarray:
+    """ε(F, P) of the worst band inside ``max_view_deg`` and the worst channel, (F0+1, P0+1).
+
+    ε_b(F, P) = ∫_b D_err dθ_v / ∫_b D dθ_v with unit lighting weights (a point light, module
+    docs): the energy fraction the truncation to (F, P) misses in band b, the unresolved
+    energy (l > F0, q > P0) counted as missed. The per-band analogue of RH02's ε (§5.1).
+    With ``fit`` (default) the coefficients at each P are :func:`fit_view_coefficients`,
+    else the projection ``coefficients``.
+    """
+    inside = bands_inside(profile, max_view_deg)
+    if not fit:
+        return _band_eps_all(profile, coefficients)[inside].max(axis=0)
+    P0 = min(profile.P0, coefficients.P0)
+    columns = []
+    for p in range(P0 + 1):
+        fitted = fit_view_coefficients(profile, coefficients, p, max_view_deg)
+        columns.append(_band_eps_all(profile, fitted, p_list=[p])[inside, :, 0].max(axis=0))
+    return np.stack(columns, axis=1)
+
+
+def _band_eps_all(
+    profile: ViewProfile, coefficients: BRDFCoefficients, p_list: list[int] | None = None
+) -> np.ndarray:
+    """ε_b(F, p) for every band, worst live channel: (n_bands, F0+1, len(p_list)) (all p <= P0
+    by default)."""
+    F0, P0 = min(profile.F0, coefficients.F0), min(profile.P0, coefficients.P0)
+    full = profile.band_full  # (nb, F0p+1, 3)
+    beyond = profile.band_beyond + full[:, F0 + 1 :].sum(axis=1)  # unresolved by the table
+    full = full[:, : F0 + 1]
+    total = full.sum(axis=1) + beyond  # (nb, 3)
+    live = _live(total.sum(axis=0))
+    after = total[:, None, :] - np.cumsum(full, axis=1)  # energy at l > f, (nb, F0+1, 3)
+    p_list = list(range(P0 + 1)) if p_list is None else p_list
+    out = np.empty((profile.n_bands, F0 + 1, len(p_list)))
+    safe = np.where(total > 0, total, 1.0)[:, None, :]
+    for j, p in enumerate(p_list):
+        res = profile.band_sum(np.moveaxis(_residual(profile, _approximation(profile, coefficients, F0, p)), 1, 0))
+        err = np.cumsum(res, axis=1) + after  # (nb, F0+1, 3)
+        eps = np.where(total[:, None, :] > 0, err / safe, 0.0)
+        out[:, :, j] = np.clip(eps[..., live], 0.0, None).max(axis=-1)
+    return out
+
+
+def brdf_view_bands(
+    profile: ViewProfile, coefficients: BRDFCoefficients, F: int, P: int, max_view_deg: float
+) -> list[dict]:
+    """Per band at (F, P) with unit lighting weights: ``eps`` (energy) and
+    ``rel_rms_point_light`` = √ε, the relative RMS a single point light would show, plus
+    ``inside`` (the band starts below the view limit) and ``extrapolated`` samples."""
+    eps = _band_eps_all(profile, coefficients, p_list=[P])[:, F, 0]
+    inside = set(bands_inside(profile, max_view_deg).tolist())
+    return [
+        {
+            "theta_v_deg": [float(lo), float(hi)],
+            "eps": float(e),
+            "rel_rms_point_light": float(np.sqrt(e)),
+            "inside": b in inside,
+            "extrapolated_samples": int(profile.missing[b]),
+        }
+        for b, (lo, hi, e) in enumerate(zip(profile.edges_deg[:-1], profile.edges_deg[1:], eps, strict=True))
+    ]
+
+
+def _lighting_weights(band_energy: np.ndarray, F0: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Λ_l² a_l for l <= F0 as (predicted, bound) (F0+1, 3) and the ceiling Λ_0² a_0 (3,):
+    known where the lighting holds l, else the mean of the last 8 known (predicted) or the
+    ceiling (bound)."""
+    n = band_energy.shape[0]
+    w = Lambda(np.arange(n))[:, None] ** 2 * band_energy
+    ceiling = w.max(axis=0)  # = Λ_0² a_0 = (∫L)² for non-negative lighting
+    pred = np.empty((F0 + 1, 3))
+    bound = np.empty((F0 + 1, 3))
+    k = min(n, F0 + 1)
+    pred[:k] = bound[:k] = w[:k]
+    pred[k:] = w[max(0, n - 8) :].mean(axis=0)
+    bound[k:] = ceiling
+    return pred, bound, ceiling
+
+
+def scene_error_curve(
+    profile: ViewProfile, coefficients: BRDFCoefficients, band_energy: np.ndarray, P: int,
+    *, q_max: int | None = None,
+) -> np.ndarray:
+    """Predicted ε_b(F) of the reflected field for F = 0..F0 at view order P, no window:
+    (n_bands, F0+1), pooled over channels (the relative RMS² of the band).
+
+    ``band_energy`` is a_l = Σ_m |L_lm|² per channel, (lmax+1, 3)
+    (:meth:`~shrmkit.analysis.lighting.LightingCoefficients.band_energy`).
+    """
+    F0 = min(profile.F0, coefficients.F0)
+    w, _, _ = _lighting_weights(band_energy, profile.F0)
+    full = np.moveaxis(profile.full(), 1, 0) * w[None]  # (K, F0p+1, 3)
+    tail = w[-1] * profile.beyond + full[:, F0 + 1 :].sum(axis=1)
+    full = full[:, : F0 + 1]
+    approx = _approximation(profile, coefficients, F0, P, q_max=q_max)
+    res = np.moveaxis(_residual(profile, approx), 1, 0) * w[None, : F0 + 1]
+    res_b = profile.band_sum(res.sum(axis=-1))  # (nb, F0+1)
+    full_b = profile.band_sum(full.sum(axis=-1))
+    total = full_b.sum(axis=1) + profile.band_sum(tail.sum(axis=-1))
+    err = np.cumsum(res_b, axis=1) + (total[:, None] - np.cumsum(full_b, axis=1))
+    return np.where(total[:, None] > 0, err / np.where(total > 0, total, 1.0)[:, None], 0.0)
+
+
+def _map_factor(l: np.ndarray, rows: int, scale: float) -> np.ndarray:
+    """Mean square relative error of bilinear lookup of a degree-l field on ``rows`` rows."""
+    h = np.pi / rows
+    return np.minimum(1.0, (l * (l + 1.0)) ** 2 * h**4 / scale)
+
+
+def shrm_view_bands(
+    profile: ViewProfile,
+    coefficients: BRDFCoefficients,
+    band_energy: np.ndarray,
+    F: int,
+    P: int,
+    *,
+    sigma: np.ndarray | None = None,
+    q_max: int | None = None,
+    map_rows: int | None = None,
+    lighting_rows: tuple[int, int] | None = None,
+    max_view_deg: float = DEFAULT_MAX_VIEW_DEG,
+) -> BandStatement:
+    """Predicted and bounded relative RMS error of an SHRM per θ_v band (module docs).
+
+    Parameters
+    ----------
+    profile, coefficients
+        The BRDF's :class:`ViewProfile` and ρ̂_lpq (the orders' grid).
+    band_energy
+        a_l = Σ_m |L_lm|² per channel, (lmax+1, 3).
+    F, P, sigma, q_max
+        Orders kept, the window σ_l (F+1,) or σ_lp (F+1, P+1), and ``q_max=0`` for the
+        azimuth-free SHRM.
+    map_rows
+        Rows S of the stored S × 2S maps (bilinear lookup; None: exact evaluation).
+    lighting_rows
+        (rows the SHT ran on, rows of the source map): area averaging before the SHT.
+
+    Returns
+    -------
+    BandStatement
+        ``bands``: one dict per band: ``theta_v_deg`` [lo, hi], ``predicted_rel_rms``,
+        ``bound_rel_rms`` (same units as a measured relative RMS), ``inside`` (starts below
+        ``max_view_deg``), ``extrapolated_samples`` (measured data missing: the bound is then
+        not a bound there, ``bound_holds`` False), and the parts ``truncation_rel_rms`` and
+        ``map_rel_rms`` of the prediction. ``eps_predicted``/``eps_bound``: the energy
+        fractions over all views (RH02's measure).
+    """
+    F0 = profile.F0
+    if F > min(F0, coefficients.F0) or P > min(profile.P0, coefficients.P0):
+        raise ValueError(f"orders (F={F}, P={P}) beyond the profile (F0={F0}, P0={profile.P0})")
+    w_pred, w_bound, ceiling = _lighting_weights(band_energy, F0)
+    full = np.moveaxis(profile.full(), 1, 0)  # (K, F0+1, 3)
+    approx = _approximation(profile, coefficients, F, P, sigma, q_max)
+    res = np.moveaxis(_residual(profile, approx), 1, 0)  # (K, F+1, 3)
+    kept = np.moveaxis(np.tensordot(approx**2, _mult(P + 1), axes=(2, 0)), 1, 0) / (2.0 * np.pi)
+    above = full[:, F + 1 :]
+
+    def trunc(w: np.ndarray, w_beyond: np.ndarray) -> np.ndarray:
+        return (res * w[None, : F + 1]).sum(axis=1) + (above * w[None, F + 1 :]).sum(axis=1) + w_beyond * profile.beyond
+
+    trunc_pred = trunc(w_pred, w_pred[-1])
+    trunc_bound = trunc(w_bound, ceiling)
+    l = np.arange(F + 1, dtype=np.float64)
+    map_pred = np.full(F + 1, _FLOAT32_REL**2 * (P + 1) ** 2)
+    map_bound = 4.0 * map_pred
+    if map_rows is not None:
+        map_pred += _map_factor(l, map_rows, 160.0)
+        map_bound += _map_factor(l + P, map_rows, 100.0)
+    if lighting_rows is not None and lighting_rows[0] < lighting_rows[1]:
+        delta = l * (l + 1.0) * (np.pi / lighting_rows[0]) ** 2 / 24.0
+        map_pred += np.minimum(delta, 1.0) ** 2
+        map_bound += np.minimum(2.0 * delta, 1.0) ** 2
+    kept_w = kept * w_pred[None, : F + 1]
+    map_p = (kept_w * map_pred[None, :, None]).sum(axis=1)
+    map_b = (kept_w * map_bound[None, :, None]).sum(axis=1)
+    # the resolved signal at the l the lighting holds: a lower bound on the band's signal
+    known = min(band_energy.shape[0], F0 + 1)
+    signal_low = (full[:, :known] * w_bound[None, :known]).sum(axis=1)
+    signal_pred = (full * w_pred[None]).sum(axis=1) + w_pred[-1] * profile.beyond
+    b_tp, b_tb = profile.band_sum(trunc_pred), profile.band_sum(trunc_bound)
+    b_mp, b_mb = profile.band_sum(map_p), profile.band_sum(map_b)
+    b_sp, b_sl = profile.band_sum(signal_pred), profile.band_sum(signal_low)
+    inside = set(bands_inside(profile, max_view_deg).tolist())
+    bands = []
+    for b in range(profile.n_bands):
+        pred, tp, mp, bound = _ratios(b_tp[b], b_tb[b], b_mp[b], b_mb[b], b_sp[b], b_sl[b])
+        bands.append({
+            "theta_v_deg": [float(profile.edges_deg[b]), float(profile.edges_deg[b + 1])],
+            "predicted_rel_rms": pred,
+            "bound_rel_rms": bound,
+            "truncation_rel_rms": tp,
+            "map_rel_rms": mp,
+            "inside": b in inside,
+            "extrapolated_samples": int(profile.missing[b]),
+            "bound_holds": bool(profile.missing[b] == 0),
+        })
+    # all views with RH02's measure (sin θ_o' dθ_o' = 2 sin 2θ_v dθ_v): the energy fractions ε_B
+    solid = 2.0 * np.sin(2.0 * profile.theta_v)[:, None]
+    parts = [(x * solid).T @ profile.weight for x in (trunc_pred, trunc_bound, map_p, map_b, signal_pred, signal_low)]
+    pred, _, _, bound = _ratios(*parts)
+    return BandStatement(bands=bands, eps_predicted=pred**2, eps_bound=min(1.0, bound**2))
+
+
+@dataclass(frozen=True)
+class BandStatement:
+    """What :func:`shrm_view_bands` states: per-band dicts, and over all views (RH02's energy
+    measure) the predicted and bounded energy fractions ε_B."""
+
+    bands: list
+    eps_predicted: float
+    eps_bound: float
+
+
+def _ratios(tp_e: np.ndarray, tb_e: np.ndarray, mp_e: np.ndarray, mb_e: np.ndarray, sp: np.ndarray,
+            sl: np.ndarray) -> tuple[float, float, float, float]:
+    """(predicted, truncation part, map part, bound) relative RMS from per-channel energies,
+    pooled over channels; the bound adds truncation and map in amplitude over the resolved
+    signal, and is never below the prediction."""
+    den_p, den_l = float(sp.sum()), float(sl.sum())
+    if den_p <= 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    tp = float(np.sqrt(tp_e.sum() / den_p))
+    mp = float(np.sqrt(mp_e.sum() / den_p))
+    pred = float(np.sqrt((tp_e.sum() + mp_e.sum()) / den_p))
+    num_b = float(((np.sqrt(tb_e) + np.sqrt(mb_e)) ** 2).sum())
+    bound = BOUND_MARGIN * float(np.sqrt(num_b / den_l)) if den_l > 0.0 else float("inf")
+    return pred, tp, mp, max(bound, pred)
+
+
+def worst_inside(bands: list[dict], key: str) -> float:
+    """The largest ``key`` over the bands inside the view limit (NaN when there are none)."""
+    values = [b[key] for b in bands if b["inside"]]
+    return float(max(values)) if values else float("nan")
