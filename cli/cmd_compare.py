@@ -36,6 +36,7 @@ from .common import (
     stdout,
     tolerance,
 )
+from .view_bands_table import print_view_bands
 
 HELP = "compare the SHRM with Kautz-McCool, Cabral (12 maps) and Gaussian-lobe representations"
 
@@ -141,6 +142,13 @@ def run(args: argparse.Namespace) -> int:
             f"{r['eval_us_per_pair']:.1f}",
         )
     stdout.print(table)
+    shrm_row = next((r for r in result["rows"] if r.get("view_bands") and "predicted_rel_rms" in r["view_bands"][0]),
+                    None)
+    if shrm_row is not None:
+        measured = [{"measured_rel_rms": b["measured_rel_rms"], "stderr": b["measured_stderr"]}
+                    for b in shrm_row["view_bands"]]
+        print_view_bands(shrm_row["view_bands"], f"{shrm_row['label']} by view band (rule {result['criterion']})",
+                         measured=measured)
     if "strip" in result:
         stdout.print(f"wrote {result['strip']['path']}")
     if args.markdown:

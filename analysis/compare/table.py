@@ -29,7 +29,8 @@ from ...brdf_io.envmap import EnvironmentMap, load_env
 from ...brdf_io.errors import BadInputError
 from ...brdf_io.specs import load_brdf
 from ..reference import reference_radiance
-from .metrics import relative_rms
+from ..view_bands import DEFAULT_BAND_EDGES_DEG
+from .metrics import band_relative_rms, relative_rms
 from .options import CompareOptions
 from .pairs import sample_pairs
 from .registry import build_representations
@@ -116,6 +117,14 @@ def compare_representations(
         t0 = time.perf_counter()
         pred = rep.radiance(R, V)
         t_eval = time.perf_counter() - t0
+        measured = band_relative_rms(pred, ref, theta_v, DEFAULT_BAND_EDGES_DEG)
+        stated = rep.params.get("view_bands")
+        if stated:  # an SHRM: its per-band statement beside what was measured
+            bands = [{**s, "measured_rel_rms": m["measured_rel_rms"], "measured_stderr": m["stderr"], "n_pairs": m["n"]}
+                     for s, m in zip(stated, measured, strict=True)]
+        else:
+            bands = [{"theta_v_deg": m["theta_v_deg"], "measured_rel_rms": m["measured_rel_rms"],
+                      "measured_stderr": m["stderr"], "n_pairs": m["n"]} for m in measured]
         rows.append({
             "key": rep.key,
             "label": rep.label,
@@ -126,13 +135,16 @@ def compare_representations(
             "precompute_s": float(rep.precompute_s),
             "update_s": float(rep.update_s),
             "eval_us_per_pair": 1e6 * t_eval / n,
-            "params": dict(rep.params),
+            "params": {k: v for k, v in rep.params.items() if k != "view_bands"},
+            "view_bands": bands,
         })
     result: dict[str, Any] = {
         "brdf": brdf.name,
         "environment": f"{env.name} ({env.height}x{env.width})",
         "eps": options.eps,
         "window": options.window,
+        "criterion": options.criterion,
+        "rule_max_view_deg": options.rule_max_view_deg,
         "n_pairs": int(n),
         "max_view_deg": float(options.max_view_deg),
         "grazing_deg": GRAZING_DEG,
@@ -214,4 +226,16 @@ def table_markdown(result: dict[str, Any]) -> str:
             f"{_fmt_bytes(r['storage_bytes'])} | {r['precompute_s']:.3f} | {1e3 * r['update_s']:.3f} | "
             f"{r['eval_us_per_pair']:.1f} |"
         )
+    for r in result["rows"]:
+        if r.get("view_bands") and "predicted_rel_rms" in r["view_bands"][0]:
+            lines += ["", f"{r['label']} by view band θ_v (predicted and bound: `SHRM.meta[\"view_bands\"]`; measured "
+                      "± its standard error on the pairs of the band; * beyond the order rule's view limit):", "",
+                      "| θ_v (deg) | predicted rel RMS | bound rel RMS | measured rel RMS | pairs |",
+                      "|---|---:|---:|---:|---:|"]
+            for b in r["view_bands"]:
+                lo, hi = b["theta_v_deg"]
+                star = "" if b["inside"] else " *"
+                lines.append(f"| {lo:g}–{hi:g}{star} | {b['predicted_rel_rms']:.4f} | {b['bound_rel_rms']:.4f} | "
+                             f"{b['measured_rel_rms']:.4f} ± {b['measured_stderr']:.4f} | {b['n_pairs']} |")
+            break
     return "\n".join(lines) + "\n"
