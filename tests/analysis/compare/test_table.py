@@ -82,7 +82,15 @@ def test_table_rows_json_and_independent_numbers(small) -> None:
     for r in result["rows"]:
         assert np.isfinite(r["rel_rms"]) and r["precompute_s"] > 0 and r["storage_bytes"] > 0
     assert rows["shrm"]["rel_rms"] < rows["shrm_low_p"]["rel_rms"]
-    assert result["markdown"].count("\n|") == len(keys) + 2
+    # the comparison table (header, rule, one line per row), then the SHRM's per-band table
+    # (header, rule, one line per view band)
+    assert result["markdown"].count("\n|") == len(keys) + 2 + 2 + 9
+    shrm_bands = rows["shrm"]["view_bands"]
+    assert len(shrm_bands) == 9 and all("predicted_rel_rms" in b and "measured_rel_rms" in b for b in shrm_bands)
+    assert all("predicted_rel_rms" not in b for b in rows["gaussian_k1"]["view_bands"])
+    # the per-band measurements pool to the row's overall number (same pairs, same metric)
+    n = sum(b["n_pairs"] for b in shrm_bands)
+    assert n == result["n_pairs"]
 
 
 def test_representations_follow_the_protocol(small) -> None:
