@@ -27,17 +27,15 @@ import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
 from rich.console import Console
 from rich.table import Table
 
-from shrmkit.analysis.compare import band_relative_rms, sample_pairs_focused
+from shrmkit.analysis.compare import band_pairs, band_relative_rms
 from shrmkit.analysis.orders import choose_orders
 from shrmkit.analysis.reference import reference_radiance
 from shrmkit.analysis.shrm import default_size, prefilter
 from shrmkit.analysis.view_bands import DEFAULT_BAND_EDGES_DEG
 from shrmkit.brdf_io.envmap import load_env
-from shrmkit.brdf_io.latlong import pixel_directions
 from shrmkit.brdf_io.merl import write_merl
 from shrmkit.brdf_io.specs import load_brdf
 
@@ -64,13 +62,6 @@ def environments(quick: bool) -> dict:
     return envs
 
 
-def brightest(env, k: int = 16) -> tuple[np.ndarray, np.ndarray]:
-    h, w = env.radiance.shape[:2]
-    flux = env.radiance.sum(axis=-1) * np.sin((np.arange(h) + 0.5) * np.pi / h)[:, None]
-    top = np.argsort(flux.ravel())[::-1][:k]
-    return pixel_directions(h, w).reshape(-1, 3)[top], np.sqrt(flux.ravel()[top])
-
-
 def band_table(quick: bool, per_band: int) -> None:
     table = Table(title=f"per view band at eps = {EPS:g} (rule: bands to 80°; measured ± s.e., brute force)")
     for name in ("env", "BRDF", "F_B", "P_B", "map", "MB", "prefilter s", "window"):
@@ -80,9 +71,7 @@ def band_table(quick: bool, per_band: int) -> None:
     brdfs = BRDFS[::2] if quick else BRDFS
     for env_name, make in environments(quick).items():
         env = make()
-        centres, weights = brightest(env)
-        R, V, theta_v, w = sample_pairs_focused(per_band, DEFAULT_BAND_EDGES_DEG, centre=centres,
-                                                centre_weights=weights, seed=11)
+        R, V, theta_v, w = band_pairs(env.radiance, per_band, DEFAULT_BAND_EDGES_DEG, seed=11)
         for spec in brdfs:
             brdf = load_brdf(spec)
             t0 = time.perf_counter()

@@ -15,7 +15,7 @@ This package never imports the render layer.
 
 from .metrics import band_relative_rms, relative_rms
 from .options import DEFAULT_ENV_HEIGHT, CompareOptions
-from .pairs import sample_pairs, sample_pairs_focused
+from .pairs import band_pairs, brightest_pixels, sample_pairs, sample_pairs_focused
 from .registry import REGISTRY, Builder, build_representations
 from .representation import BuildContext, BuiltRepresentation, RadianceModel, Representation, time_update
 from .table import FRONTAL_DEG, GRAZING_DEG, Comparison, compare, compare_representations, table_markdown
@@ -25,5 +25,5 @@ __all__ = [
     "CompareOptions", "DEFAULT_ENV_HEIGHT",
     "Representation", "RadianceModel", "BuiltRepresentation", "BuildContext", "time_update",
     "REGISTRY", "Builder", "build_representations",
-    "sample_pairs", "sample_pairs_focused", "relative_rms", "band_relative_rms",
+    "sample_pairs", "sample_pairs_focused", "band_pairs", "brightest_pixels", "relative_rms", "band_relative_rms",
 ]

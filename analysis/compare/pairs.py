@@ -10,7 +10,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-__all__ = ["sample_pairs", "sample_pairs_focused"]
+__all__ = ["sample_pairs", "sample_pairs_focused", "brightest_pixels", "band_pairs"]
 
 
 def sample_pairs(n: int, *, seed: int = 0, max_view_deg: float = 88.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -146,6 +146,28 @@ def sample_pairs_focused(
     V = np.cos(two) * R + np.sin(two) * (np.cos(psi)[:, None] * t + np.sin(psi)[:, None] * b)
     V /= np.linalg.norm(V, axis=1, keepdims=True)
     return R, V, theta_v, weights
+
+
+def brightest_pixels(radiance: np.ndarray, k: int = 16) -> tuple[np.ndarray, np.ndarray]:
+    """The ``k`` pixels of a lat-long map (H, W, 3) with the largest flux (radiance summed over
+    channels × solid angle): their unit directions (k, 3) and √flux as sampling weights — the
+    ``centre``/``centre_weights`` of :func:`sample_pairs_focused`."""
+    radiance = np.asarray(radiance, dtype=np.float64)
+    h, w = radiance.shape[:2]
+    flux = radiance.sum(axis=-1) * np.sin((np.arange(h) + 0.5) * np.pi / h)[:, None]
+    top = np.argsort(flux.ravel())[::-1][:k]
+    theta = (top // w + 0.5) * np.pi / h
+    phi = 2.0 * np.pi * (top % w + 0.5) / w
+    dirs = np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], axis=-1)
+    return dirs, np.sqrt(np.clip(flux.ravel()[top], 0.0, None))
+
+
+def band_pairs(radiance: np.ndarray, per_band: int, edges_deg: Sequence[float], *, seed: int = 0
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`sample_pairs_focused` on the 16 brightest pixels of ``radiance`` (the per-band
+    measurement of ``shrm report``, the tests and ``benchmarks/view_bands.py``)."""
+    centres, weights = brightest_pixels(radiance)
+    return sample_pairs_focused(per_band, edges_deg, centre=centres, centre_weights=weights, seed=seed)
 
 
 def _perpendicular_pair(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

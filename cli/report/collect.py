@@ -38,13 +38,13 @@ from typing import Any
 import numpy as np
 
 from ..._version import __version__
-from ...analysis.compare import band_relative_rms, relative_rms, sample_pairs
+from ...analysis.compare import band_pairs, band_relative_rms, relative_rms, sample_pairs
 from ...analysis.fit import fit_brdf
 from ...analysis.lighting import lighting_coefficients
 from ...analysis.orders import choose_orders
 from ...analysis.reference import reference_radiance
 from ...analysis.shrm import prefilter
-from ...analysis.view_bands import DEFAULT_MAX_VIEW_DEG, worst_inside
+from ...analysis.view_bands import DEFAULT_BAND_EDGES_DEG, DEFAULT_MAX_VIEW_DEG, worst_inside
 from ...brdf_io.brdf import BRDF
 from ...brdf_io.errors import BadInputError
 from ...brdf_io.jsonutil import to_jsonable
@@ -71,8 +71,7 @@ REPORT_FORMAT_VERSION = 1
 #: Largest view angle θ_v of the error sample (``analysis.compare.sample_pairs``, the sampler
 #: ``shrm compare`` uses too); stated in report.json as ``error_sample``.
 REPORT_MAX_VIEW_DEG = DEFAULT_MAX_VIEW_DEG
-#: The report samples (R, V) pairs up to this θ_v, so that every view band has measurements.
-SAMPLE_MAX_VIEW_DEG = 89.9
+BAND_EDGES = DEFAULT_BAND_EDGES_DEG
 
 
 def merge_measured(bands: list[dict], measured: list[dict]) -> list[dict]:
@@ -238,10 +237,8 @@ def unique_names(names: list[str]) -> list[str]:
 
 
 def _environments(brdf: BRDF, options: ReportOptions, progress: Progress | None):
-    # pairs over every view band (to 89.9°): the headline measured error uses those inside the view
-    # limit, the per-band table all of them
-    R, V, theta_v = sample_pairs(options.n_pairs, seed=options.seed, max_view_deg=SAMPLE_MAX_VIEW_DEG)
-    inside = np.degrees(theta_v) < options.max_view_deg
+    # the headline measured error: pairs inside the view limit (the sampler of `shrm compare`)
+    R, V, _ = sample_pairs(options.n_pairs, seed=options.seed, max_view_deg=options.max_view_deg)
     env_entries, speed_rows, main_shrms = [], [], []
     envs = [load_report_env(spec, options) for spec in options.envs]
     names = unique_names([env.name for env in envs])
@@ -252,6 +249,11 @@ def _environments(brdf: BRDF, options: ReportOptions, progress: Progress | None)
         t0 = time.perf_counter()
         reference = reference_radiance(env, brdf, R, V)
         ref_seconds = time.perf_counter() - t0
+        # per view band: pairs drawn per band, R importance-sampled around the brightest pixels
+        # (a band of uniform pairs under a sun has a few samples and a meaningless spread)
+        Rb, Vb, theta_b, weight_b = band_pairs(env.radiance, max(16, options.n_pairs // len(BAND_EDGES)),
+                                               BAND_EDGES, seed=options.seed)
+        reference_b = reference_radiance(env, brdf, Rb, Vb)
         lighting = lighting_coefficients(env.radiance, env.height - 1, name=env.name)
         entry: dict[str, Any] = {
             "name": env.name,
@@ -265,10 +267,9 @@ def _environments(brdf: BRDF, options: ReportOptions, progress: Progress | None)
             _stage(progress, f"prefilter {env.name} eps={tol:g}")
             shrm = prefilter(env, brdf, eps=tol, max_F=options.max_F, max_P=options.max_P, window=options.window,
                              criterion=options.criterion, max_view_deg=options.max_view_deg)
-            radiance = shrm.radiance(R, V)  # clamped at 0, as rendered
-            err = relative_rms(radiance[inside], reference[inside])
+            err = relative_rms(shrm.radiance(R, V), reference)  # clamped at 0, as rendered
             bands = merge_measured(shrm.meta["view_bands"], band_relative_rms(
-                radiance, reference, theta_v, [b["theta_v_deg"][0] for b in shrm.meta["view_bands"]] + [90.0]))
+                shrm.radiance(Rb, Vb), reference_b, theta_b, BAND_EDGES, weight_b))
             t = shrm.meta["timings"]
             n_out = shrm.height * shrm.width
             row = {

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import shrmkit
-from shrmkit.analysis.compare import band_relative_rms, relative_rms, sample_pairs, sample_pairs_focused
+from shrmkit.analysis.compare import band_pairs, band_relative_rms, relative_rms, sample_pairs
 from shrmkit.analysis.lighting import lighting_coefficients
 from shrmkit.analysis.orders import choose_orders
 from shrmkit.analysis.reference import reference_radiance
@@ -21,7 +21,6 @@ from shrmkit.analysis.scene import scene_orders
 from shrmkit.analysis.shrm import WINDOW_THRESHOLD, prefilter
 from shrmkit.analysis.view_bands import DEFAULT_BAND_EDGES_DEG, view_profile
 from shrmkit.brdf_io.errors import BadInputError
-from shrmkit.brdf_io.latlong import pixel_directions
 from shrmkit.brdf_io.reparam import ReparamGrid, reparameterize
 
 EPS = 0.03
@@ -36,18 +35,8 @@ def _env(name: str, shared_data=None):
     return shrmkit.load_env("builtin:sun,height=128,elevation=35,azimuth=20")  # 1e5 over the sky
 
 
-def _brightest(env, k: int = 16) -> tuple[np.ndarray, np.ndarray]:
-    """The ``k`` pixels of largest flux (radiance × solid angle) and their fluxes."""
-    h, w = env.radiance.shape[:2]
-    flux = env.radiance.sum(axis=-1) * np.sin((np.arange(h) + 0.5) * np.pi / h)[:, None]
-    top = np.argsort(flux.ravel())[::-1][:k]
-    return pixel_directions(h, w).reshape(-1, 3)[top], np.sqrt(flux.ravel()[top])
-
-
 def _measure(shrm, env, brdf, per_band: int, seed: int = 5) -> list[dict]:
-    centres, weights = _brightest(env)
-    R, V, theta_v, w = sample_pairs_focused(per_band, DEFAULT_BAND_EDGES_DEG, centre=centres,
-                                            centre_weights=weights, seed=seed)
+    R, V, theta_v, w = band_pairs(env.radiance, per_band, DEFAULT_BAND_EDGES_DEG, seed=seed)
     ref = reference_radiance(env, brdf, R, V)
     return band_relative_rms(shrm.radiance(R, V), ref, theta_v, DEFAULT_BAND_EDGES_DEG, w)
 
