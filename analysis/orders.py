@@ -31,6 +31,7 @@ SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -185,7 +186,10 @@ def choose_from_table(table: np.ndarray, tolerance: float) -> tuple[int, int, bo
 
     RH02's table falls monotonically in F and P, so "a column meets the tolerance" is its
     F0 row; the bands table (worst band of a fit) need not, so each column's minimum is used.
+    NaN columns (not computed: :func:`~shrmkit.analysis.view_bands.band_eps_table`'s
+    ``stop_at``) count as not meeting anything.
     """
+    table = np.where(np.isnan(table), np.inf, table)
     column_best = table.min(axis=0)
     ok_p = np.nonzero(column_best <= tolerance)[0]
     if ok_p.size:
@@ -210,7 +214,8 @@ class _OnGrid:
     missing: int
 
 
-def _on_grid(brdf: BRDF, grid: ReparamGrid, max_F: int, max_P: int, criterion: str, max_view_deg: float) -> _OnGrid:
+def _on_grid(brdf: BRDF, grid: ReparamGrid, max_F: int, max_P: int, criterion: str, max_view_deg: float,
+             stop_at: float | None = None) -> _OnGrid:
     reparam: ReparamBRDF = reparameterize(brdf, grid)
     F0 = min(grid.n_theta_i - 1, max_F)
     P0 = min(grid.n_theta_o - 1, (grid.n_phi - 1) // 2, max_P)
@@ -219,7 +224,7 @@ def _on_grid(brdf: BRDF, grid: ReparamGrid, max_F: int, max_P: int, criterion: s
     if not np.any(coefficients.energy > 0):
         return _OnGrid(grid, coefficients, profile, np.zeros((0, 0)), np.zeros((0, 0)), reparam.n_without_data)
     rh02 = eps_table(coefficients)
-    table = rh02 if criterion == "rh02" else band_eps_table(profile, coefficients, max_view_deg)
+    table = rh02 if criterion == "rh02" else band_eps_table(profile, coefficients, max_view_deg, stop_at=stop_at)
     return _OnGrid(grid, coefficients, profile, rh02, table, reparam.n_without_data + int(profile.missing.sum()))
 
 
@@ -283,7 +288,7 @@ def choose_orders(
     notes: list[str] = []
     F_goal, P_goal = min(start_F, max_F), min(start_P, max_P)
     for _ in range(24):
-        on = _on_grid(brdf, ReparamGrid.for_orders(F_goal, P_goal), max_F, max_P, criterion, max_view_deg)
+        on = _on_grid(brdf, ReparamGrid.for_orders(F_goal, P_goal), max_F, max_P, criterion, max_view_deg, eps)
         at_caps = on.coefficients.F0 >= max_F and on.coefficients.P0 >= max_P
         if not np.any(on.coefficients.energy > 0) and not at_caps:
             # a lobe far sharper than this grid (Phong s = 1e6) can fall between its nodes
@@ -306,13 +311,15 @@ def choose_orders(
         fine = ReparamGrid(
             int(grid.n_theta_i * 1.5), int(grid.n_theta_o * 1.5), int(grid.n_phi * 1.5) + (grid.n_phi % 2)
         )
-        on = _on_grid(brdf, fine, max_F, max_P, criterion, max_view_deg)
+        on = _on_grid(brdf, fine, max_F, max_P, criterion, max_view_deg, eps)
         F2, P2, capped2 = choose_from_table(on.table, eps)
         same = abs(F2 - F) <= 1 and P2 == P and capped2 == capped
         F, P, capped = F2, P2, capped2
         if same:
             converged = True
             break
+    if np.isnan(on.table).any():  # the search stopped at the chosen P: the whole table for the user
+        on = dataclasses.replace(on, table=band_eps_table(on.profile, on.coefficients, max_view_deg))
     if capped:
         notes.append(
             f"tolerance {eps:g} not met within the caps F<={max_F}, P<={max_P}: "

@@ -337,7 +337,8 @@ def fit_view_coefficients(
 
 
 def band_eps_table(
-    profile: ViewProfile, coefficients: BRDFCoefficients, max_view_deg: float, *, fit: bool = True
+    profile: ViewProfile, coefficients: BRDFCoefficients, max_view_deg: float, *, fit: bool = True,
+    stop_at: float | None = None,
 ) -> np.ndarray:
     """ε(F, P) of the worst band inside ``max_view_deg`` and the worst channel, (F0+1, P0+1).
 
@@ -345,17 +346,21 @@ def band_eps_table(
     docs): the energy fraction the truncation to (F, P) misses in band b, the unresolved
     energy (l > F0, q > P0) counted as missed. The per-band analogue of RH02's ε (§5.1).
     With ``fit`` (default) the coefficients at each P are :func:`fit_view_coefficients`,
-    else the projection ``coefficients``.
+    else the projection ``coefficients``. With ``stop_at`` (a tolerance), the columns after the
+    first one whose minimum meets it are left NaN (the order rule needs no more: a search saves
+    the fits of higher P on its intermediate grids).
     """
     inside = bands_inside(profile, max_view_deg)
     if not fit:
         return _band_eps_all(profile, coefficients)[inside].max(axis=0)
     P0 = min(profile.P0, coefficients.P0)
-    columns = []
+    table = np.full((min(profile.F0, coefficients.F0) + 1, P0 + 1), np.nan)
     for p in range(P0 + 1):
         fitted = fit_view_coefficients(profile, coefficients, p, max_view_deg)
-        columns.append(_band_eps_all(profile, fitted, p_list=[p])[inside, :, 0].max(axis=0))
-    return np.stack(columns, axis=1)
+        table[:, p] = _band_eps_all(profile, fitted, p_list=[p])[inside, :, 0].max(axis=0)
+        if stop_at is not None and table[:, p].min() <= stop_at:
+            break
+    return table
 
 
 def _band_eps_all(
