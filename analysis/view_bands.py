@@ -83,6 +83,9 @@ _FLOAT32_REL = 2.0**-24
 #: quadrature of each band (doubling the nodes changes the per-band errors by < 0.6 %,
 #: Cook–Torrance, microfacet σ = 0.05 and 0.3) and the rounding of a float64 reference.
 BOUND_MARGIN = 1.05
+#: In the point-light tables a channel counts in a band when its energy there is at least this
+#: fraction of the band's strongest channel (1 % in amplitude).
+CHANNEL_FLOOR = 1e-4
 
 
 def check_max_view(value: float) -> float:
@@ -373,7 +376,10 @@ def _band_eps_all(
     beyond = profile.band_beyond + full[:, F0 + 1 :].sum(axis=1)  # unresolved by the table
     full = full[:, : F0 + 1]
     total = full.sum(axis=1) + beyond  # (nb, 3)
-    live = _live(total.sum(axis=0))
+    # a channel counts in a band where it carries at least CHANNEL_FLOOR of the band's strongest
+    # channel's energy (a specular-only red channel with f0 = 0 is ~0 at normal views: its
+    # relative error there is invisible, and would otherwise decide the orders)
+    live = _live(total.sum(axis=0))[None, :] & (total >= CHANNEL_FLOOR * total.max(axis=1, keepdims=True))
     after = total[:, None, :] - np.cumsum(full, axis=1)  # energy at l > f, (nb, F0+1, 3)
     p_list = list(range(P0 + 1)) if p_list is None else p_list
     out = np.empty((profile.n_bands, F0 + 1, len(p_list)))
@@ -381,8 +387,8 @@ def _band_eps_all(
     for j, p in enumerate(p_list):
         res = profile.band_sum(np.moveaxis(_residual(profile, _approximation(profile, coefficients, F0, p)), 1, 0))
         err = np.cumsum(res, axis=1) + after  # (nb, F0+1, 3)
-        eps = np.where(total[:, None, :] > 0, err / safe, 0.0)
-        out[:, :, j] = np.clip(eps[..., live], 0.0, None).max(axis=-1)
+        eps = np.where(live[:, None, :] & (total[:, None, :] > 0), err / safe, 0.0)
+        out[:, :, j] = np.clip(eps, 0.0, None).max(axis=-1)
     return out
 
 
