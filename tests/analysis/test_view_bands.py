@@ -227,3 +227,12 @@ def test_bad_rule_arguments_are_refused():
         choose_orders("phong:s=8", max_view_deg=0.0)
     with pytest.raises(BadInputError):
         prefilter("builtin:constant,height=8", "phong:s=8", max_view_deg=91.0)
+
+
+def test_a_channel_without_energy_in_a_band_does_not_decide_the_orders():
+    """Red channel specular-only with f0 = 0 (Schlick: no reflection at normal incidence, as a
+    Cornell fit produced): its relative error where it carries nothing is invisible and must not
+    drive ε above 1 (it made the rule return F = P = 0, 'capped', ε = 1.0017)."""
+    o = choose_orders("cook-torrance:kd=0/0.03/0.05,ks=0.16,alpha=0.2,f0=0", eps=EPS, max_F=64)
+    assert not o.capped and 0.0 < o.eps <= EPS and o.F > 10
+    assert all(0.0 <= b["eps"] <= 1.0 for b in o.view_bands())
