@@ -723,7 +723,11 @@ def prefilter(
         σ-factors at the smallest strength t (σ(t) = 1 − t(1 − σ)) that brings it under the
         threshold, but at most the strength whose cost stays within
         :data:`WINDOW_BUDGET_EPS`·ε of added ε_B (when none reaches it: the strength of least
-        undershoot, possibly 0; :func:`_strength_for`). ``"none"``: no window. The window's cost is
+        undershoot, possibly 0; :func:`_strength_for`). With the ``"bands"`` rule, F_B is first
+        raised to the smallest F whose field with the full Lanczos window in l is predicted to
+        meet ε in every view band inside the limit, and the budget is WINDOW_BUDGET_EPS·ε of
+        added predicted error energy in every such band (``data_specs/view_bands.md``).
+        ``"none"``: no window. The window's cost is
         included in ``eps["reflected"]`` and ``eps["bound"]``; ``meta`` records the window
         used, its strength and why, and the undershoot before and after
         (``data_specs/shrm_file.md``). What undershoot is left, :meth:`SHRM.radiance`,
