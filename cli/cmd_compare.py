@@ -32,6 +32,7 @@ from .common import (
     load_env_arg,
     number_in,
     print_json,
+    print_table,
     stderr,
     stdout,
     tolerance,
@@ -141,7 +142,7 @@ def run(args: argparse.Namespace) -> int:
             f"{r['storage_bytes'] / 1e6:.3f}", f"{r['precompute_s']:.3f}", f"{1e3 * r['update_s']:.3f}",
             f"{r['eval_us_per_pair']:.1f}",
         )
-    stdout.print(table)
+    print_table(table)
     shrm_row = next((r for r in result["rows"] if r.get("view_bands") and "predicted_rel_rms" in r["view_bands"][0]),
                     None)
     if shrm_row is not None:

@@ -24,7 +24,7 @@ from ..analysis.fit.metrics import METRICS
 from ..analysis.fit.models_param import MODELS
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.specs import load_brdf
-from .common import number_in, print_json, stderr, stdout
+from .common import number_in, print_json, print_table, stderr, stdout
 
 HELP = "fit a Lafortune, Cook-Torrance or microfacet model to a BRDF (nlopt)"
 
@@ -121,7 +121,7 @@ def _print_tables(result: FitResult, name: str) -> None:
         f"{result.errors['rel_rms']:.4g}", f"{result.errors['log_rms']:.4g}", result.status,
         str(result.evaluations), f"{result.seconds:.2f}", str(result.n_samples), str(result.n_dropped),
     )
-    stdout.print(summary)
+    print_table(summary)
 
     bands = Table(title="errors per view elevation θ_o")
     for col in ("θ_o (deg)", "samples", "rel_rms", "log_rms"):

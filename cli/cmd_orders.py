@@ -15,7 +15,17 @@ from ..analysis.orders import DEFAULT_MAX_F, DEFAULT_MAX_P, choose_orders
 from ..analysis.scene import scene_for
 from ..analysis.tolerance import DEFAULT_EPS
 from ..brdf_io.specs import load_brdf
-from .common import add_env_orientation, add_order_rule, load_env_arg, order_rule, print_json, stderr, stdout, tolerance
+from .common import (
+    add_env_orientation,
+    add_order_rule,
+    load_env_arg,
+    order_rule,
+    print_json,
+    print_table,
+    stderr,
+    stdout,
+    tolerance,
+)
 from .view_bands_table import print_view_bands
 
 HELP = "choose the SH orders (F, P) a BRDF needs at a tolerance eps (RH02 §5.1)"
@@ -86,7 +96,7 @@ def _print_tables(doc: dict, table: np.ndarray) -> None:
         str(doc["F"]), str(doc["P"]), f"{doc['eps']:.4g}", f"{doc['eps_rh02']:.4g}", str(doc["capped"]),
         str(doc["converged"]), f"{doc['seconds']:.2f}",
     )
-    stdout.print(summary)
+    print_table(summary)
     print_view_bands(doc["view_bands"], f"error by view band at (F, P) = ({doc['F']}, {doc['P']}) under a point light",
                      point_light=True)
     if "F_B" in doc:
@@ -102,7 +112,7 @@ def _print_tables(doc: dict, table: np.ndarray) -> None:
             f"{doc['eps_L']:.3g}",
             f"{doc['bound']:.3g}",
         )
-        stdout.print(scene)
+        print_table(scene)
         if doc["scene_view_bands"]:
             print_view_bands(doc["scene_view_bands"], f"reflected field by view band at (F_B, P_B) = "
                              f"({doc['F_B']}, {doc['P_B']}), exact lookup")
@@ -110,16 +120,22 @@ def _print_tables(doc: dict, table: np.ndarray) -> None:
         stdout.print(f"[yellow]note:[/yellow] {doc['message']}")
     F, P = doc["F"], doc["P"]
     rows = sorted(set(np.unique(np.linspace(0, min(table.shape[0] - 1, max(2 * F, 8)), 9).astype(int))) | {F})
-    cols = range(min(table.shape[1], max(P + 3, 5)))
+    cols = list(range(min(table.shape[1], max(P + 3, 5))))
     what = "worst view band inside the limit, point light" if doc["criterion"] == "bands" else "all views"
-    eps_tab = Table(title=f"eps(F, P): uncaptured energy fraction ({what}, worst channel)")
-    eps_tab.add_column("F \\ P", justify="right")
-    for p in cols:
-        eps_tab.add_column(str(p), justify="right")
-    for f in rows:
-        cells = []
-        for p in cols:
-            text = f"{table[f, p]:.3g}"
-            cells.append(f"[bold green]{text}[/bold green]" if (f, p) == (F, P) else text)
-        eps_tab.add_row(str(f), *cells)
-    stdout.print(eps_tab)
+    # as many P columns per table as the console holds (9 characters each, the F column 8): a
+    # narrow terminal gets the table in parts instead of cells squeezed to "…"
+    per_table = max(1, (stdout.width - 8) // 9)
+    for start in range(0, len(cols), per_table):
+        part = cols[start : start + per_table]
+        suffix = "" if len(cols) <= per_table else f", P = {part[0]}–{part[-1]}"
+        eps_tab = Table(title=f"eps(F, P): uncaptured energy fraction ({what}, worst channel{suffix})")
+        eps_tab.add_column("F \\ P", justify="right")
+        for p in part:
+            eps_tab.add_column(str(p), justify="right")
+        for f in rows:
+            cells = []
+            for p in part:
+                text = "-" if np.isnan(table[f, p]) else f"{table[f, p]:.3g}"
+                cells.append(f"[bold green]{text}[/bold green]" if (f, p) == (F, P) else text)
+            eps_tab.add_row(str(f), *cells)
+        stdout.print(eps_tab)

@@ -25,6 +25,7 @@ from .common import (
     load_env_arg,
     order_rule,
     print_json,
+    print_table,
     stderr,
     stdout,
     tolerance,
@@ -82,7 +83,7 @@ def run(args: argparse.Namespace) -> int:
         f"{shrm.eps['reflected']:.3g}", f"{shrm.eps['bound']:.3g}", f"{t['orders']:.3f}", f"{t['lighting']:.3f}",
         f"{t['synthesis']:.3f}", f"{out.stat().st_size / 1e6:.2f}",
     )
-    stdout.print(table)
+    print_table(table)
     limit = f"view limit {shrm.meta['max_view_deg']:g}°, rule {shrm.meta['criterion']}"
     print_view_bands(shrm.meta["view_bands"], f"error by view band ({limit})")
     if shrm.cube is not None:

@@ -9,6 +9,8 @@ from typing import Any
 
 import numpy as np
 from rich.console import Console
+from rich.measure import Measurement
+from rich.table import Table
 
 from ..analysis.shrm import DEFAULT_WINDOW, WINDOW_BUDGET_EPS, WINDOW_THRESHOLD, WINDOWS
 from ..analysis.tolerance import check_eps
@@ -27,9 +29,13 @@ __all__ = [
     "load_oriented_env",
     "stdout",
     "stderr",
+    "print_table",
     "number_in", "positive_float", "tolerance", "print_json", "to_jsonable"]
 
-stdout = Console(highlight=False)
+#: Width of tables written to a pipe or a file (logs, ``| cat``): there is no terminal to fit,
+#: and rich's 80-column default squeezes cells to "…"; tables wider than this are split.
+PIPE_WIDTH = 160
+stdout = Console(highlight=False, width=None if sys.stdout.isatty() else PIPE_WIDTH)
 stderr = Console(stderr=True, highlight=False)
 
 
@@ -67,6 +73,26 @@ def tolerance(text: str) -> float:
 
 positive_float = number_in(0.0, np.inf, lo_open=True)
 """argparse type: a finite number > 0."""
+
+
+def print_table(table: Table) -> None:
+    """Print a rich ``table`` on stdout as it is when it fits the console, else one small
+    "column: value" table per row (a narrow terminal gets every number whole, never "…")."""
+    natural = Measurement.get(stdout, stdout.options.update(max_width=1 << 20), table).maximum
+    if natural <= stdout.width:
+        stdout.print(table)
+        return
+    headers = [str(column.header) for column in table.columns]
+    cells = [list(column.cells) for column in table.columns]
+    if table.title:
+        stdout.print(table.title, markup=False)
+    for i in range(table.row_count):
+        part = Table(show_header=False, box=None, padding=(0, 1))
+        part.add_column(justify="right", style="bold")
+        part.add_column()
+        for header, column in zip(headers, cells, strict=True):
+            part.add_row(header, column[i])
+        stdout.print(part)
 
 
 def print_json(doc: dict[str, Any]) -> None:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from rich.table import Table
 
-from .common import stdout
+from .common import print_table
 
 __all__ = ["print_view_bands"]
 
@@ -49,4 +49,4 @@ def print_view_bands(
             notes.append("extrapolated")
         cells.append(", ".join(notes))
         table.add_row(*cells)
-    stdout.print(table)
+    print_table(table)
