@@ -146,10 +146,8 @@ def run(args: argparse.Namespace) -> int:
     shrm_row = next((r for r in result["rows"] if r.get("view_bands") and "predicted_rel_rms" in r["view_bands"][0]),
                     None)
     if shrm_row is not None:
-        measured = [{"measured_rel_rms": b["measured_rel_rms"], "stderr": b["measured_stderr"]}
-                    for b in shrm_row["view_bands"]]
         print_view_bands(shrm_row["view_bands"], f"{shrm_row['label']} by view band (rule {result['criterion']})",
-                         measured=measured)
+                         measured=True)
     if "strip" in result:
         stdout.print(f"wrote {result['strip']['path']}")
     if args.markdown:

@@ -16,10 +16,11 @@ def _fmt(value: float | None) -> str:
 
 
 def print_view_bands(
-    bands: list[dict], title: str, *, point_light: bool = False, measured: list[dict] | None = None
+    bands: list[dict], title: str, *, point_light: bool = False, measured: bool = False
 ) -> None:
     """Print ``bands`` (``SHRM.meta["view_bands"]``, ``OrderChoice.view_bands()`` or a scene's)
-    with, optionally, the ``measured`` per-band relative RMS (and its standard error) beside.
+    with, when ``measured``, their ``measured_rel_rms`` ± ``measured_stderr``
+    (``analysis.compare.beside_measured``) beside.
 
     Bands beyond the view limit are marked "stated" (errors stated, not promised); bands with
     missing measurements "extrapolated" (the bound does not hold there)."""
@@ -31,19 +32,18 @@ def print_view_bands(
     else:
         table.add_column("predicted rel. RMS", justify="right")
         table.add_column("bound rel. RMS", justify="right")
-    if measured is not None:
+    if measured:
         table.add_column("measured rel. RMS", justify="right")
     table.add_column("", justify="left")
-    for i, band in enumerate(bands):
+    for band in bands:
         lo, hi = band["theta_v_deg"]
         cells = [f"{lo:g}-{hi:g}"]
         if point_light:
             cells += [_fmt(band["eps"]), _fmt(band["rel_rms_point_light"])]
         else:
             cells += [_fmt(band["predicted_rel_rms"]), _fmt(band["bound_rel_rms"])]
-        if measured is not None:
-            m = measured[i]
-            cells.append(f"{_fmt(m['measured_rel_rms'])} ± {_fmt(m['stderr'])}")
+        if measured:
+            cells.append(f"{_fmt(band['measured_rel_rms'])} ± {_fmt(band['measured_stderr'])}")
         notes = [] if band["inside"] else ["stated"]
         if band.get("extrapolated_samples"):
             notes.append("extrapolated")

@@ -13,7 +13,7 @@ Nemec 1999 (RSIBR) and Green, Kautz, Durand 2007 (Gaussian lobes).
 This package never imports the render layer.
 """
 
-from .metrics import band_relative_rms, relative_rms
+from .metrics import band_relative_rms, beside_measured, relative_rms
 from .options import DEFAULT_ENV_HEIGHT, CompareOptions
 from .pairs import band_pairs, brightest_pixels, sample_pairs, sample_pairs_focused
 from .registry import REGISTRY, Builder, build_representations
@@ -25,5 +25,6 @@ __all__ = [
     "CompareOptions", "DEFAULT_ENV_HEIGHT",
     "Representation", "RadianceModel", "BuiltRepresentation", "BuildContext", "time_update",
     "REGISTRY", "Builder", "build_representations",
-    "sample_pairs", "sample_pairs_focused", "band_pairs", "brightest_pixels", "relative_rms", "band_relative_rms",
+    "sample_pairs", "sample_pairs_focused", "band_pairs", "brightest_pixels",
+    "relative_rms", "band_relative_rms", "beside_measured",
 ]

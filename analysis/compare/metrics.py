@@ -10,7 +10,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-__all__ = ["relative_rms", "band_relative_rms"]
+__all__ = ["relative_rms", "band_relative_rms", "beside_measured"]
 
 
 def relative_rms(value: np.ndarray, reference: np.ndarray) -> float:
@@ -96,3 +96,13 @@ def band_relative_rms(
         se = float(np.sqrt(max(var_r2, 0.0)) / (2.0 * r)) if r > 0.0 else float(np.sqrt(max(var_r2, 0.0)))
         out.append({"theta_v_deg": [float(lo), float(hi)], "n": n, "measured_rel_rms": r, "stderr": se})
     return out
+
+
+def beside_measured(measured: list[dict], stated: list[dict] | None = None) -> list[dict]:
+    """Per band, what :func:`band_relative_rms` measured as ``measured_rel_rms``,
+    ``measured_stderr`` and ``n_pairs``, beside the band's statement when there is one
+    (``SHRM.meta["view_bands"]``, same bands in the same order) — the one per-band record of
+    ``shrm report`` and ``shrm compare``."""
+    stated = stated or [{"theta_v_deg": m["theta_v_deg"]} for m in measured]
+    return [{**s, "measured_rel_rms": m["measured_rel_rms"], "measured_stderr": m["stderr"], "n_pairs": m["n"]}
+            for s, m in zip(stated, measured, strict=True)]

@@ -30,7 +30,7 @@ from ...brdf_io.errors import BadInputError
 from ...brdf_io.specs import load_brdf
 from ..reference import reference_radiance
 from ..view_bands import DEFAULT_BAND_EDGES_DEG
-from .metrics import band_relative_rms, relative_rms
+from .metrics import band_relative_rms, beside_measured, relative_rms
 from .options import CompareOptions
 from .pairs import band_pairs, sample_pairs
 from .registry import build_representations
@@ -123,13 +123,7 @@ def compare_representations(
         pred = rep.radiance(R, V)
         t_eval = time.perf_counter() - t0
         measured = band_relative_rms(rep.radiance(Rb, Vb), ref_b, theta_b, DEFAULT_BAND_EDGES_DEG, weight_b)
-        stated = rep.params.get("view_bands")
-        if stated:  # an SHRM: its per-band statement beside what was measured
-            bands = [{**s, "measured_rel_rms": m["measured_rel_rms"], "measured_stderr": m["stderr"], "n_pairs": m["n"]}
-                     for s, m in zip(stated, measured, strict=True)]
-        else:
-            bands = [{"theta_v_deg": m["theta_v_deg"], "measured_rel_rms": m["measured_rel_rms"],
-                      "measured_stderr": m["stderr"], "n_pairs": m["n"]} for m in measured]
+        bands = beside_measured(measured, rep.params.get("view_bands"))  # an SHRM's statement too
         rows.append({
             "key": rep.key,
             "label": rep.label,

@@ -38,13 +38,13 @@ from typing import Any
 import numpy as np
 
 from ..._version import __version__
-from ...analysis.compare import band_pairs, band_relative_rms, relative_rms, sample_pairs
+from ...analysis.compare import band_pairs, band_relative_rms, beside_measured, relative_rms, sample_pairs
 from ...analysis.fit import fit_brdf
 from ...analysis.lighting import lighting_coefficients
 from ...analysis.orders import choose_orders
 from ...analysis.reference import reference_radiance
 from ...analysis.shrm import prefilter
-from ...analysis.view_bands import DEFAULT_BAND_EDGES_DEG, DEFAULT_MAX_VIEW_DEG, worst_inside
+from ...analysis.view_bands import DEFAULT_BAND_EDGES_DEG, worst_inside
 from ...brdf_io.brdf import BRDF
 from ...brdf_io.errors import BadInputError
 from ...brdf_io.jsonutil import to_jsonable
@@ -63,22 +63,11 @@ __all__ = [
     "failed_report",
     "REPORT_DIGITS",
     "strip_timings",
-    "REPORT_MAX_VIEW_DEG",
 ]
 
 REPORT_FORMAT = "shrmkit-report"
 REPORT_FORMAT_VERSION = 1
-#: Largest view angle θ_v of the error sample (``analysis.compare.sample_pairs``, the sampler
-#: ``shrm compare`` uses too); stated in report.json as ``error_sample``.
-REPORT_MAX_VIEW_DEG = DEFAULT_MAX_VIEW_DEG
 BAND_EDGES = DEFAULT_BAND_EDGES_DEG
-
-
-def merge_measured(bands: list[dict], measured: list[dict]) -> list[dict]:
-    """Per-band statements (``SHRM.meta["view_bands"]``) with the measured relative RMS, its
-    standard error and the pair count beside the prediction and the bound."""
-    return [{**b, "measured_rel_rms": m["measured_rel_rms"], "measured_stderr": m["stderr"], "n_pairs": m["n"]}
-            for b, m in zip(bands, measured, strict=True)]
 SLICE_VIEWS_DEG = (0.0, 30.0, 60.0, 75.0)
 _SLICE_THETA_DEG = np.arange(-85.0, 85.0 + 1e-9, 2.5)
 #: Significant digits of every float in report.json (``to_jsonable(..., digits=)``).
@@ -268,8 +257,8 @@ def _environments(brdf: BRDF, options: ReportOptions, progress: Progress | None)
             shrm = prefilter(env, brdf, eps=tol, max_F=options.max_F, max_P=options.max_P, window=options.window,
                              criterion=options.criterion, max_view_deg=options.max_view_deg)
             err = relative_rms(shrm.radiance(R, V), reference)  # clamped at 0, as rendered
-            bands = merge_measured(shrm.meta["view_bands"], band_relative_rms(
-                shrm.radiance(Rb, Vb), reference_b, theta_b, BAND_EDGES, weight_b))
+            bands = beside_measured(band_relative_rms(shrm.radiance(Rb, Vb), reference_b, theta_b, BAND_EDGES,
+                                                      weight_b), shrm.meta["view_bands"])
             t = shrm.meta["timings"]
             n_out = shrm.height * shrm.width
             row = {
