@@ -41,7 +41,7 @@ from .brdf_coeffs import BRDFCoefficients
 from .lighting import LightingCoefficients, lighting_coefficients, point_band_energy
 from .orders import CAPPED_SLACK, OrderChoice
 from .sh import Lambda
-from .view_bands import bands_inside, scene_error_curve, shrm_view_bands
+from .view_bands import bands_inside, scene_error_curve, shrm_view_bands, window_matrix
 
 __all__ = [
     "SceneOrders", "scene_orders", "scene_for", "lighting_lmax", "reflected_error", "reflected_error_parts",
@@ -82,16 +82,6 @@ def _brdf_lp_energies(
     return terms[:, : P + 1, :q_stop].sum(axis=2), terms.sum(axis=(1, 2))
 
 
-def _window_matrix(window: np.ndarray, F: int, P: int) -> np.ndarray:
-    """A window as (F+1, P+1): a 1-D σ_l (l = 0..F) applies to every p."""
-    w = np.asarray(window, dtype=np.float64)
-    if w.ndim == 1:
-        w = np.repeat(w[: F + 1, None], P + 1, axis=1)
-    if w.shape != (F + 1, P + 1):
-        raise ValueError(f"window must have shape ({F + 1},) or ({F + 1}, {P + 1}), got {w.shape}")
-    return w
-
-
 def _kept_energy(a: np.ndarray, kept_lp: np.ndarray, F: int) -> np.ndarray:
     """Λ_l² a_l r_lp of the kept terms (l <= F), per (l, p, channel): (F+1, P+1, 3)."""
     lam2 = Lambda(np.arange(F + 1))[:, None, None] ** 2
@@ -102,7 +92,7 @@ def _window_cost(window: np.ndarray | None, kept: np.ndarray, F: int, P: int) ->
     """Energy a window σ_lp removes from the kept terms, Σ (1 − σ_lp)² Λ_l² a_l r_lp, per channel."""
     if window is None:
         return np.zeros(kept.shape[-1])
-    return ((1.0 - _window_matrix(window, F, P))[..., None] ** 2 * kept).sum(axis=(0, 1))
+    return ((1.0 - window_matrix(window, F, P))[..., None] ** 2 * kept).sum(axis=(0, 1))
 
 
 def reflected_error_parts(

@@ -597,8 +597,7 @@ def _order_for_window(
 
     def meets(f: int) -> bool:
         # the window in l (its cost falls as F grows); the view part's cost does not depend on F
-        sigma = np.repeat(lanczos_window(f)[:, None], P + 1, axis=1)
-        bands = shrm_view_bands(orders.profile, base, band_energy, f, P, sigma=sigma, q_max=q_max).bands
+        bands = shrm_view_bands(orders.profile, base, band_energy, f, P, sigma=lanczos_window(f), q_max=q_max).bands
         return max(bands[b]["predicted_rel_rms"] ** 2 for b in inside) <= eps
 
     prev, f, step = F, F, 1

@@ -67,6 +67,7 @@ __all__ = [
     "DEFAULT_BAND_EDGES_DEG", "DEFAULT_MAX_VIEW_DEG", "CRITERIA", "DEFAULT_CRITERION", "ViewProfile",
     "view_profile", "fit_view_coefficients", "band_eps_table", "brdf_view_bands", "scene_error_curve",
     "shrm_view_bands", "check_max_view", "check_criterion", "bands_inside", "worst_inside", "BandStatement",
+    "window_matrix",
 ]
 
 #: Band edges of θ_v in degrees: 15° wide up to 60°, then 10° and 5° toward grazing.
@@ -246,6 +247,22 @@ def view_profile(
     )
 
 
+def window_matrix(window: np.ndarray, F: int, P: int) -> np.ndarray:
+    """A window as (F+1, P+1): a 1-D σ_l (l = 0..F) applies to every p.
+
+    Raises
+    ------
+    ValueError
+        Any other shape.
+    """
+    w = np.asarray(window, dtype=np.float64)
+    if w.ndim == 1:
+        w = np.repeat(w[: F + 1, None], P + 1, axis=1)
+    if w.shape != (F + 1, P + 1):
+        raise ValueError(f"window must have shape ({F + 1},) or ({F + 1}, {P + 1}), got {w.shape}")
+    return w
+
+
 def _approximation(
     profile: ViewProfile, coefficients: BRDFCoefficients, F: int, P: int,
     sigma: np.ndarray | None = None, q_max: int | None = None,
@@ -253,10 +270,7 @@ def _approximation(
     """T̂_lq at the nodes, l <= F, q <= P: 2π Σ_{p<=P} σ_lp ρ̂_lpq f_pq(θ_o'), (F+1, K, P+1, 3)."""
     c = coefficients.coeffs[: F + 1, : P + 1, : P + 1, :].copy()
     if sigma is not None:
-        s = np.asarray(sigma, dtype=np.float64)
-        if s.ndim == 1:
-            s = np.repeat(s[: F + 1, None], P + 1, axis=1)
-        c *= s[:, :, None, None]
+        c *= window_matrix(sigma, F, P)[:, :, None, None]
     if q_max is not None:
         c[:, :, q_max + 1 :, :] = 0.0
     fo = legendre_f(P, P, np.cos(2.0 * profile.theta_v))  # (P+1, P+1, K)
