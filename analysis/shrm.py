@@ -907,12 +907,19 @@ def prefilter(
         orders.profile, base, band_energy, F_B, P_B, sigma=sigma, q_max=q_max, map_rows=S,
         lighting_rows=(lighting.rows, lighting.source_rows), max_view_deg=orders.max_view_deg,
     )
-    truncation, cost = reflected_error_parts(lighting, orders.coefficients, F_B, P_B, sigma, q_max=q_max)
+    # on the coefficients the map was made of (the projection for rh02, the view fit for bands):
+    # the window's cost, the energy of its change over all views, is exact for either
+    truncation, cost = reflected_error_parts(lighting, base, F_B, P_B, sigma, q_max=q_max)
     if orders.criterion == "rh02":
         reflected = float((truncation + cost).max())
-        bound = residual_bound(lighting, orders.coefficients, F_B, P_B, sigma, q_max=q_max)
+        unwindowed = float(truncation.max())
+        bound = residual_bound(lighting, base, F_B, P_B, sigma, q_max=q_max)
     else:  # fitted coefficients: Parseval no longer splits the error; the view-band sums do
         reflected, bound = statement.eps_predicted, statement.eps_bound
+        unwindowed = reflected if sigma is None else shrm_view_bands(
+            orders.profile, base, band_energy, F_B, P_B, q_max=q_max, map_rows=S,
+            lighting_rows=(lighting.rows, lighting.source_rows), max_view_deg=orders.max_view_deg,
+        ).eps_predicted
     eps_info = {
         "brdf": float(orders.table[min(F_B, orders.F0), P_B]),
         "brdf_rh02": float(orders.rh02_table[min(F_B, orders.F0), P_B]),
@@ -945,7 +952,7 @@ def prefilter(
         "window_reason": reason,
         "window_threshold": WINDOW_THRESHOLD,
         "window_cost": float(cost.max()),
-        "eps_reflected_unwindowed": float(truncation.max()),
+        "eps_reflected_unwindowed": unwindowed,
         "negative_before": None if window == "lanczos" else before,
         "negative_after": after,
         "negative_fraction_after": negative_fraction,
