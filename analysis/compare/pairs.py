@@ -10,6 +10,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from ...brdf_io.latlong import pixel_directions, row_solid_angles
+
 __all__ = ["sample_pairs", "sample_pairs_focused", "brightest_pixels", "band_pairs"]
 
 
@@ -154,12 +156,9 @@ def brightest_pixels(radiance: np.ndarray, k: int = 16) -> tuple[np.ndarray, np.
     ``centre``/``centre_weights`` of :func:`sample_pairs_focused`."""
     radiance = np.asarray(radiance, dtype=np.float64)
     h, w = radiance.shape[:2]
-    flux = radiance.sum(axis=-1) * np.sin((np.arange(h) + 0.5) * np.pi / h)[:, None]
-    top = np.argsort(flux.ravel())[::-1][:k]
-    theta = (top // w + 0.5) * np.pi / h
-    phi = 2.0 * np.pi * (top % w + 0.5) / w
-    dirs = np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], axis=-1)
-    return dirs, np.sqrt(np.clip(flux.ravel()[top], 0.0, None))
+    flux = (radiance.sum(axis=-1) * row_solid_angles(h, w)[:, None]).ravel()
+    top = np.argsort(flux)[::-1][:k]
+    return pixel_directions(h, w).reshape(-1, 3)[top], np.sqrt(np.clip(flux[top], 0.0, None))
 
 
 def band_pairs(radiance: np.ndarray, per_band: int, edges_deg: Sequence[float], *, seed: int = 0
