@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from shrmkit.analysis import shrm
-from shrmkit.brdf_io import envmap, hdr_codecs, merl, specs
+from shrmkit.brdf_io import envmap, hdr_codecs, merl, pfm, rgbe, specs
 
 ROOT = Path(__file__).resolve().parents[1]
 RESOURCES = ROOT / "tests" / "resources"
@@ -27,7 +27,8 @@ DOCUMENTED = {
     specs: ("load_brdf",),
     envmap: ("load_env",),
     merl: ("read_merl", "write_merl"),
-    hdr_codecs: ("read_hdr", "read_pfm"),
+    rgbe: ("read_hdr",),
+    pfm: ("read_pfm",),
     shrm: ("prefilter",),
 }
 

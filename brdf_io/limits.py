@@ -1,0 +1,161 @@
+"""Limits every reader checks *before* it allocates or reads, and the one safe way to
+open an input file.
+
+A hostile or broken file must cost a reader no more than a look at its header: a FIFO
+named ``x.binary`` would block forever, a symlink to ``/dev/zero`` would read until
+memory runs out, and a few kilobytes of header can declare 10⁹ pixels or array
+elements. Readers therefore
+
+1. open inputs through :func:`regular_file` / :func:`read_bytes`, which accept only a
+   regular file (after following links) no larger than :func:`max_file_bytes`, and
+2. check every declared size with :func:`check_elements` (or :func:`check_pixels`)
+   against :func:`max_elements` before allocating, and against the bytes the file
+   actually holds where the format lets them.
+
+The limits are generous for real data (a 16384 × 8192 lat-long map, a MERL table,
+a 1 GB table) and overridable through the environment (documented in
+``data_specs/limits.md``):
+
+``SHRM_MAX_FILE_BYTES``
+    largest input file, bytes (default 8 GiB);
+``SHRM_MAX_PIXELS``
+    largest image, pixels (width × height, default 2²⁸ = 268,435,456, twice a
+    16384 × 8192 map);
+``SHRM_MAX_ELEMENTS``
+    largest array a reader allocates from a file's declared shape, elements (default
+    2²⁹ ≈ 5.4 · 10⁸, 4 GiB of float64).
+
+Raises :class:`~shrmkit.brdf_io.errors.BadInputError` naming the file for every
+violation, so the CLI prints one line and exits with status 2.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import stat
+from pathlib import Path
+
+from .errors import BadInputError
+
+__all__ = [
+    "max_file_bytes",
+    "max_pixels",
+    "max_elements",
+    "regular_file",
+    "read_bytes",
+    "check_pixels",
+    "check_elements",
+]
+
+DEFAULT_MAX_FILE_BYTES = 8 * 2**30
+DEFAULT_MAX_PIXELS = 2**28
+DEFAULT_MAX_ELEMENTS = 2**29
+
+
+def _env_limit(name: str, default: int) -> int:
+    text = os.environ.get(name)
+    if text is None or not text.strip():
+        return default
+    try:
+        value = int(text.strip())
+    except ValueError:
+        raise BadInputError(name, f"environment variable {name}={text!r} is not a whole number") from None
+    if value <= 0:
+        raise BadInputError(name, f"environment variable {name}={text!r} must be positive")
+    return value
+
+
+def max_file_bytes() -> int:
+    """Largest input file a reader opens, in bytes (``SHRM_MAX_FILE_BYTES``, default 8 GiB)."""
+    return _env_limit("SHRM_MAX_FILE_BYTES", DEFAULT_MAX_FILE_BYTES)
+
+
+def max_pixels() -> int:
+    """Largest image a reader decodes, in pixels (``SHRM_MAX_PIXELS``, default 2²⁸)."""
+    return _env_limit("SHRM_MAX_PIXELS", DEFAULT_MAX_PIXELS)
+
+
+def max_elements() -> int:
+    """Largest array a reader allocates from declared sizes (``SHRM_MAX_ELEMENTS``, default 2²⁹)."""
+    return _env_limit("SHRM_MAX_ELEMENTS", DEFAULT_MAX_ELEMENTS)
+
+
+def regular_file(path: str | Path, what: str = "file") -> int:
+    """Check that ``path`` is a readable regular file of allowed size; return its size.
+
+    Links are followed. FIFOs, sockets, devices (``/dev/zero``) and folders are refused
+    without opening them, so a reader never blocks or reads without end.
+
+    Raises
+    ------
+    BadInputError
+        Missing, not a regular file, or larger than :func:`max_file_bytes`.
+    """
+    path = Path(path)
+    try:
+        info = path.stat()
+    except FileNotFoundError:
+        raise BadInputError(path, "no such file") from None
+    except OSError as err:
+        raise BadInputError(path, f"cannot read ({err.strerror or err})") from None
+    if stat.S_ISDIR(info.st_mode):
+        raise BadInputError(path, f"is a folder, expected a {what}")
+    if not stat.S_ISREG(info.st_mode):
+        kind = "a FIFO" if stat.S_ISFIFO(info.st_mode) else "a device or special file"
+        raise BadInputError(path, f"is {kind}, not a regular {what}")
+    limit = max_file_bytes()
+    if info.st_size > limit:
+        raise BadInputError(
+            path, f"file of {info.st_size:,} bytes exceeds the {limit:,}-byte limit (SHRM_MAX_FILE_BYTES)"
+        )
+    return int(info.st_size)
+
+
+def read_bytes(path: str | Path, what: str = "file") -> bytes:
+    """The whole content of a regular file checked by :func:`regular_file`.
+
+    Raises
+    ------
+    BadInputError
+        As :func:`regular_file`, or when reading fails (the OS reason is given).
+    """
+    path = Path(path)
+    size = regular_file(path, what)
+    try:
+        with path.open("rb") as handle:
+            data = handle.read(size + 1)
+    except OSError as err:
+        raise BadInputError(path, f"cannot read ({err.strerror or err})") from None
+    if len(data) > size:  # grew while we read it: not a file we can trust
+        raise BadInputError(path, "file changed size while being read")
+    return data
+
+
+def check_pixels(source: object, height: int, width: int) -> None:
+    """Refuse an image whose declared ``height × width`` exceeds :func:`max_pixels`
+    (or is not positive), before anything is allocated."""
+    if height <= 0 or width <= 0:
+        raise BadInputError(source, f"zero-size image ({width} x {height})")
+    limit = max_pixels()
+    if height * width > limit:
+        raise BadInputError(
+            source,
+            f"image of {width} x {height} = {height * width:,} pixels exceeds the {limit:,}-pixel limit "
+            "(SHRM_MAX_PIXELS)",
+        )
+
+
+def check_elements(source: object, shape: tuple[int, ...], what: str = "array") -> int:
+    """Refuse a declared array shape with a negative axis or more than
+    :func:`max_elements` elements; return the element count."""
+    if any(int(n) < 0 for n in shape):
+        raise BadInputError(source, f"{what} declares a negative size {tuple(shape)}")
+    count = math.prod(int(n) for n in shape)
+    limit = max_elements()
+    if count > limit:
+        raise BadInputError(
+            source, f"{what} of shape {tuple(shape)} = {count:,} elements exceeds the {limit:,}-element limit "
+            "(SHRM_MAX_ELEMENTS)",
+        )
+    return count
