@@ -1,0 +1,50 @@
+"""The fuzz harness (benchmarks/fuzz_readers.py): a fast seeded subset in CI.
+
+Every reader gets ``SHRM_FUZZ_CASES`` mutated files (default 120; the full run in
+``benchmarks/`` uses ≥ 10,000 cases in all). A case fails when the reader crashes,
+hangs, blows memory up or accepts garbage; the test lists the failing cases with the
+command that reruns one of them.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _harness():
+    spec = importlib.util.spec_from_file_location("fuzz_readers", ROOT / "benchmarks" / "fuzz_readers.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_harness_classifies_misbehaviour():
+    """The harness itself can fail a reader: each misbehaviour gets its own outcome."""
+    outcomes = _harness().self_test(timeout=8.0)
+    assert outcomes == {
+        "sleep": "hang", "die": "crash", "huge": "memory", "creep": "memory", "keyerror": "crash",
+        "nan": "garbage", "unnamed": "garbage", "clean": "clean", "fine": "valid",
+    }
+
+
+@pytest.mark.slow
+def test_seeded_fuzz_subset_has_no_failures():
+    harness = _harness()
+    per_reader = int(os.environ.get("SHRM_FUZZ_CASES", "120"))
+    results = harness.run_fuzz(seed=20261130, per_reader=per_reader, workers=2, timeout=30.0)
+    failures = [r for r in results if r["outcome"] in harness.FAILURES or harness._seed_refused(r)]
+    listing = "\n".join(
+        f"{r['outcome']} {r['reader']}:{r['index']} [{r['mutation']}] {r['detail']}" for r in failures[:30]
+    )
+    assert not failures, (
+        f"{len(failures)} of {len(results)} fuzz cases failed (rerun one: python benchmarks/fuzz_readers.py "
+        f"--seed 20261130 --show READER:INDEX):\n{listing}\n\n{harness.outcome_table(results)}"
+    )
+    readers = {r["reader"] for r in results}
+    assert len(readers) >= 13 and len(results) == per_reader * len(readers)
