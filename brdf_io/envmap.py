@@ -16,6 +16,7 @@ Public objects: :class:`EnvironmentMap`, :func:`load_env`, :func:`save_env`.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -31,8 +32,34 @@ from .probe import probe_to_latlong
 __all__ = ["EnvironmentMap", "load_env", "save_env"]
 
 
-def _check_radiance(source: object, radiance: np.ndarray) -> None:
-    """Refuse non-finite or negative radiance, counting the offending pixels."""
+#: Negative radiance up to this fraction of the map's white level is clamped to 0 (with a
+#: warning); beyond it the map is refused (data_specs/environment_maps.md §6).
+NEGATIVE_CLAMP_FRACTION = 1e-3
+#: The white level: this percentile of the per-pixel largest channel (robust to a sun or a
+#: lamp covering less than 0.1 % of the pixels).
+WHITE_PERCENTILE = 99.9
+
+
+def white_level(radiance: np.ndarray) -> float:
+    """The map's white level S: the 99.9th percentile (over pixels) of the per-pixel largest
+    channel, non-finite pixels left out; 0 for an empty or all-non-finite array."""
+    peak = np.asarray(radiance).max(axis=-1).reshape(-1)
+    peak = peak[np.isfinite(peak)]
+    return float(np.percentile(peak, WHITE_PERCENTILE)) if peak.size else 0.0
+
+
+def _check_radiance(source: object, radiance: np.ndarray, white: float | None = None) -> np.ndarray:
+    """Refuse NaN, infinite or clearly negative radiance, counting the offending pixels; clamp
+    negatives no larger than :data:`NEGATIVE_CLAMP_FRACTION` × the white level (``white``,
+    default :func:`white_level` of ``radiance``) to 0 with a warning that counts them.
+
+    Returns ``radiance`` itself when nothing is clamped, else a clamped copy.
+
+    Raises
+    ------
+    BadInputError
+        NaN or infinite values; negatives beyond the threshold (all problems in one message).
+    """
     problems = []
     nan = np.isnan(radiance).any(axis=-1)
     if nan.any():
@@ -41,10 +68,28 @@ def _check_radiance(source: object, radiance: np.ndarray) -> None:
     if inf.any():
         problems.append(f"{int(inf.sum())} pixel(s) with infinite radiance")
     negative = (radiance < 0).any(axis=-1)
+    clamp = False
     if negative.any():
-        problems.append(f"{int(negative.sum())} pixel(s) with negative radiance (min {np.nanmin(radiance):g})")
+        lowest = float(np.nanmin(radiance))
+        white = white_level(radiance) if white is None else white
+        limit = NEGATIVE_CLAMP_FRACTION * white
+        if -lowest <= limit:
+            clamp = True
+        else:
+            problems.append(
+                f"{int(negative.sum())} pixel(s) with negative radiance (min {lowest:g}, beyond the clamping "
+                f"threshold {NEGATIVE_CLAMP_FRACTION:g} x white level {white:g} = {limit:g})"
+            )
     if problems:
-        raise BadInputError(source, "; ".join(problems) + " (refused, not clamped)")
+        raise BadInputError(source, "; ".join(problems) + " (refused)")
+    if clamp:
+        warnings.warn(
+            f"{source}: clamped {int(negative.sum())} negative pixel(s) to 0 (min {lowest:g}, within "
+            f"{NEGATIVE_CLAMP_FRACTION:g} x the white level {white:g})",
+            stacklevel=2,
+        )
+        return np.maximum(radiance, 0).astype(radiance.dtype, copy=False)
+    return radiance
 
 
 def _interval_overlap(edges_out: np.ndarray, edges_in: np.ndarray) -> np.ndarray:
@@ -80,11 +125,11 @@ class EnvironmentMap:
             raise BadInputError(where, f"radiance must have shape (H, W, 3) with H, W >= 1, got {radiance.shape}")
         if radiance.dtype not in (np.float32, np.float64):
             raise BadInputError(where, f"radiance must be float32 or float64, got {radiance.dtype}")
-        _check_radiance(where, radiance)
-        if radiance.flags.writeable:
-            radiance = radiance.copy()
-            radiance.flags.writeable = False
-        object.__setattr__(self, "radiance", radiance)
+        checked = _check_radiance(where, radiance)  # a fresh copy when tiny negatives were clamped
+        if checked is radiance and radiance.flags.writeable:
+            checked = radiance.copy()
+        checked.flags.writeable = False
+        object.__setattr__(self, "radiance", checked)
 
     @property
     def height(self) -> int:

@@ -7,7 +7,8 @@ Ramamoorthi & Hanrahan 2002, doi:10.1145/566654.566611), ``fit_speed.py`` (fit t
 errors) and ``render_speed.py`` (frames per second; needs an offscreen OpenGL context and is
 skipped without one). Each is loaded from its file and its ``main`` called with ``--quick``
 when asked; a benchmark that fails is reported and the others still run (exit status 1 if
-any failed).
+any failed). A missing folder, or a folder without the scripts of the chosen benchmarks, is
+a usage error: one line naming the folder and the missing scripts, exit status 2, nothing run.
 """
 
 from __future__ import annotations
@@ -70,15 +71,15 @@ def run(args: argparse.Namespace) -> int:
     if not folder.is_dir():
         raise BadInputError(folder, "no benchmarks folder (shrm bench needs a source checkout; pass --benchmarks DIR)")
     names = args.only or list(BENCHMARKS)
+    missing = [BENCHMARKS[name][0] for name in names if not (folder / BENCHMARKS[name][0]).is_file()]
+    if missing:  # checked before any benchmark runs: a wrong folder is a usage error
+        raise BadInputError(folder, f"benchmark script{'s' if len(missing) > 1 else ''} missing: {', '.join(missing)} "
+                            "(pass --benchmarks DIR holding them, or --only the ones present)")
     results = []
     for name in names:
         file, what = BENCHMARKS[name]
         path = folder / file
         _say(f"\n=== {name}: {what} ({path}){' --quick' if args.quick else ''}")
-        if not path.is_file():
-            results.append((name, "missing", 0.0, f"{path} not found"))
-            _say(f"skipped: {path} not found")
-            continue
         if name == "render":
             ok, message = probe_offscreen(timeout=60.0)
             if not ok:

@@ -102,6 +102,19 @@ def _options(args: argparse.Namespace) -> CompareOptions:
     )
 
 
+def _note_dropped_lower_p(args: argparse.Namespace, result: dict) -> None:
+    """``--lower-p N`` not below the SHRM's P gives no lower-order row (the library omits it,
+    so the table and the JSON stay as documented): say why on stderr, one line."""
+    keys = [r["key"] for r in result["rows"]]
+    if args.lower_p is None or "shrm_low_p" in keys or "shrm" not in keys:
+        return
+    P = result["rows"][keys.index("shrm")]["params"]["P"]
+    hint = f"use --lower-p {P - 1} or less" if P > 0 else "P = 0 has no lower order"
+    stderr.print(f"shrm compare: note: no lower-order SHRM row: --lower-p {args.lower_p} is not below the "
+                 f"SHRM's P = {P} (chosen for eps {result['eps']:g}); {hint}",
+                 markup=False, highlight=False, soft_wrap=True)
+
+
 def run(args: argparse.Namespace) -> int:
     options = _options(args)
     if args.strip and Path(args.strip).suffix.lower() != ".png":
@@ -124,6 +137,7 @@ def run(args: argparse.Namespace) -> int:
         if args.strip:
             progress("image strip")
             result = write_comparison_strip(comparison, args.strip, size=args.strip_size, mesh=mesh)
+    _note_dropped_lower_p(args, result)
     if args.markdown:
         with atomic_path(args.markdown) as tmp:
             Path(tmp).write_text(result["markdown"], encoding="utf-8")

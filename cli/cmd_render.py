@@ -32,6 +32,9 @@ from .common import add_env_orientation, add_order_rule, add_window_option, load
 
 HELP = "render a mesh shaded by the SHRM of ENV and BRDF to PNG (and linear EXR), offscreen"
 
+#: The modes that use ``--lobes`` and ``--elevations`` (the Gaussian-lobe fit).
+LOBE_OPTION_MODES = ("gaussian-lobes",)
+
 
 def _vector(text: str, option: str) -> np.ndarray:
     parts = text.split(",")
@@ -59,10 +62,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--mode", choices=mode_names(), default=DEFAULT_MODE, help=_mode_help())
     defaults = RenderOptions()
     shadow = " or ".join(self_shadow_modes())
-    p.add_argument("--lobes", type=int, default=defaults.lobes,
-                   help=f"gaussian-lobes: lobes per elevation K (default {defaults.lobes})")
-    p.add_argument("--elevations", type=int, default=defaults.elevations,
-                   help=f"gaussian-lobes: fitted view elevations (default {defaults.elevations})")
+    lobe_modes = " or ".join(LOBE_OPTION_MODES)
+    # default None: given with another mode they are refused, not silently ignored
+    p.add_argument("--lobes", type=int, default=None,
+                   help=f"{lobe_modes} only: lobes per elevation K (default {defaults.lobes})")
+    p.add_argument("--elevations", type=int, default=None,
+                   help=f"{lobe_modes} only: fitted view elevations (default {defaults.elevations})")
     p.add_argument("--self-shadow", action="store_true",
                    help=f"{shadow}: per-vertex self-shadowing by ray casting (Green et al. 2007 eq. 7)")
     add_window_option(p)
@@ -99,6 +104,12 @@ def _validate(args: argparse.Namespace) -> tuple[list[Camera], RenderOptions]:
         raise BadInputError(args.exr, "--exr must name a .exr file")
     if args.self_shadow and args.mode not in self_shadow_modes():
         raise BadInputError(None, f"--self-shadow needs --mode {' or '.join(self_shadow_modes())}")
+    given = [f"--{name}" for name in ("lobes", "elevations") if getattr(args, name) is not None]
+    if given and args.mode not in LOBE_OPTION_MODES:
+        raise BadInputError(
+            None, f"{' and '.join(given)} apply only to --mode {' or '.join(LOBE_OPTION_MODES)} "
+            f"(the Gaussian-lobe fit), not to --mode {args.mode}",
+        )
     view, up = _vector(args.view, "--view"), _vector(args.up, "--up")
     try:
         camera = Camera.looking_at(view=view, up=up, projection=args.camera)
@@ -106,8 +117,8 @@ def _validate(args: argparse.Namespace) -> tuple[list[Camera], RenderOptions]:
         raise BadInputError(None, f"--view/--up: {err}") from None
     cameras = turntable_cameras(camera, args.turntable) if args.turntable else [camera]
     # RenderOptions checks --lobes/--elevations (its ranges, one home) before anything is loaded
-    options = RenderOptions(lobes=args.lobes, elevations=args.elevations, self_shadow=args.self_shadow,
-                            window=args.window, **order_rule(args))
+    lobe_options = {name: getattr(args, name) for name in ("lobes", "elevations") if getattr(args, name) is not None}
+    options = RenderOptions(self_shadow=args.self_shadow, window=args.window, **lobe_options, **order_rule(args))
     return cameras, options
 
 

@@ -9,26 +9,53 @@ their node transforms) or a built-in spec:
 - ``builtin:torus-knot[:p=2,q=3,segments=1024,sides=48,r=0.35]`` — a tube around a (p, q)
   torus knot (2·segments·sides triangles).
 
-Every mesh is checked (non-empty, finite vertices, face indices in range, no degenerate
-faces) and then centred at its bounding-box centre and scaled so that its bounding sphere
-about that centre has radius 1. Vertex normals come from the file when present and valid,
-otherwise they are the area-weighted averages of the face normals.
+Every mesh is checked (at least one triangle, finite vertices, face indices in range) and
+cleaned: degenerate faces (a repeated index or zero area) are dropped with a
+:class:`MeshRepairWarning` that counts them (refused only when no face is left), and so are
+vertices no face references (stray points an editor left behind), so that only the drawn
+surface decides the placement. The mesh is then centred at the bounding-box centre of its
+vertices and scaled so that its bounding sphere about that centre has radius 1. Vertex
+normals come from the file when present and valid, otherwise they are the area-weighted
+averages of the face normals.
+
+Files are opened only when they are regular files within
+:func:`~shrmkit.brdf_io.limits.max_file_bytes` (a FIFO or a link to ``/dev/zero`` named
+``x.ply`` is refused before trimesh sees it; so are such files referenced from the mesh,
+e.g. an OBJ's ``mtllib``); a PLY header's declared element counts are checked against
+:func:`~shrmkit.brdf_io.limits.max_elements` and the bytes the file holds before anything is
+parsed. The rules are in ``data_specs/render_outputs.md`` (Meshes).
 """
 
 from __future__ import annotations
 
+import re
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import trimesh
+import trimesh.resolvers
 
+from ..brdf_io import limits
 from ..brdf_io.errors import BadInputError
 
-__all__ = ["Mesh", "load_mesh", "make_mesh", "builtin_mesh", "BUILTINS", "MESH_SUFFIXES"]
+__all__ = [
+    "Mesh",
+    "MeshRepairWarning",
+    "load_mesh",
+    "make_mesh",
+    "builtin_mesh",
+    "BUILTINS",
+    "MESH_SUFFIXES",
+]
 
 MESH_SUFFIXES = (".obj", ".ply", ".stl", ".off", ".glb", ".gltf")
 BUILTINS = ("sphere", "torus", "torus-knot")
+
+
+class MeshRepairWarning(UserWarning):
+    """A mesh was usable after dropping some of its faces (degenerate triangles)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -84,13 +111,18 @@ def make_mesh(
     name: str = "",
     normalize: bool = True,
 ) -> Mesh:
-    """Validate arrays and build a :class:`Mesh` (centred and scaled to a unit bounding sphere).
+    """Validate and clean arrays and build a :class:`Mesh` (centred, unit bounding sphere).
+
+    Degenerate faces (a repeated index, or an area at most 10⁻¹² × the squared extent of the
+    referenced vertices) are dropped with a :class:`MeshRepairWarning` giving their count;
+    vertices that no remaining face references are dropped silently (faces are renumbered),
+    so stray points do not move the centre or shrink the object.
 
     Raises
     ------
     BadInputError
-        Empty mesh, non-finite vertices, face indices out of range, degenerate faces
-        (repeated index or zero area), naming ``name`` and the offending count.
+        No vertices or no triangles, non-finite vertices, face indices out of range, or
+        every face degenerate, naming ``name`` and the offending count.
     """
     v = np.asarray(vertices, dtype=np.float64)
     f = np.asarray(faces)
@@ -103,23 +135,44 @@ def make_mesh(
     f = f.astype(np.int64)
     bad = ~np.all(np.isfinite(v), axis=1)
     if bad.any():
-        raise BadInputError(name, f"{int(bad.sum())} of {len(v)} vertices are not finite (NaN or Inf)")
+        first = int(np.flatnonzero(bad)[0])
+        raise BadInputError(
+            name, f"{int(bad.sum())} of {len(v)} vertices are not finite (NaN or Inf), first is vertex {first}"
+        )
     if f.min() < 0 or f.max() >= len(v):
         raise BadInputError(name, f"face indices out of range [0, {len(v)}): min {f.min()}, max {f.max()}")
+    n = None if normals is None else np.asarray(normals, dtype=np.float64)
+    if n is not None and (n.shape != v.shape or not np.all(np.isfinite(n))):
+        n = None
+    n_faces = len(f)
+    used = np.unique(f)
+    extent = float(np.max(v[used].max(axis=0) - v[used].min(axis=0)))
     repeated = (f[:, 0] == f[:, 1]) | (f[:, 1] == f[:, 2]) | (f[:, 0] == f[:, 2])
-    extent = float(np.max(v.max(axis=0) - v.min(axis=0)))
-    if extent == 0.0:
-        raise BadInputError(name, "all vertices coincide (zero-size mesh)")
     area2 = np.linalg.norm(_face_normals(v, f), axis=1)
-    zero_area = area2 <= 1e-12 * extent * extent
-    degenerate = repeated | zero_area
+    degenerate = repeated | (area2 <= 1e-12 * extent * extent)
+    if degenerate.all():
+        raise BadInputError(
+            name,
+            "all vertices of the faces coincide (zero-size mesh)" if extent == 0.0
+            else f"all {n_faces} faces are degenerate (zero area or a repeated vertex)",
+        )
     if degenerate.any():
         first = int(np.flatnonzero(degenerate)[0])
-        raise BadInputError(
-            name, f"{int(degenerate.sum())} of {len(f)} faces are degenerate (zero area), first is face {first}"
+        warnings.warn(
+            f"{name}: dropped {int(degenerate.sum())} of {n_faces} faces that are degenerate "
+            f"(zero area or a repeated vertex), first is face {first}",
+            MeshRepairWarning,
+            stacklevel=2,
         )
-    n = None if normals is None else np.asarray(normals, dtype=np.float64)
-    if n is None or n.shape != v.shape or not np.all(np.isfinite(n)):
+        f = f[~degenerate]
+    # keep only the vertices the faces use (renumbering the faces), so that stray points
+    # do not decide the centre and the scale
+    used, f = np.unique(f, return_inverse=True)
+    f = f.reshape(-1, 3).astype(np.int64)
+    v = v[used]
+    if n is not None:
+        n = n[used]
+    if n is None:
         n = _vertex_normals(v, f)
     length = np.linalg.norm(n, axis=1)
     weak = length <= 1e-12
@@ -235,14 +288,85 @@ def builtin_mesh(spec: str) -> Mesh:
     raise BadInputError(spec, f"unknown built-in mesh {name!r}; known: {', '.join(BUILTINS)}")
 
 
+_PLY_SIZES = {
+    "char": 1, "int8": 1, "uchar": 1, "uint8": 1,
+    "short": 2, "int16": 2, "ushort": 2, "uint16": 2,
+    "int": 4, "int32": 4, "uint": 4, "uint32": 4, "float": 4, "float32": 4,
+    "double": 8, "float64": 8,
+}
+_PLY_HEADER_MAX = 1 << 20
+
+
+def _check_ply_header(path: Path, size: int) -> None:
+    """Refuse a PLY whose header declares more elements than the limits or the file allow.
+
+    Each element needs at least: binary, the bytes of its scalar properties plus the count
+    field of each list; ASCII, one character and one separator per property. A header this
+    reader cannot parse is left to trimesh (which then reports it).
+    """
+    with path.open("rb") as handle:
+        head = handle.read(min(size, _PLY_HEADER_MAX))
+    end = re.search(rb"end_header[ \t]*\r?\n", head)
+    if not head.startswith(b"ply") or end is None:
+        return  # not a PLY header we can read: trimesh will say what is wrong
+    body = size - end.end()
+    lines = head[: end.start()].decode("ascii", errors="replace").splitlines()
+    binary = any(line.split()[:2] in (["format", "binary_little_endian"], ["format", "binary_big_endian"])
+                 for line in lines if line.strip())
+    elements: list[list] = []  # [name, count, properties, bytes per element]
+    for line in lines:
+        words = line.split()
+        if len(words) >= 3 and words[0] == "element":
+            try:
+                count = int(words[2])
+            except ValueError:
+                return
+            elements.append([words[1], count, 0, 0])
+        elif len(words) >= 3 and words[0] == "property" and elements:
+            el = elements[-1]
+            el[2] += 1
+            kind = words[2] if words[1] == "list" and len(words) >= 5 else words[1]
+            el[3] += _PLY_SIZES.get(kind, 1)
+    need = 0
+    for name, count, n_props, n_bytes in elements:
+        limits.check_elements(path, (count, max(n_props, 1)), f"PLY element {name!r}")
+        need += count * (n_bytes if binary else 2 * n_props)
+    if not binary:
+        need -= 1  # the last value needs no separator after it
+    if need > body:
+        declared = ", ".join(f"element {name} {count:,}" for name, count, _, _ in elements)
+        raise BadInputError(
+            path, f"PLY header declares {declared}, which need at least {need:,} bytes, but the file "
+            f"holds {body:,} after its header (truncated or corrupt)",
+        )
+
+
+class _SafeResolver(trimesh.resolvers.FilePathResolver):
+    """trimesh's file resolver (files a mesh references: OBJ materials and textures, glTF
+    buffers) restricted to regular files of allowed size inside the mesh's folder
+    (:func:`limits.read_bytes`), so a referenced FIFO or device cannot block or exhaust memory."""
+
+    def get(self, name: str) -> bytes:
+        root = Path(self.parent).resolve()
+        for candidate in (name.strip(), name.strip().lstrip("/"), Path(name.strip()).name):
+            if not candidate:
+                continue
+            path = (root / candidate).resolve()
+            if path.is_relative_to(root) and path.exists():
+                return limits.read_bytes(path, "file referenced by the mesh")
+        raise FileNotFoundError(name)
+
+
 def load_mesh(source: str | Path) -> Mesh:
-    """Load a mesh file or built-in spec, validated and normalized to the unit bounding sphere.
+    """Load a mesh file or built-in spec, validated, cleaned and normalized to the unit
+    bounding sphere (see :func:`make_mesh`).
 
     Raises
     ------
     BadInputError
-        Unknown spec, missing/unreadable file, unsupported extension, no triangles, or any
-        problem :func:`make_mesh` detects.
+        Unknown spec, missing, unreadable or special (FIFO, device) file, unsupported
+        extension, PLY header declaring more data than the limits or the file allow,
+        no triangles (empty file or a point cloud), or any problem :func:`make_mesh` detects.
     """
     text = str(source)
     if text.startswith("builtin:"):
@@ -251,12 +375,19 @@ def load_mesh(source: str | Path) -> Mesh:
     suffix = path.suffix.lower()
     if suffix not in MESH_SUFFIXES:
         raise BadInputError(path, f"unsupported mesh extension {suffix!r}; use one of {', '.join(MESH_SUFFIXES)}")
-    if not path.is_file():
-        raise BadInputError(path, "no such file")
+    size = limits.regular_file(path, "mesh file")
+    if size == 0:
+        raise BadInputError(path, "empty file")
+    if suffix == ".ply":
+        _check_ply_header(path, size)
     try:
         # process=False: keep the data as written (trimesh would otherwise silently drop
         # NaN vertices and degenerate faces, which we want to report)
-        loaded = trimesh.load(str(path), process=False)
+        loaded = trimesh.load(str(path), process=False, resolver=_SafeResolver(str(path)))
+    except BadInputError:
+        raise
+    except IndexError as err:  # e.g. an OBJ face naming a vertex the file does not have
+        raise BadInputError(path, f"cannot read mesh: face index out of range ({err})") from None
     except Exception as err:  # trimesh raises many types for malformed files
         raise BadInputError(path, f"cannot read mesh: {type(err).__name__}: {err}") from None
     if isinstance(loaded, trimesh.Scene):
@@ -273,10 +404,14 @@ def load_mesh(source: str | Path) -> Mesh:
         n = None if any(x is None for x in parts_n) else np.concatenate(parts_n)
     elif isinstance(loaded, trimesh.Trimesh):
         v, f, n = np.asarray(loaded.vertices), np.asarray(loaded.faces), _file_normals(loaded)
+    elif isinstance(loaded, trimesh.PointCloud):
+        raise BadInputError(
+            path, f"file holds a point cloud ({len(loaded.vertices)} vertices, no faces); a triangle mesh is needed"
+        )
     else:
         raise BadInputError(path, f"file holds no triangle mesh (got {type(loaded).__name__})")
     if len(f) == 0:
-        raise BadInputError(path, "mesh has no triangles")
+        raise BadInputError(path, f"mesh has no triangles ({len(v)} vertices, no faces)")
     return make_mesh(v, f, n, name=str(path))
 
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import importlib.util
 import os
+import sys
 from pathlib import Path
 
 import pytest
@@ -20,6 +21,7 @@ ROOT = Path(__file__).resolve().parents[1]
 def _harness():
     spec = importlib.util.spec_from_file_location("fuzz_readers", ROOT / "benchmarks" / "fuzz_readers.py")
     module = importlib.util.module_from_spec(spec)
+    sys.modules.setdefault("fuzz_readers", module)  # dataclasses look their module up there
     spec.loader.exec_module(module)
     return module
 

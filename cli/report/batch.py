@@ -16,10 +16,19 @@ Three engines run the same task function:
   come back to this process, which writes them, so workers need no shared output folder.
 
 Results do not depend on the engine (every random choice is seeded per BRDF).
+
+Folder names are the file stem or the sanitized spec (:func:`report_names`), at most
+:data:`MAX_NAME_CHARS` characters: a longer one is cut and a short hash of the full stem or
+spec is added, so a 245-character file name still gives a folder (and its temporary
+siblings) the file system accepts, and two long names that share their first characters
+stay apart. A folder that cannot be written fails that BRDF alone; if the engine itself
+breaks (a worker process dies), the BRDFs without a result are marked failed. In every case
+the summary is written.
 """
 
 from __future__ import annotations
 
+import hashlib
 import multiprocessing
 import re
 import time
@@ -35,13 +44,18 @@ from .collect import collect_report, failed_report, unique_names
 from .options import ReportOptions
 from .writer import report_files, summary_row, write_folder, write_summary
 
-__all__ = ["BRDF_SUFFIXES", "ReportTask", "ReportOutcome", "BatchResult", "report_names", "run_task", "run_batch"]
+__all__ = ["BRDF_SUFFIXES", "MAX_NAME_CHARS", "ReportTask", "ReportOutcome", "BatchResult", "report_names", "run_task",
+           "run_batch"]
 
 #: ``progress(event, name, detail)``: event ``"start"``, ``"stage"`` (serial only) or ``"done"``.
 BatchProgress = Callable[[str, str, str], None]
 
 #: File suffixes of the BRDF files `shrm report` takes (MERL, our table, Cornell, a fitted model).
 BRDF_SUFFIXES = (".binary", ".npz", ".brdf", ".json")
+
+#: Longest report folder name kept as it is; a longer one becomes its first
+#: ``MAX_NAME_CHARS`` characters, ``-`` and 10 hex digits of the SHA-256 of the full stem/spec.
+MAX_NAME_CHARS = 100
 
 
 @dataclass(frozen=True)
@@ -80,13 +94,31 @@ class BatchResult:
         return self.n_failed == 0
 
 
+def _is_file_name(path: Path) -> bool:
+    try:
+        return path.exists()
+    except OSError:  # e.g. a spec string longer than a file name may be
+        return False
+
+
+def _short_name(base: str, full: str) -> str:
+    """``base`` (sanitized, ASCII) if short enough, else cut + a hash of the unsanitized ``full``."""
+    if len(base) <= MAX_NAME_CHARS:
+        return base
+    digest = hashlib.sha256(full.encode("utf-8", "surrogatepass")).hexdigest()[:10]
+    return f"{base[:MAX_NAME_CHARS].rstrip('._-')}-{digest}"
+
+
 def report_names(sources: Sequence[str]) -> list[str]:
-    """Folder names: the file stem or the sanitized spec, made unique with ``-2``, ``-3``…"""
+    """Folder names: the file stem or the sanitized spec (letters, digits, ``._-``), cut to
+    :data:`MAX_NAME_CHARS` with a hash of the full stem/spec when longer, made unique with
+    ``-2``, ``-3``…"""
     bases = []
     for source in sources:
         path = Path(source)
-        base = path.stem if path.suffix.lower() in BRDF_SUFFIXES or path.exists() else source
-        bases.append(re.sub(r"[^A-Za-z0-9._-]+", "_", base).strip("._") or "brdf")
+        raw = path.stem if path.suffix.lower() in BRDF_SUFFIXES or _is_file_name(path) else source
+        base = re.sub(r"[^A-Za-z0-9._-]+", "_", raw).strip("._") or "brdf"
+        bases.append(_short_name(base, raw))
     return unique_names(bases)
 
 
@@ -187,15 +219,41 @@ def run_batch(
     else:
         outcomes, engine = _serial(tasks, progress), "serial"
     rows: dict[str, dict[str, Any]] = {}
-    for outcome in outcomes:
-        write_folder(out, outcome.name, outcome.files)
-        rows[outcome.name] = outcome.row
-        if progress is not None:
-            progress("done", outcome.name, "ok" if outcome.ok else "failed")
+    broken = None
+    try:
+        for outcome in outcomes:
+            row, ok = outcome.row, outcome.ok
+            try:
+                write_folder(out, outcome.name, outcome.files)
+            except OSError as err:  # this folder alone: the batch goes on
+                ok = False
+                row = _failed_row(outcome.name, row.get("source", ""), row.get("total_seconds"),
+                                  f"cannot write the report folder {out / outcome.name}: {err.strerror or err}")
+            rows[outcome.name] = row
+            if progress is not None:
+                progress("done", outcome.name, "ok" if ok else "failed")
+    except Exception as err:  # the engine broke (a worker died): the rest fail, the summary is written
+        if isinstance(err, BadInputError) and not rows:
+            raise  # bad usage (an unreachable Dask scheduler): exit 2, nothing to summarize
+        reason = str(err) if isinstance(err, BadInputError) else f"{type(err).__name__}: {err}"
+        broken = f"the {engine} engine stopped: {reason}"
+    for task in tasks:
+        if task.name not in rows:
+            rows[task.name] = _failed_row(task.name, task.source, None, f"no result: {broken}")
+            if progress is not None:
+                progress("done", task.name, "failed")
     ordered = [rows[n] for n in names]
     notes = [f"{len(ordered)} BRDFs, engine: {engine}, profile {options.profile}, eps {options.eps:g}."]
     if note:
         notes.append(note)
+    if broken:
+        notes.append(f"Incomplete: {broken}.")
     write_summary(out, ordered, notes)
     n_failed = sum(1 for r in ordered if r["status"] != "ok")
     return BatchResult(out, ordered, n_failed, time.perf_counter() - t0, engine)
+
+
+def _failed_row(name: str, source: str, seconds: float | None, error: str) -> dict[str, Any]:
+    """A summary row for a BRDF whose report could not be written or was never made (the
+    keys of :func:`~.writer.summary_row` for a failed report)."""
+    return {"name": name, "status": "failed", "source": source, "error": error, "total_seconds": seconds}

@@ -44,7 +44,8 @@ def write_folder(out_dir: str | os.PathLike[str], name: str, files: Mapping[str,
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     final = out / name
-    tmp = Path(tempfile.mkdtemp(prefix=f".{name}.", suffix=".tmp", dir=out))
+    stem = name[:64]  # temporary siblings stay within file-name limits whatever the name
+    tmp = Path(tempfile.mkdtemp(prefix=f".{stem}.", suffix=".tmp", dir=out))
     try:
         umask = os.umask(0)
         os.umask(umask)
@@ -52,7 +53,7 @@ def write_folder(out_dir: str | os.PathLike[str], name: str, files: Mapping[str,
         for file_name, data in files.items():
             (tmp / file_name).write_bytes(data)
         if final.exists():
-            old = Path(tempfile.mkdtemp(prefix=f".{name}.", suffix=".old", dir=out))
+            old = Path(tempfile.mkdtemp(prefix=f".{stem}.", suffix=".old", dir=out))
             os.replace(final, old / name)
             os.replace(tmp, final)
             shutil.rmtree(old, ignore_errors=True)

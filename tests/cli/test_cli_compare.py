@@ -48,3 +48,23 @@ def test_compare_bad_input_exit_2(tmp_path: Path, capsys) -> None:
     assert main(["compare", "nonsense:q=1", *FAST]) == 2
     err = capsys.readouterr().err
     assert "strip" in err and "lobes" in err
+
+
+def test_compare_lower_p_not_below_p_is_explained(capsys) -> None:
+    """--lower-p at or above the chosen P gives no lower-order row; stderr says why (one line)
+    and which values would give one; the JSON stays as documented."""
+    rc = main(["compare", "microfacet:sigma=0.3", *FAST[:-6], "--lobes", "none", "--elevations", "3",
+               "--cabral-reference-height", "0", "--lower-p", "64", "--json"])
+    captured = capsys.readouterr()
+    doc = json.loads(captured.out)
+    keys = [r["key"] for r in doc["rows"]]
+    P = doc["rows"][0]["params"]["P"]
+    assert rc == 0 and "shrm_low_p" not in keys and P > 0
+    assert captured.err == (f"shrm compare: note: no lower-order SHRM row: --lower-p 64 is not below the SHRM's "
+                            f"P = {P} (chosen for eps {DEFAULT_EPS:g}); use --lower-p {P - 1} or less\n")
+    # a valid lower P gives the row, and no note
+    rc = main(["compare", "microfacet:sigma=0.3", *FAST[:-6], "--lobes", "none", "--elevations", "3",
+               "--cabral-reference-height", "0", "--lower-p", str(P - 1), "--json"])
+    captured = capsys.readouterr()
+    rows = {r["key"]: r for r in json.loads(captured.out)["rows"]}
+    assert rows["shrm_low_p"]["params"]["P"] == P - 1 and captured.err == ""

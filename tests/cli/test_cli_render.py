@@ -6,6 +6,7 @@ geometry + SHRM.radiance), built independently of the shader.
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -73,15 +74,40 @@ def test_turntable_transparent(offscreen, tmp_path: Path) -> None:
         (["builtin:sphere", "--size", "4"], "--size"),
         (["builtin:sphere", "--eps", "2"], "--eps"),
         (["builtin:sphere", "--self-shadow"], "--self-shadow needs --mode gaussian-lobes"),
+        (["builtin:sphere", "--lobes", "2"],
+         "--lobes apply only to --mode gaussian-lobes (the Gaussian-lobe fit), not to --mode distant"),
+        (["builtin:sphere", "--mode", "perpixel", "--lobes", "3", "--elevations", "15"],
+         "--lobes and --elevations apply only to --mode gaussian-lobes (the Gaussian-lobe fit), not to --mode "
+         "perpixel"),
+        (["builtin:sphere", "--mode", "rsibr", "--elevations", "4"], "--elevations apply only to --mode gaussian"),
+        (["builtin:sphere", "--mode", "gaussian-lobes", "--lobes", "9"], "lobes must be an integer in [1, 8], got 9"),
+        (["stray.ply"], "stray.ply: is a FIFO"),
     ],
 )
 def test_bad_input_exits_2_without_output(tmp_path: Path, capsys, monkeypatch, args, message) -> None:
     monkeypatch.chdir(tmp_path)
     (tmp_path / "nan.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n")
     (tmp_path / "empty.obj").write_text("")
+    os.mkfifo(tmp_path / "stray.ply")
     before = set(tmp_path.iterdir())
     rc = main(["render", *args, "-o", "out.png", "--exr", "out.exr"])
     assert rc == 2
     err = capsys.readouterr().err
     assert err.startswith("shrm render: error:") and message in err
     assert set(tmp_path.iterdir()) == before
+
+
+def test_lobe_options_reach_the_gaussian_lobes_builder(monkeypatch, tmp_path: Path) -> None:
+    """With --mode gaussian-lobes the given --lobes/--elevations are used; omitted ones keep
+    the RenderOptions defaults (no render: the options are checked and built only)."""
+    from shrmkit.cli import cmd_render
+    from shrmkit.cli.main import build_parser
+    from shrmkit.render.modes import RenderOptions
+
+    parse = build_parser().parse_args
+    out = str(tmp_path / "o.png")
+    _, options = cmd_render._validate(parse(["render", "builtin:sphere", "--mode", "gaussian-lobes", "--lobes", "2",
+                                             "-o", out]))
+    assert (options.lobes, options.elevations) == (2, RenderOptions().elevations)
+    _, options = cmd_render._validate(parse(["render", "builtin:sphere", "-o", out]))
+    assert (options.lobes, options.elevations) == (RenderOptions().lobes, RenderOptions().elevations)
