@@ -539,6 +539,9 @@ class Worker:
         except (ProcessLookupError, PermissionError):
             pass
         self.proc.wait()
+        for stream in (self.proc.stdin, self.proc.stdout):
+            if stream is not None:
+                stream.close()
 
 
 def _materialise(case: dict, content: bytes | str, seed_path: Path, work: Path) -> tuple[str, list[str]]:
@@ -633,6 +636,7 @@ def drive(
                         w.case = None
                     else:  # died: a segfault, or killed at the memory limit
                         code = w.proc.wait()
+                        w.kill()
                         result = {**case, "outcome": "memory" if code == -signal.SIGKILL else "crash",
                                   "detail": f"worker died (exit {code})", "peak_mib": float("nan")}
                         pool[pool.index(w)] = Worker(memory_gib, budget_mib)

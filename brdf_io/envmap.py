@@ -25,11 +25,27 @@ import numpy as np
 from .builtin_env import BUILTIN_PREFIX, builtin_radiance
 from .cubemap import CUBE_FACES, cube_to_latlong
 from .errors import BadInputError
+from .exr import ExrImage, read_exr, read_exr_image
 from .hdr_codecs import IMAGE_SUFFIXES, read_image, write_image
-from .latlong import bilinear_lookup, pixel_directions, row_edges_cos, row_solid_angles
+from .latlong import (
+    bilinear_lookup,
+    default_gather_samples,
+    gather_to_latlong,
+    pixel_directions,
+    row_edges_cos,
+    row_solid_angles,
+)
 from .probe import probe_to_latlong
 
-__all__ = ["EnvironmentMap", "load_env", "save_env"]
+__all__ = [
+    "EnvironmentMap",
+    "load_env",
+    "save_env",
+    "white_level",
+    "openexr_envmap_to_latlong",
+    "OPENEXR_TO_PROJECT",
+    "NEGATIVE_CLAMP_FRACTION",
+]
 
 
 #: Negative radiance up to this fraction of the map's white level is clamped to 0 (with a
@@ -229,7 +245,17 @@ def _y_up_to_project(image: np.ndarray) -> np.ndarray:
     return image[:, j]
 
 
-def _cube_faces(source: Path, folder: Path) -> dict[str, np.ndarray]:
+def _read_face(path: Path, layer: str | None, part: int | str | None) -> np.ndarray:
+    if path.suffix.lower() == ".exr":
+        return read_exr(path, layer=layer, part=part)
+    if layer is not None or part is not None:
+        raise BadInputError(path, "layer and part apply to OpenEXR files only")
+    return read_image(path)
+
+
+def _cube_faces(
+    source: Path, folder: Path, layer: str | None = None, part: int | str | None = None
+) -> dict[str, np.ndarray]:
     faces: dict[str, np.ndarray] = {}
     missing = []
     for face in CUBE_FACES:
@@ -239,7 +265,7 @@ def _cube_faces(source: Path, folder: Path) -> dict[str, np.ndarray]:
         elif len(found) > 1:
             raise BadInputError(source, f"cube face {face} exists in several formats: {[p.name for p in found]}")
         else:
-            faces[face] = read_image(found[0])
+            faces[face] = _read_face(found[0], layer, part)
     if missing:
         raise BadInputError(
             source, f"cube map needs six faces {', '.join(CUBE_FACES)}; missing {', '.join(missing)} in {folder}"
@@ -248,9 +274,104 @@ def _cube_faces(source: Path, folder: Path) -> dict[str, np.ndarray]:
     n = shapes["px"][0]
     if any(s != (n, n) for s in shapes.values()):
         raise BadInputError(source, f"cube faces must be square and of equal size; sizes {shapes}")
+    finite = [im for im in faces.values() if np.isfinite(im).all()]
+    white = white_level(np.concatenate([im.reshape(-1, 3) for im in finite])) if finite else 0.0
     for face, image in faces.items():
-        _check_radiance(folder / face, image)
+        faces[face] = _check_radiance(folder / face, image, white)
     return faces
+
+
+# --------------------------------------------------------------------------------------
+# OpenEXR's own environment-map conventions (the `envmap` attribute, ImfEnvmap.h/.cpp)
+# --------------------------------------------------------------------------------------
+#: OpenEXR environment frame (x_e, y_e, z_e; y up) → project frame: X = x_e, Y = −z_e,
+#: Z = y_e. A rotation (det +1) by +90° about x; the same map as ``up="y"`` lat-long files.
+OPENEXR_TO_PROJECT = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
+
+# OpenEXR cube faces in file order (ImfEnvmap.h CubeMapFace): +X, −X, +Y, −Y, +Z, −Z
+OPENEXR_CUBE_FACES = ("+X", "-X", "+Y", "-Y", "+Z", "-Z")
+
+
+def _openexr_latlong_texel(h: int, w: int):
+    """texel_of(x, y, z) for an OpenEXR lat-long data window of h × w: the nearest pixel to
+    ImfEnvmap ``LatLongMap::pixelPosition``: x = (lon/(−2π) + ½)(w − 1), y = (lat/(−π) + ½)(h − 1),
+    lat = asin(y_e), lon = atan2(x_e, z_e) (pixel centres on the poles and on the ±π seam)."""
+
+    def texel_of(x: np.ndarray, y: np.ndarray, z: np.ndarray) -> np.ndarray:
+        lat = np.arcsin(np.clip(y, -1.0, 1.0))
+        lon = np.arctan2(x, z)
+        col = np.clip(np.rint((lon / (-2.0 * np.pi) + 0.5) * (w - 1)), 0, w - 1).astype(np.int64)
+        row = np.clip(np.rint((lat / -np.pi + 0.5) * (h - 1)), 0, h - 1).astype(np.int64)
+        return row * w + col
+
+    return texel_of
+
+
+def _openexr_cube_texel(n: int):
+    """texel_of(x, y, z) for an OpenEXR cube of six n × n faces stacked vertically (+X, −X,
+    +Y, −Y, +Z, −Z): the face of the largest |component| (ties: x, then y), the in-face
+    position of ImfEnvmap ``CubeMap::faceAndPixelPosition`` (p = (d_a/|d_major| + 1)/2 · (n − 1),
+    a = y, z for ±X; x, z for ±Y; x, y for ±Z) and the file pixel of ``CubeMap::pixelPosition``,
+    rounded to the nearest pixel. Flat index (face·n + row)·n + column."""
+    last = n - 1
+
+    def texel_of(x: np.ndarray, y: np.ndarray, z: np.ndarray) -> np.ndarray:
+        ax, ay, az = np.abs(x), np.abs(y), np.abs(z)
+        on_x = (ax >= ay) & (ax >= az)
+        on_y = ~on_x & (ay >= az)
+        major = np.maximum(np.where(on_x, ax, np.where(on_y, ay, az)), 1e-300)
+        first = np.where(on_x, y, x) / major  # pif.x
+        second = np.where(on_x | on_y, z, y) / major  # pif.y
+        px = (first + 1.0) * 0.5 * last
+        py = (second + 1.0) * 0.5 * last
+        negative = np.where(on_x, x < 0, np.where(on_y, y < 0, z < 0))
+        face = np.where(on_x, 0, np.where(on_y, 2, 4)) + negative
+        # CubeMap::pixelPosition, relative to the face's top-left pixel: (column, row)
+        col = np.select(
+            [face == 0, face == 1, face == 4], [py, last - py, last - px], default=px
+        )
+        row = np.select([face == 3], [py], default=last - np.where(face <= 1, px, py))
+        col = np.clip(np.rint(col), 0, last).astype(np.int64)
+        row = np.clip(np.rint(row), 0, last).astype(np.int64)
+        return (face * n + row) * n + col
+
+    return texel_of
+
+
+def openexr_envmap_to_latlong(image: np.ndarray, kind: str, height: int, samples: int | None = None) -> np.ndarray:
+    """Resample an OpenEXR environment map (its data window) to a project-frame lat-long map.
+
+    Parameters
+    ----------
+    image
+        ``(h, w, 3)`` data-window pixels: ``kind="latlong"`` (ImfEnvmap LatLongMap: top row
+        latitude +π/2, bottom −π/2, left column longitude +π, right −π, direction
+        (sin lon cos lat, sin lat, cos lon cos lat)), or ``kind="cube"`` (h = 6w: faces +X,
+        −X, +Y, −Y, +Z, −Z from the top, ImfEnvmap CubeMap).
+    height
+        Output rows H (width 2H).
+    samples
+        Equal-area sub-samples per pixel and axis; default
+        :func:`~shrmkit.brdf_io.latlong.default_gather_samples` with h (lat-long) or 2w (cube)
+        source rows.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(H, 2H, 3)`` float64: each pixel the mean over its equal-area sub-samples of the
+        nearest file pixel (OpenEXR's pixel-centre positions), directions mapped by
+        :data:`OPENEXR_TO_PROJECT`. Source: OpenEXR ``ImfEnvmap.cpp``.
+    """
+    h, w = image.shape[:2]
+    values = np.asarray(image, dtype=np.float64).reshape(-1, 3)
+    if kind == "latlong":
+        texel_of, rows = _openexr_latlong_texel(h, w), h
+    elif kind == "cube":
+        texel_of, rows = _openexr_cube_texel(w), 2 * w
+    else:
+        raise ValueError(f"unknown OpenEXR envmap kind {kind!r}")
+    s = samples or default_gather_samples(height, rows)
+    return gather_to_latlong(values, texel_of, OPENEXR_TO_PROJECT.T, height, s)
 
 
 def _options_text(up: str, flip: bool, azimuth: float, kind: str) -> str:
@@ -269,6 +390,8 @@ def load_env(
     flip: bool = False,
     probe: bool | None = None,
     height: int | None = None,
+    layer: str | None = None,
+    part: int | str | None = None,
 ) -> EnvironmentMap:
     """Load an environment map into the project frame (data_specs/environment_maps.md).
 
@@ -344,12 +467,12 @@ def load_env(
         raise BadInputError(text, f"height={height!r} must be a positive integer")
 
     if text.strip().startswith(BUILTIN_PREFIX):
-        if up is not None or flip or probe:
-            raise BadInputError(text, "up, flip and probe do not apply to built-in environments")
+        if up is not None or flip or probe or layer is not None or part is not None:
+            raise BadInputError(text, "up, flip, probe, layer and part do not apply to built-in environments")
         name, radiance = builtin_radiance(text)
         env = EnvironmentMap(radiance, name, text.strip())
     else:
-        env = _load_file(Path(text), up, flip, probe, azimuth, height)
+        env = _load_file(Path(text), up, flip, probe, azimuth, height, layer, part)
     if azimuth:
         env = env.rotated_z(np.radians(azimuth))
     if height is not None and height != env.height:
@@ -358,7 +481,14 @@ def load_env(
 
 
 def _load_file(
-    path: Path, up: str | None, flip: bool, probe: bool | None, azimuth: float, height: int | None
+    path: Path,
+    up: str | None,
+    flip: bool,
+    probe: bool | None,
+    azimuth: float,
+    height: int | None,
+    layer: str | None = None,
+    part: int | str | None = None,
 ) -> EnvironmentMap:
     is_face = path.stem.lower() in CUBE_FACES and path.suffix.lower() in IMAGE_SUFFIXES
     if path.is_dir() or is_face:
@@ -369,17 +499,25 @@ def _load_file(
         folder = path if path.is_dir() else path.parent
         if not folder.is_dir():
             raise BadInputError(path, "no such cube-map folder")
-        faces = _cube_faces(path, folder)
+        faces = _cube_faces(path, folder, layer, part)
         n = faces["px"].shape[0]
         radiance = cube_to_latlong(faces, int(height or 2 * n)).astype(np.float32)
         return EnvironmentMap(radiance, folder.name, f"{folder}" + _options_text("y", False, azimuth, "cube"))
     if not path.exists():
         raise BadInputError(path, "no such file")
-    image = read_image(path)
+    if path.suffix.lower() == ".exr":
+        exr = read_exr_image(path, layer=layer, part=part)
+        if exr.envmap is not None:
+            return _load_openexr_envmap(path, exr, up, flip, probe, azimuth, height)
+        image = exr.pixels
+    else:
+        if layer is not None or part is not None:
+            raise BadInputError(path, "layer and part apply to OpenEXR files only")
+        image = read_image(path)
     h, w = image.shape[:2]
     if h == 0 or w == 0:
         raise BadInputError(path, f"zero-size image ({w} x {h})")
-    _check_radiance(path, image)
+    image = _check_radiance(path, image)
     is_probe = probe if probe is not None else (h == w and "probe" in path.name.lower())
     if is_probe:
         if flip:
@@ -402,6 +540,33 @@ def _load_file(
     return EnvironmentMap(
         np.ascontiguousarray(image), path.stem, f"{path}" + _options_text(up, flip, azimuth, "latlong")
     )
+
+
+def _load_openexr_envmap(
+    path: Path, exr: ExrImage, up: str | None, flip: bool, probe: bool | None, azimuth: float, height: int | None
+) -> EnvironmentMap:
+    """A file with the ``envmap`` attribute: OpenEXR's own convention, honoured automatically."""
+    kind = exr.envmap
+    if kind not in ("latlong", "cube"):
+        raise BadInputError(path, f"envmap attribute {kind!r} is neither ENVMAP_LATLONG nor ENVMAP_CUBE")
+    if flip or probe:
+        raise BadInputError(
+            path, f"the file declares envmap={kind} (OpenEXR's own orientation, ImfEnvmap); flip and probe do not apply"
+        )
+    if up == "z":
+        raise BadInputError(
+            path, f"the file declares envmap={kind}: OpenEXR environment maps are y-up; up='z' does not apply"
+        )
+    image = exr.data
+    h, w = image.shape[:2]
+    if kind == "cube" and h != 6 * w:
+        raise BadInputError(
+            path, f"envmap=cube needs a data window of six stacked square faces (h = 6w), got {w} x {h}"
+        )
+    image = _check_radiance(path, image)
+    rows = int(height or (h if kind == "latlong" else 2 * w))
+    radiance = openexr_envmap_to_latlong(image, kind, rows).astype(np.float32)
+    return EnvironmentMap(radiance, path.stem, f"{path}" + _options_text("y", False, azimuth, f"openexr-{kind}"))
 
 
 def save_env(path: str | Path, env: EnvironmentMap, half: bool = False) -> None:
