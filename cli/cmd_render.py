@@ -47,6 +47,15 @@ def _vector(text: str, option: str) -> np.ndarray:
     return v
 
 
+class _StoreGiven(argparse.Action):
+    """Store the value and record that the option was given (``args.<dest>_given``), so that
+    an option that does not apply to the chosen mode is refused rather than ignored."""
+
+    def __call__(self, parser, namespace, values, option_string=None) -> None:
+        setattr(namespace, self.dest, values)
+        setattr(namespace, f"{self.dest}_given", True)
+
+
 def _mode_help() -> str:
     listed = "; ".join(f"{m.name}: {m.help}" for m in RENDER_MODES.values())
     return f"{listed} (default {DEFAULT_MODE})"
@@ -63,10 +72,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     defaults = RenderOptions()
     shadow = " or ".join(self_shadow_modes())
     lobe_modes = " or ".join(LOBE_OPTION_MODES)
-    # default None: given with another mode they are refused, not silently ignored
-    p.add_argument("--lobes", type=int, default=None,
+    # _StoreGiven: given with another mode they are refused, not silently ignored
+    p.add_argument("--lobes", type=int, default=defaults.lobes, action=_StoreGiven,
                    help=f"{lobe_modes} only: lobes per elevation K (default {defaults.lobes})")
-    p.add_argument("--elevations", type=int, default=None,
+    p.add_argument("--elevations", type=int, default=defaults.elevations, action=_StoreGiven,
                    help=f"{lobe_modes} only: fitted view elevations (default {defaults.elevations})")
     p.add_argument("--self-shadow", action="store_true",
                    help=f"{shadow}: per-vertex self-shadowing by ray casting (Green et al. 2007 eq. 7)")
@@ -104,7 +113,7 @@ def _validate(args: argparse.Namespace) -> tuple[list[Camera], RenderOptions]:
         raise BadInputError(args.exr, "--exr must name a .exr file")
     if args.self_shadow and args.mode not in self_shadow_modes():
         raise BadInputError(None, f"--self-shadow needs --mode {' or '.join(self_shadow_modes())}")
-    given = [f"--{name}" for name in ("lobes", "elevations") if getattr(args, name) is not None]
+    given = [f"--{name}" for name in ("lobes", "elevations") if getattr(args, f"{name}_given", False)]
     if given and args.mode not in LOBE_OPTION_MODES:
         raise BadInputError(
             None, f"{' and '.join(given)} apply only to --mode {' or '.join(LOBE_OPTION_MODES)} "
@@ -117,8 +126,8 @@ def _validate(args: argparse.Namespace) -> tuple[list[Camera], RenderOptions]:
         raise BadInputError(None, f"--view/--up: {err}") from None
     cameras = turntable_cameras(camera, args.turntable) if args.turntable else [camera]
     # RenderOptions checks --lobes/--elevations (its ranges, one home) before anything is loaded
-    lobe_options = {name: getattr(args, name) for name in ("lobes", "elevations") if getattr(args, name) is not None}
-    options = RenderOptions(self_shadow=args.self_shadow, window=args.window, **lobe_options, **order_rule(args))
+    options = RenderOptions(lobes=args.lobes, elevations=args.elevations, self_shadow=args.self_shadow,
+                            window=args.window, **order_rule(args))
     return cameras, options
 
 
