@@ -7,11 +7,20 @@ at θ = (i + ½)π/H, φ = 2π(j + ½)/W (φ from +x toward +y), direction
 :mod:`~shrmkit.brdf_io.latlong`.
 
 :func:`load_env` reads OpenEXR, Radiance .hdr and PFM lat-long maps, Debevec angular
-probes, Direct3D cube maps (a folder of six faces) and procedural ``builtin:`` specs,
-and maps each file's own orientation convention into the project frame; the rules are
-written down in data_specs/environment_maps.md.
+probes, Direct3D cube maps (a folder of six faces), OpenEXR files carrying the standard
+``envmap`` attribute (lat-long or cube, OpenEXR's own conventions, ImfEnvmap) and
+procedural ``builtin:`` specs, and maps each file's own orientation convention into the
+project frame; the rules are written down in data_specs/environment_maps.md.
 
-Public objects: :class:`EnvironmentMap`, :func:`load_env`, :func:`save_env`.
+Radiance checks (all sources, :func:`EnvironmentMap` included): NaN and infinite values are
+refused; negative values no larger than :data:`NEGATIVE_CLAMP_FRACTION` (10⁻³) × the map's
+white level (:func:`white_level`: the 99.9th percentile of the per-pixel largest channel) are
+clamped to 0 with a warning that counts them (camera processing leaves such pixels in real
+photographs); larger negatives are refused.
+
+Public objects: :class:`EnvironmentMap`, :func:`load_env`, :func:`save_env`,
+:func:`white_level`, :func:`openexr_envmap_to_latlong`, :data:`OPENEXR_TO_PROJECT`,
+:data:`NEGATIVE_CLAMP_FRACTION`.
 """
 
 from __future__ import annotations
@@ -123,7 +132,9 @@ class EnvironmentMap:
     ----------
     radiance
         ``(H, W, 3)`` float32 or float64, finite and non-negative; row 0 is the zenith
-        (+z). Stored read-only.
+        (+z). Stored read-only. Negatives within 10⁻³ × the white level are clamped to 0
+        with a warning (module docstring); NaN, infinities and larger negatives raise
+        :class:`BadInputError`.
     name
         Short name (file stem or built-in name).
     source
@@ -417,17 +428,32 @@ def load_env(
         image whose file name contains "probe" (any case) is a probe, others lat-long.
     height
         Output rows (width 2·height), by area-weighted resampling; default: the file's
-        rows (lat-long), 2N for N × N cube faces, D/2 for a D × D probe.
+        rows (lat-long), 2N for N × N cube faces, D/2 for a D × D probe; for OpenEXR
+        ``envmap`` files the data window's rows (lat-long) or 2N (N × N faces).
+    layer, part
+        OpenEXR only (files and cube faces): the layer (channel prefix) and the part (name
+        or index) to read; defaults and rules in
+        :func:`~shrmkit.brdf_io.exr.read_exr_image`. A file with the ``envmap`` attribute is
+        read in OpenEXR's own convention (y up, mapped by :data:`OPENEXR_TO_PROJECT`); ``up``
+        may then be None or ``"y"``, ``flip`` and ``probe`` are refused, ``azimuth`` applies.
+        Other OpenEXR files are read on their display window (the data window placed in it).
 
     Returns
     -------
     EnvironmentMap
 
+    Warns
+    -----
+    UserWarning
+        "clamped N negative pixel(s)" when tiny negatives (≤ 10⁻³ × white level) were set to 0.
+
     Raises
     ------
     BadInputError
-        Missing, unreadable or corrupt file; zero-size image; NaN, infinite or negative
-        radiance (the pixels are counted, never clamped); a lat-long image that is not
+        Missing, unreadable or corrupt file; zero-size image; NaN, infinite or clearly
+        negative radiance (the pixels are counted); OpenEXR: deep, ambiguous layers/parts
+        without ``layer``/``part``, sizes beyond the limits (brdf_io.limits); layer/part for a
+        non-OpenEXR source; a lat-long image that is not
         2:1; a non-square probe; missing, duplicate or unequal cube faces; bad options.
 
     Examples

@@ -392,7 +392,7 @@ def luminance_weights(chromaticities: tuple[float, ...] = REC709_CHROMATICITIES)
     except np.linalg.LinAlgError:
         raise ValueError(f"chromaticities {tuple(chromaticities)} are degenerate") from None
     yw = scale / scale.sum()
-    if not np.all(np.isfinite(yw)) or np.any(yw <= 0):
+    if not np.all(np.isfinite(yw)) or yw[1] <= 0:  # G = (Y − R·yw_r − B·yw_b)/yw_g
         raise ValueError(f"chromaticities {tuple(chromaticities)} give luminance weights {yw}")
     return yw
 

@@ -102,7 +102,8 @@ def print_json(doc: dict[str, Any]) -> None:
 
 def add_env_orientation(parser: argparse.ArgumentParser) -> None:
     """``--env-up``, ``--env-flip``, ``--env-azimuth``: how a lat-long *file* is oriented
-    (data_specs/environment_maps.md; the shared Grace probe needs ``--env-up y --env-flip``)."""
+    (data_specs/environment_maps.md; the shared Grace probe needs ``--env-up y --env-flip``);
+    ``--env-layer``, ``--env-part``: which layer/part of an OpenEXR file holds the map (§2.1)."""
     group = parser.add_argument_group(
         "environment orientation (--env-up/--env-flip: map files only, refused for builtin: maps; "
         "--env-azimuth: any map)")
@@ -111,6 +112,12 @@ def add_env_orientation(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--env-flip", action="store_true", help="reverse the rows of a lat-long file first")
     group.add_argument("--env-azimuth", type=float, default=0.0, metavar="DEG",
                        help="rotate the map about the up axis by this many degrees")
+    group.add_argument("--env-layer", default=None, metavar="NAME",
+                       help="OpenEXR files: the layer (channel prefix, e.g. 'diffuse' for diffuse.R/G/B) to read; "
+                       "default: the plain R, G, B, else the only layer with colour")
+    group.add_argument("--env-part", default=None, metavar="NAME|INDEX",
+                       help="multi-part OpenEXR files: the part to read, by name or index; default: the only part "
+                       "with colour channels")
 
 
 def add_window_option(parser: argparse.ArgumentParser) -> None:
@@ -146,18 +153,24 @@ def order_rule(args: argparse.Namespace) -> dict[str, Any]:
 
 def env_orientation(args: argparse.Namespace) -> dict[str, Any]:
     """Keyword arguments of ``load_env`` from :func:`add_env_orientation`'s options."""
-    return {"up": args.env_up, "flip": args.env_flip, "azimuth": args.env_azimuth}
+    return {"up": args.env_up, "flip": args.env_flip, "azimuth": args.env_azimuth,
+            "layer": getattr(args, "env_layer", None), "part": getattr(args, "env_part", None)}
 
 
-def load_oriented_env(spec: str, *, up: str | None, flip: bool, azimuth: float, **kwargs: Any):
+def load_oriented_env(spec: str, *, up: str | None, flip: bool, azimuth: float, layer: str | None = None,
+                      part: str | int | None = None, **kwargs: Any):
     """``load_env(spec)`` with the orientation options: ``up`` and ``flip`` describe how a map
     *file* is stored and are refused for built-ins (which have no file); ``azimuth`` rotates any
-    map. The one rule of every verb (``shrm report`` included)."""
+    map; ``layer`` and ``part`` pick the layer/part of an OpenEXR file (refused for built-ins;
+    ``load_env`` refuses them for other formats). The one rule of every verb (``shrm report``
+    included)."""
     if spec.strip().startswith("builtin:"):
         if up or flip:
             raise BadInputError(spec, "--env-up/--env-flip apply to map files, not to built-in environments")
+        if layer is not None or part is not None:
+            raise BadInputError(spec, "--env-layer/--env-part apply to OpenEXR files, not to built-in environments")
         return load_env(spec, azimuth=azimuth, **kwargs)
-    return load_env(spec, up=up, flip=flip, azimuth=azimuth, **kwargs)
+    return load_env(spec, up=up, flip=flip, azimuth=azimuth, layer=layer, part=part, **kwargs)
 
 
 def load_env_arg(spec: str, args: argparse.Namespace, **kwargs: Any):
