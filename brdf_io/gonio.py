@@ -1,0 +1,250 @@
+"""Gonioreflectometer CSV files (NIST-style Mueller-matrix BRDF tables), input.
+
+Format (``data_specs/gonio_csv.md``): comma-separated text, one header line naming the
+columns, then one measurement per line. The columns this reader uses, found by name (case and
+surrounding spaces ignored; any other columns, such as the 15 normalized Mueller elements
+``f_r12/f_r11`` … ``f_r44/f_r11``, are ignored):
+
+==========  ==================================  ==============================
+column      meaning                             unit
+==========  ==================================  ==============================
+``lambda``  wavelength                          µm
+``thetai``  incidence polar angle θ_i (signed)  degrees
+``phi``     incidence azimuth φ_i (or ``phii``)  degrees
+``thetar``  scattering polar angle θ_r          degrees
+``phir``    scattering azimuth φ_r              degrees
+``f_r11``   the unpolarised BRDF (Mueller m11)  1/sr
+==========  ==================================  ==============================
+
+Directions: ω = (sin θ cos φ, sin θ sin φ, cos θ) for both, pointing away from the surface
+(L toward the source, V toward the detector), evaluated with the *signed* θ as written. A
+negative θ_i therefore means the source at |θ_i| on the opposite azimuth, φ_i + 180° — the
+convention of NIST's regular PTFE set, which writes θ_i = 0, −15, …, −75° with φ_i = 0: its
+forward-scattering peaks then sit at the mirror direction (θ_r ≈ |θ_i|, φ_r ≈ 0), and no
+detector position coincides with the source (closest 5.7°), whereas reading |θ_i| at φ_i = 0
+would put the detector on the source in some rows. The random set (positive θ_i, arbitrary
+φ_i) reads with the same formula (closest approach to the source 5.0°). |θ| <= 90° is
+required; negative θ_r is read with the same rule.
+
+Wavelength: a file may hold several (the regular PTFE set: 351, 532, 633, 1064 nm). With one
+wavelength it is used; with several, ``wavelength_nm`` must choose one (rows within 0.5 nm);
+otherwise :class:`BadInputError` lists them. The BRDF is monochrome, so ``rgb`` repeats
+f_r11; ``spectral`` is f_r11 as (n, 1) and ``wavelengths`` the chosen one (nm).
+
+Negative f_r11 (detector noise on dark samples) are clamped to 0 and counted in
+``n_clipped`` (3 per value, the RGB components); a row with another number of fields than
+the header (a truncated file), or NaN, infinite or non-numeric entries in a used column, are
+errors naming the line.
+
+Public objects: :func:`read_gonio_csv`, :func:`gonio_wavelengths`, :data:`GONIO_COLUMNS`.
+
+References
+----------
+T. A. Germer, "Full four-dimensional and reciprocal Mueller matrix bidirectional reflectance
+distribution function of sintered polytetrafluoroethylene", Applied Optics 56(33), 9333–9340,
+2017, doi:10.1364/AO.56.009333 (the PTFE data, NIST).
+F. E. Nicodemus et al., "Geometrical Considerations and Nomenclature for Reflectance", NBS
+Monograph 160, 1977 (BRDF definition, f_r).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import os
+import re
+from pathlib import Path
+
+import numpy as np
+
+from .cornell import ScatteredBRDF
+from .errors import BadInputError
+from .limits import check_elements, read_bytes
+
+__all__ = ["GONIO_COLUMNS", "read_gonio_csv", "gonio_wavelengths"]
+
+#: Column used → accepted header names (lower case).
+GONIO_COLUMNS: dict[str, tuple[str, ...]] = {
+    "lambda": ("lambda", "wavelength"),
+    "thetai": ("thetai", "theta_i"),
+    "phii": ("phi", "phii", "phi_i"),
+    "thetar": ("thetar", "theta_r"),
+    "phir": ("phir", "phi_r"),
+    "f_r11": ("f_r11", "fr11", "brdf"),
+}
+
+#: Rows whose wavelength is within this many nm of the requested one are used.
+WAVELENGTH_TOLERANCE_NM = 0.5
+
+
+def _columns(path: Path, header: list[str]) -> dict[str, int]:
+    names = [h.strip().lower() for h in header]
+    found: dict[str, int] = {}
+    missing = []
+    for key, accepted in GONIO_COLUMNS.items():
+        hits = [k for k, name in enumerate(names) if name in accepted]
+        if len(hits) > 1:
+            raise BadInputError(path, f"line 1: column {key!r} appears {len(hits)} times ({[header[k] for k in hits]})")
+        if hits:
+            found[key] = hits[0]
+        else:
+            missing.append("/".join(accepted))
+    if missing:
+        raise BadInputError(
+            path, f"line 1: missing column(s) {', '.join(missing)}; header has {', '.join(h.strip() for h in header)}"
+        )
+    return found
+
+
+_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+_MAX_TOKEN = 64  # longest number field, characters
+
+
+def _number(path: Path, line_no: int, key: str, field: str) -> float:
+    """One decimal number field; BadInputError naming line and column otherwise (``nan``,
+    ``inf``, ``1_000``, overflowing and empty fields included)."""
+    if len(field) <= _MAX_TOKEN and _NUMBER.fullmatch(field):
+        value = float(field)
+        if np.isfinite(value):
+            return value
+    if field.lower().lstrip("+-") in ("nan", "inf", "infinity") or _NUMBER.fullmatch(field):
+        raise BadInputError(path, f"line {line_no}: column {key}: {field[:_MAX_TOKEN]!r} is not finite")
+    raise BadInputError(path, f"line {line_no}: column {key}: {field[:_MAX_TOKEN]!r} is not a number")
+
+
+def _table(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """(data (n, 6) in GONIO_COLUMNS order, line numbers (n,))."""
+    raw = read_bytes(path, "gonioreflectometer CSV")
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as err:
+        raise BadInputError(path, f"not a UTF-8 text CSV file (byte {err.start})") from None
+    # at most one row per line: size the arrays before parsing (limits.check_elements)
+    n_lines = text.count("\n") + 1
+    check_elements(path, (n_lines, len(GONIO_COLUMNS)), "gonioreflectometer rows")
+    reader = csv.reader(io.StringIO(text))
+    try:
+        header = next(reader)
+    except StopIteration:
+        raise BadInputError(path, "empty file (expected a header line naming the columns)") from None
+    except csv.Error as err:
+        raise BadInputError(path, f"line 1: {err}") from None
+    cols = _columns(path, header)
+    keys = list(GONIO_COLUMNS)
+    order = [cols[key] for key in keys]
+    data = np.empty((n_lines, len(keys)))
+    lines = np.empty(n_lines, dtype=np.int64)
+    n = 0
+    try:
+        for record in reader:
+            line_no = reader.line_num
+            if not record or all(not field.strip() for field in record):
+                continue
+            if len(record) != len(header):
+                raise BadInputError(path, f"line {line_no}: {len(record)} fields, the header has {len(header)}")
+            data[n] = [_number(path, line_no, key, record[k].strip()) for key, k in zip(keys, order, strict=True)]
+            lines[n] = line_no
+            n += 1
+    except csv.Error as err:
+        raise BadInputError(path, f"line {reader.line_num}: {err}") from None
+    if n == 0:
+        raise BadInputError(path, "no measurement rows after the header")
+    return data[:n], lines[:n]
+
+
+def _wavelengths_nm(data: np.ndarray) -> np.ndarray:
+    return np.unique(np.round(data[:, 0] * 1000.0, 3))
+
+
+def gonio_wavelengths(path: str | os.PathLike[str]) -> list[float]:
+    """The distinct wavelengths of a gonioreflectometer CSV, in nm, ascending.
+
+    Raises
+    ------
+    BadInputError
+        As :func:`read_gonio_csv` (missing columns, non-numeric or non-finite entries).
+    """
+    data, _ = _table(Path(path))
+    return [float(w) for w in _wavelengths_nm(data)]
+
+
+def _parse_wavelength(path: Path, wavelength_nm: float | str) -> float:
+    if isinstance(wavelength_nm, str):
+        match = re.fullmatch(r"\s*([0-9]*\.?[0-9]+(?:[eE][-+]?\d+)?)\s*(nm|um|µm)?\s*", wavelength_nm)
+        if not match:
+            raise BadInputError(path, f"wavelength {wavelength_nm!r} is not a number of nm (e.g. '532' or '532nm')")
+        value = float(match.group(1)) * (1000.0 if match.group(2) in ("um", "µm") else 1.0)
+    else:
+        value = float(wavelength_nm)
+    if not (np.isfinite(value) and value > 0):
+        raise BadInputError(path, f"wavelength {wavelength_nm!r} must be a positive number of nm")
+    return value
+
+
+def read_gonio_csv(path: str | os.PathLike[str], wavelength_nm: float | str | None = None) -> ScatteredBRDF:
+    """Read a gonioreflectometer BRDF CSV (NIST PTFE layout, ``data_specs/gonio_csv.md``).
+
+    Parameters
+    ----------
+    path
+        The CSV file.
+    wavelength_nm
+        Wavelength to use, in nm (a number, or a string ``"532"``, ``"532nm"``, ``"0.532um"``);
+        required when the file holds several. Rows within 0.5 nm are used.
+
+    Returns
+    -------
+    ScatteredBRDF
+        ``L`` (n, 3) toward the source, ``V`` (n, 3) toward the detector (unit vectors,
+        normal +z, signed-θ convention of the module docstring), ``rgb`` (n, 3) f_r11 in 1/sr
+        repeated (negative values clamped to 0, ``n_clipped`` = 3 × their number),
+        ``spectral`` (n, 1) f_r11, ``wavelengths`` [λ in nm], ``name`` ``<stem>@<λ>nm``.
+
+    Raises
+    ------
+    BadInputError
+        Unreadable or non-UTF-8 file, more lines than ``SHRM_MAX_ELEMENTS`` allows (checked
+        before parsing), missing or duplicate columns (the message lists the header), a row
+        with another number of fields than the header, a used entry that is not a finite
+        decimal number (with the line number and column), |θ| > 90°, several wavelengths and
+        none chosen (they are listed), a requested wavelength the file lacks, no rows.
+    """
+    path = Path(path)
+    data, lines = _table(path)
+    available = _wavelengths_nm(data)
+    listed = ", ".join(f"{w:g}" for w in available)
+    if wavelength_nm is None:
+        if len(available) > 1:
+            first = f"{available[0]:g}"
+            raise BadInputError(
+                path, f"{len(available)} wavelengths in the file ({listed} nm): choose one, e.g. '{path}#{first}' "
+                f"or read_gonio_csv(path, wavelength_nm={first})",
+            )
+        chosen = float(available[0])
+    else:
+        chosen = _parse_wavelength(path, wavelength_nm)
+    keep = np.abs(data[:, 0] * 1000.0 - chosen) <= WAVELENGTH_TOLERANCE_NM
+    if not np.any(keep):
+        raise BadInputError(path, f"no rows at {chosen:g} nm; the file has {listed} nm")
+    data, lines = data[keep], lines[keep]
+    _, theta_i, phi_i, theta_r, phi_r, f = data.T
+    for name, theta in (("thetai", theta_i), ("thetar", theta_r)):
+        bad = np.abs(theta) > 90.0 + 1e-9
+        if np.any(bad):
+            k = int(np.argmax(bad))
+            raise BadInputError(path, f"line {lines[k]}: {name} = {theta[k]:g}° outside [−90°, 90°]")
+    ti, pi_, tr, pr = (np.radians(a) for a in (theta_i, phi_i, theta_r, phi_r))
+    L = np.stack((np.sin(ti) * np.cos(pi_), np.sin(ti) * np.sin(pi_), np.cos(ti)), axis=-1)
+    V = np.stack((np.sin(tr) * np.cos(pr), np.sin(tr) * np.sin(pr), np.cos(tr)), axis=-1)
+    negative = f < 0
+    grey = np.maximum(f, 0.0)
+    return ScatteredBRDF(
+        L=L,
+        V=V,
+        rgb=np.repeat(grey[:, None], 3, axis=1),
+        spectral=f[:, None].copy(),
+        wavelengths=np.array([chosen]),
+        n_clipped=3 * int(np.count_nonzero(negative)),
+        name=f"{path.stem}@{chosen:g}nm",
+        source=str(path),
+    )
