@@ -170,6 +170,24 @@ def _write_seeds(folder: Path) -> dict[str, Reader]:
         write_pfm(cube / f"{face}.pfm", rng.uniform(0.0, 2.0, (4, 4, 3)).astype(np.float32))
     add("cube", ".pfm", [cube], mutations=("truncate", "flip", "text_number", "nonfinite", "special"))
 
+    rgl = sorted((SHARED / "brdf" / "rgl").glob("*.bsdf"))[:2]
+    add("rgl", ".bsdf", rgl, mutations=("truncate", "flip", "int32", "nonfinite", "append", "zero", "special"))
+
+    curet_src = SHARED / "brdf" / "curet"
+    if (curet_src / "abrdf.dat").exists():
+        curet = folder / "seed_curet"
+        curet.mkdir()
+        for name in ("abrdf.dat", "table.txt"):
+            shutil.copyfile(curet_src / name, curet / name)
+        add("curet", ".dat", [curet], mutations=("truncate", "flip", "text_number", "append", "zero", "special"))
+
+    ptfe = SHARED / "brdf" / "nist_ptfe" / "PTFE.data.random.csv"
+    if ptfe.exists():
+        lines = ptfe.read_text().splitlines()
+        gonio = folder / "seed_gonio.csv"
+        gonio.write_text("\n".join(lines[:1] + [x for x in lines[1:] if x.startswith("0.532")][:400]) + "\n")
+        add("gonio", ".csv", [gonio], mutations=("truncate", "flip", "text_number", "append", "zero", "special"))
+
     import trimesh
 
     sphere = trimesh.creation.icosphere(subdivisions=1)
@@ -375,11 +393,15 @@ def _probe_directions() -> tuple[np.ndarray, np.ndarray]:
 
 def load_and_check(reader: str, target: str) -> tuple[bool, str]:
     """Load ``target`` with the reader's public loader; (all values finite, summary)."""
-    if reader in ("merl", "table", "cornell", "fit_json", "spec"):
+    if reader in ("merl", "table", "cornell", "fit_json", "spec", "rgl", "curet", "gonio"):
+        import warnings
+
         from shrmkit.brdf_io.specs import load_brdf
 
-        brdf = load_brdf(target)
-        if reader == "cornell":
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            brdf = load_brdf(target)
+        if reader in ("cornell", "curet", "gonio"):
             return _finite(brdf.rgb) and _finite(brdf.L) and _finite(brdf.V), f"{len(brdf.rgb)} samples"
         L, V = _probe_directions()
         values = brdf.eval(L, V)
@@ -549,7 +571,14 @@ def _materialise(case: dict, content: bytes | str, seed_path: Path, work: Path) 
     reader = case["reader"]
     folder = work / f"{reader}_{case['index']}"
     folder.mkdir()
-    if reader == "cube":  # one face of a copied cube folder is mutated
+    if reader == "curet":  # abrdf.dat or table.txt of a copied folder is mutated
+        data = folder / "curet"
+        shutil.copytree(seed_path, data)
+        path = data / ("abrdf.dat", "table.txt")[case["index"] % 2]
+        path.unlink()
+        target = f"{data / 'abrdf.dat'}#{1 + case['index'] % 61}"
+        names = [str(data / "abrdf.dat"), str(path), str(data), path.name]
+    elif reader == "cube":  # one face of a copied cube folder is mutated
         cube = folder / "cube"
         shutil.copytree(seed_path, cube)
         face = ("px", "nx", "py", "ny", "pz", "nz")[case["index"] % 6]
@@ -561,6 +590,8 @@ def _materialise(case: dict, content: bytes | str, seed_path: Path, work: Path) 
         name = "probe_case" if reader == "probe" else "case"
         path = folder / f"{name}{suffix}"
         target, names = str(path), [str(path), path.name]
+        if reader == "gonio":
+            target = f"{path}#532"
     if isinstance(content, str):  # a special file
         if content == "fifo":
             os.mkfifo(path)
@@ -578,7 +609,7 @@ def _materialise(case: dict, content: bytes | str, seed_path: Path, work: Path) 
 def build_cases(readers: dict[str, Reader], seed: int, per_reader: int, only: set[str] | None) -> list[dict]:
     cases = []
     for r_index, reader in enumerate(sorted(readers)):
-        if only and reader not in only:
+        if (only and reader not in only) or not (readers[reader].seeds or readers[reader].text_seeds):
             continue
         for i in range(per_reader):
             cases.append({"reader": reader, "index": i, "seed": [seed, r_index, i]})
@@ -600,6 +631,8 @@ def _prepare(case: dict, readers: dict[str, Reader], work: Path) -> dict:
     if reader.name == "cube":
         source = seed_path / ("px", "nx", "py", "ny", "pz", "nz")[case["index"] % 6]
         source = source.with_suffix(".pfm")
+    elif reader.name == "curet":
+        source = seed_path / ("abrdf.dat", "table.txt")[case["index"] % 2]
     content, desc = mutate(reader, rng, source.read_bytes(), kind)
     target, names = _materialise(case, content, seed_path, work)
     return {**case, "target": target, "names": names, "mutation": f"{seed_path.name}: {desc}",
