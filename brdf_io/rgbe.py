@@ -1,18 +1,29 @@
-"""Radiance RGBE (``.hdr``) reader and writer.
+"""Radiance RGBE / XYZE (``.hdr``) reader and RGBE writer.
 
 The reader returns ``(H, W, 3)`` float32 linear RGB, row 0 at the top, and raises
-:class:`BadInputError` naming the file for a missing, truncated or malformed file; the
-writer is atomic.
+:class:`BadInputError` naming the file for a missing, truncated, malformed or oversized
+file; the writer is atomic. The reading rules (header, resolution line, the three pixel
+encodings, colour handling, size checks) are documented in ``data_specs/image_files.md``.
 
 References
 ----------
 - G. Ward, "Real Pixels", Graphics Gems II (1991) 80-83: the RGBE shared-exponent pixel.
-- Radiance file formats, https://radiance-online.org/learning/documentation/manual-pages
-  (``picture`` format: header, resolution string, run-length encodings).
+- Radiance ``doc/notes/picture.format`` and the Radiance sources
+  (https://github.com/NREL/Radiance, ``src/common``): ``header.c`` (``getheader``: the
+  header ends at the first line that is empty or ``"\\r"``; ``formatval``), ``resolu.h`` /
+  ``resolu.c`` (resolution line, ``YMAJOR``/``XDECR``/``YDECR``), ``image.c``
+  (``pix2loc``: pixel positions), ``color.c`` (``freadcolrs``: new-style run-length
+  scanlines; ``oldreadcolrs``: flat and pre-1991 run-length scanlines, chosen per
+  scanline), ``color.h`` / ``spec_rgb.c`` (standard primaries, ``xyz2rgbmat``,
+  von Kries white balance, ``clipgamut``), ``src/px/ra_xyze.c`` (XYZE and ``PRIMARIES``
+  conversion), ``src/px/pvalue.c`` (``-o``: original values divide by ``EXPOSURE`` and
+  ``COLORCORR``).
 """
 
 from __future__ import annotations
 
+import array
+import math
 import re
 from pathlib import Path
 
@@ -20,13 +31,31 @@ import numpy as np
 
 from .errors import BadInputError
 from .image_common import atomic_image_path, check_rgb
-from .limits import read_bytes
+from .limits import check_pixels, read_bytes
 
 __all__ = ["read_hdr", "write_hdr"]
 
 
-_RESOLUTION_RE = re.compile(rb"^([-+])Y (\d+) ([-+])X (\d+)$")
-_RLE_MIN_WIDTH, _RLE_MAX_WIDTH = 8, 32767
+_RLE_MIN_WIDTH, _RLE_MAX_WIDTH = 8, 32767  # color.c MINELEN, MAXELEN
+_HEADER_END_RE = re.compile(rb"\n\r?\n")  # an empty line, "\n" or "\r\n" (header.c getheader)
+_RESOLUTION_RE = re.compile(rb"^\s*([-+])([XY])\s+(\d{1,12})\s+([-+])([XY])\s+(\d{1,12})\s*$")
+_NUMBER_RE = re.compile(rb"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)")
+_RESOLUTION_MAX_BYTES = 64  # Radiance reads it into a 32-byte buffer (resolu.h RESOLU_BUFLEN)
+_BLOCK_BYTES = 1 << 22  # output bytes decoded / converted per block (bounds temporaries)
+_OLD_WINDOW = 1 << 20  # 4-byte groups examined per step of the old-style decoder
+
+# Radiance's standard RGB primaries (color.h "nominal CRT primaries", CIE xy of R, G, B and
+# white): Rec.709 red and blue, green x 0.290 (Rec.709: 0.300), equal-energy white.
+STANDARD_PRIMARIES = ((0.640, 0.330), (0.290, 0.600), (0.150, 0.060), (1.0 / 3.0, 1.0 / 3.0))
+WHITE_EFFICACY = 179.0  # lm/W, color.h WHTEFFICACY: XYZE luminance <-> RGBE radiance
+_CEPS = 1e-4  # spec_rgb.c CEPS: chromaticities this close are equal
+_VON_KRIES = np.array(  # spec_rgb.c vkmat ("Sharp" primaries), XYZ -> cone-like space
+    [[1.2694, -0.0988, -0.1706], [-0.8364, 1.8006, 0.0357], [0.0297, -0.0315, 1.0018]]
+)
+
+# mantissa * 2**(e - 136) for e = 1..255 (e = 0: black); exact in float32 (2**-135 is a
+# float32 subnormal, and 8 mantissa bits above it stay exact)
+_EXPONENT_SCALE = np.concatenate(([0.0], np.ldexp(1.0, np.arange(1, 256) - 136))).astype(np.float32)
 
 
 def _rgbe_to_float(rgbe: np.ndarray) -> np.ndarray:
@@ -35,9 +64,9 @@ def _rgbe_to_float(rgbe: np.ndarray) -> np.ndarray:
     This is Ward's (and stb_image's, OpenCV's) decoding without the half-step offset
     that the Radiance tools add; :func:`_float_to_rgbe` rounds to nearest to match it.
     """
-    exponent = rgbe[..., 3].astype(np.int32)
-    scale = np.where(exponent > 0, np.ldexp(np.float32(1.0), exponent - 136), 0.0).astype(np.float32)
-    return rgbe[..., :3].astype(np.float32) * scale[..., None]
+    out = rgbe[..., :3].astype(np.float32)
+    out *= _EXPONENT_SCALE[rgbe[..., 3]][..., None]
+    return out
 
 
 def _float_to_rgbe(image: np.ndarray) -> np.ndarray:
@@ -57,99 +86,460 @@ def _float_to_rgbe(image: np.ndarray) -> np.ndarray:
     return out
 
 
-def _parse_hdr_header(path: Path, data: bytes) -> tuple[int, int, bool, bool, float, int]:
-    """Return (height, width, flip_rows, flip_cols, exposure, data offset)."""
-    if not (data.startswith(b"#?RADIANCE") or data.startswith(b"#?RGBE")):
-        raise BadInputError(path, "not a Radiance .hdr file (missing '#?RADIANCE' magic)")
-    end = data.find(b"\n\n")
-    if end < 0:
-        raise BadInputError(path, "truncated Radiance header (no blank line ending the header)")
-    exposure = 1.0
-    for line in data[:end].split(b"\n")[1:]:
-        if line.startswith(b"FORMAT=") and line.strip() != b"FORMAT=32-bit_rle_rgbe":
-            raise BadInputError(path, f"unsupported Radiance pixel format {line.decode(errors='replace')!r}")
-        if line.startswith(b"EXPOSURE="):
-            try:
-                exposure *= float(line[9:])
-            except ValueError:
-                raise BadInputError(path, f"bad EXPOSURE line {line.decode(errors='replace')!r}") from None
-    res_end = data.find(b"\n", end + 2)
-    if res_end < 0:
-        raise BadInputError(path, "truncated Radiance file (no resolution line)")
-    match = _RESOLUTION_RE.match(data[end + 2 : res_end].strip())
-    if not match:
-        line = data[end + 2 : res_end][:40].decode(errors="replace")
-        raise BadInputError(path, f"unsupported Radiance resolution line {line!r} (need '[-+]Y H [-+]X W')")
-    height, width = int(match.group(2)), int(match.group(4))
-    if height == 0 or width == 0:
-        raise BadInputError(path, f"zero-size image ({width} x {height})")
-    if not (np.isfinite(exposure) and exposure > 0):
-        raise BadInputError(path, f"EXPOSURE product {exposure} is not positive")
-    return height, width, match.group(1) == b"+", match.group(3) == b"-", exposure, res_end + 1
+# ------------------------------------------------------------------------------------------- colour
+def _white_xyz(xy: tuple[float, float]) -> np.ndarray:
+    x, y = xy
+    return np.array([x / y, 1.0, (1.0 - x - y) / y])
 
 
-def _decode_rle(path: Path, buf: bytes, pos: int, height: int, width: int) -> np.ndarray:
-    """Decode new-style run-length-encoded scanlines into (height, width, 4) uint8.
+def _rgb_to_xyz_matrix(primaries) -> np.ndarray:
+    """RGB -> XYZ for primaries ((xr, yr), (xg, yg), (xb, yb), (xw, yw)); RGB (1, 1, 1) maps
+    to the white with Y = 1 (the same matrix as spec_rgb.c ``comprgb2xyzmat``)."""
+    chroma = np.array([[x, y, 1.0 - x - y] for x, y in primaries[:3]]).T  # columns: R, G, B
+    return chroma * np.linalg.solve(chroma, _white_xyz(primaries[3]))[None, :]
 
-    Each scanline starts with the bytes 2, 2, width >> 8, width & 255; then the four
-    components follow one after another, each as chunks: a count byte c > 128 followed
-    by one value repeated c - 128 times, or 0 < c <= 128 followed by c literal bytes.
-    The Python loop only walks the chunk headers; the bytes are gathered with numpy.
+
+def _von_kries(white_from, white_to) -> np.ndarray:
+    """XYZ -> XYZ von Kries adaptation between two white points (spec_rgb.c ``compxyzWBmat``,
+    with the exact inverse of ``vkmat`` where Radiance uses a 4-digit table)."""
+    ratio = (_VON_KRIES @ _white_xyz(white_to)) / (_VON_KRIES @ _white_xyz(white_from))
+    return np.linalg.solve(_VON_KRIES, ratio[:, None] * _VON_KRIES)
+
+
+_XYZ_TO_STANDARD = np.linalg.inv(_rgb_to_xyz_matrix(STANDARD_PRIMARIES))  # color.h/spec_rgb.c xyz2rgbmat
+_STANDARD_BRIGHTNESS = _rgb_to_xyz_matrix(STANDARD_PRIMARIES)[1]  # color.h CIE_rf, CIE_gf, CIE_bf
+
+
+def _primaries_matrix(primaries) -> np.ndarray | None:
+    """File RGB -> standard RGB (ra_xyze: ``comprgb2rgbWBmat``, then ``clipgamut``).
+
+    None (no conversion) when the primaries are the standard ones within Radiance's
+    tolerance 1e-4 (Radiance writes them with 4 decimals), and when they do not define a
+    colour space (spec_rgb.c ``colorprimsOK`` fails, e.g. Photoshop's ``PRIMARIES=0 0 0 0 0
+    0 0 0``): such a line says nothing, and the pixels are taken as standard RGB.
     """
-    n_total = len(buf)
-    starts: list[int] = []  # source offset of each chunk's first value byte
-    counts: list[int] = []  # output bytes of each chunk
-    runs: list[bool] = []
-    for row in range(height):
-        if pos + 4 > n_total:
-            raise BadInputError(path, f"truncated RLE data at scanline {row} of {height}")
-        if buf[pos] != 2 or buf[pos + 1] != 2 or (buf[pos + 2] << 8 | buf[pos + 3]) != width:
-            raise BadInputError(path, f"corrupt RLE data: bad scanline header at scanline {row}")
-        pos += 4
-        for _component in range(4):
-            filled = 0
-            while filled < width:
-                if pos >= n_total:
-                    raise BadInputError(path, f"truncated RLE data at scanline {row} of {height}")
-                c = buf[pos]
-                if c > 128:
-                    c -= 128
-                    starts.append(pos + 1)
-                    runs.append(True)
-                    pos += 2
-                elif c > 0:
-                    starts.append(pos + 1)
-                    runs.append(False)
-                    pos += 1 + c
+    points = np.array(primaries, dtype=np.float64)
+    if np.abs(points - np.array(STANDARD_PRIMARIES)).max() <= _CEPS:
+        return None
+    (xw, yw), rgb = points[3], points[:3]
+    distinct = all(np.abs(points[i] - points[j]).max() > _CEPS for i in range(4) for j in range(i + 1, 4))
+    sane = (
+        _CEPS < xw < 1 - _CEPS
+        and _CEPS < yw < 1 - _CEPS
+        and bool(np.all((rgb > -2) & (rgb < 3) & (rgb.sum(axis=1)[:, None] > -2) & (rgb.sum(axis=1)[:, None] < 3)))
+    )
+    if not (distinct and sane):
+        return None
+    try:
+        with np.errstate(all="ignore"):
+            matrix = _XYZ_TO_STANDARD @ _von_kries(primaries[3], STANDARD_PRIMARIES[3]) @ _rgb_to_xyz_matrix(primaries)
+    except np.linalg.LinAlgError:  # primaries on one line
+        return None
+    return matrix if np.all(np.isfinite(matrix)) else None
+
+
+def _clip_gamut(block: np.ndarray) -> None:
+    """Radiance ``clipgamut(col, bright(col), CGAMUT_LOWER, cblack, cwhite)`` in place: a colour
+    with a negative channel is desaturated toward the grey of the same brightness until its
+    lowest channel is 0 (brightness = luminance kept); negative brightness becomes black."""
+    r, g, b = block[..., 0], block[..., 1], block[..., 2]  # (channel-wise: reductions over 3 are slow)
+    outside = (r < 0) | (g < 0) | (b < 0)
+    if not outside.any():
+        return
+    weight = _STANDARD_BRIGHTNESS.astype(np.float32)
+    brightness = weight[0] * r + weight[1] * g + weight[2] * b
+    keep = np.ones_like(brightness)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for channel in (r, g, b):
+            np.minimum(keep, np.where(channel < 0, brightness / (brightness - channel), 1.0), out=keep)
+    np.clip(keep, 0.0, 1.0, out=keep)
+    keep[brightness <= 0] = 0.0  # black: below brtmin
+    brightness[brightness <= 0] = 0.0
+    for channel in (r, g, b):
+        clipped = np.maximum(keep * channel + (1 - keep) * brightness, 0.0)
+        np.copyto(channel, clipped, where=outside)
+
+
+# ------------------------------------------------------------------------------------------- header
+class _Header:
+    """What the header and resolution line of a Radiance picture say."""
+
+    __slots__ = ("xyz", "exposure", "colorcorr", "primaries", "ymajor", "xdecr", "ydecr", "width", "height", "pos")
+
+    @property
+    def scanlines(self) -> int:
+        return self.height if self.ymajor else self.width
+
+    @property
+    def scanline_length(self) -> int:
+        return self.width if self.ymajor else self.height
+
+
+def _numbers(path: Path, line: bytes, key: str, count: int) -> list[float]:
+    """``count`` leading numbers of a header value, read like C ``atof``/``sscanf``."""
+    values, pos = [], len(key)
+    for _ in range(count):
+        match = _NUMBER_RE.match(line, pos)
+        if not match:
+            raise BadInputError(path, f"bad {key[:-1]} line {line[:80].decode(errors='replace')!r}")
+        values.append(float(match.group(1)))
+        pos = match.end()
+    return values
+
+
+def _parse_header(path: Path, data: bytes) -> _Header:
+    if not data.startswith(b"#?"):
+        raise BadInputError(path, "not a Radiance .hdr file (missing '#?RADIANCE' magic)")
+    end = _HEADER_END_RE.search(data)
+    if end is None:
+        raise BadInputError(path, "truncated Radiance header (no empty line ending the header)")
+    head = _Header()
+    head.xyz = False
+    head.exposure = 1.0
+    head.colorcorr = [1.0, 1.0, 1.0]
+    head.primaries = None
+    for raw in data[: end.start()].split(b"\n")[1:]:
+        line = raw.rstrip(b"\r")
+        if line.startswith(b"FORMAT="):
+            value = line[7:].split()
+            fmt = value[0] if value else b""
+            if fmt in (b"32-bit_rle_rgbe", b"32-bit_rle_xyze"):
+                head.xyz = fmt == b"32-bit_rle_xyze"
+            else:
+                raise BadInputError(
+                    path,
+                    f"unsupported Radiance pixel format {line[:60].decode(errors='replace')!r} "
+                    "(need 32-bit_rle_rgbe or 32-bit_rle_xyze)",
+                )
+        elif line.startswith(b"EXPOSURE="):
+            head.exposure *= _numbers(path, line, "EXPOSURE=", 1)[0]
+        elif line.startswith(b"COLORCORR="):
+            head.colorcorr = [a * b for a, b in zip(head.colorcorr, _numbers(path, line, "COLORCORR=", 3), strict=True)]
+        elif line.startswith(b"PRIMARIES="):
+            try:
+                values = _numbers(path, line, "PRIMARIES=", 8)
+            except BadInputError:  # Radiance's primsval() fails: the line is ignored
+                continue
+            head.primaries = tuple(zip(values[0::2], values[1::2], strict=True))
+        # PIXASPECT=, VIEW=, SOFTWARE=, CAPDATE=, GAMMA= ... do not change pixel values
+    if not (math.isfinite(head.exposure) and head.exposure > 0):
+        raise BadInputError(path, f"EXPOSURE product {head.exposure:g} is not a positive number")
+    if not all(math.isfinite(c) and c > 0 for c in head.colorcorr):
+        raise BadInputError(path, f"COLORCORR product {' '.join(f'{c:g}' for c in head.colorcorr)} is not positive")
+
+    start = end.end()
+    stop = data.find(b"\n", start, start + _RESOLUTION_MAX_BYTES)
+    if stop < 0:
+        if len(data) - start < _RESOLUTION_MAX_BYTES:
+            raise BadInputError(path, "truncated Radiance file (no resolution line after the header)")
+        stop = start + _RESOLUTION_MAX_BYTES
+    match = _RESOLUTION_RE.match(data[start:stop])
+    if not match or match.group(2) == match.group(5):
+        line = data[start:stop][:40].decode(errors="replace")
+        raise BadInputError(
+            path, f"unsupported Radiance resolution line {line!r} (need e.g. '-Y H +X W' or '+X W -Y H')"
+        )
+    first = (match.group(1), match.group(2), int(match.group(3)))
+    second = (match.group(4), match.group(5), int(match.group(6)))
+    x_axis, y_axis = (second, first) if first[1] == b"Y" else (first, second)
+    head.ymajor = first[1] == b"Y"  # resolu.c str2resolu: Y first -> scanlines run along X
+    head.xdecr = x_axis[0] == b"-"
+    head.ydecr = y_axis[0] == b"-"
+    head.width, head.height = x_axis[2], y_axis[2]
+    head.pos = stop + 1
+    return head
+
+
+# ------------------------------------------------------------------------------------------ decoding
+class _Decoder:
+    """Decode the scanlines of a Radiance picture into file-order RGBE bytes.
+
+    Radiance (color.c ``freadcolrs``) decides per scanline: a scanline whose length is in
+    8..32767 and whose first bytes are 2, 2, h, l with h < 128 is new-style run-length
+    encoded (and h·256 + l must be the length); every other scanline is read by
+    ``oldreadcolrs``: 4-byte pixels, where a pixel (1, 1, 1, n) repeats the previous pixel
+    n << s times, s growing by 8 for each consecutive repeat pixel and restarting at 0 on
+    every other pixel and every scanline. Repeats stop at the end of the scanline (the
+    current Radiance), and a repeat at the start of a scanline copies the last pixel
+    decoded before it.
+
+    Python only walks the new-style chunk headers (one step per chunk) and the old-style
+    repeat pixels that meet a scanline end; bytes are moved by numpy, in blocks of
+    scanlines, so memory stays close to the output's 4 bytes per pixel.
+    """
+
+    def __init__(self, path: Path, data: bytes, pos: int, scanlines: int, length: int) -> None:
+        self.path, self.data, self.pos = path, data, pos
+        self.scanlines, self.length = scanlines, length
+        self.src = np.frombuffer(data, dtype=np.uint8)
+        self.out = np.empty((scanlines * length, 4), dtype=np.uint8)  # pages touched as decoded
+        self.done = 0  # pixels decoded so far, file order
+        self.rle_ok = _RLE_MIN_WIDTH <= length <= _RLE_MAX_WIDTH
+
+    def run(self) -> np.ndarray:
+        data, total = self.data, self.scanlines * self.length
+        while self.done < total:
+            p = self.pos
+            if self.rle_ok and len(data) >= p + 4 and data[p] == 2 and data[p + 1] == 2 and data[p + 2] < 128:
+                self._new_style()
+            else:
+                self._old_style()
+        return self.out.reshape(self.scanlines, self.length, 4)
+
+    def _truncated(self, kind: str) -> BadInputError:
+        row = self.done // self.length
+        return BadInputError(
+            self.path,
+            f"truncated {kind} RGBE data at scanline {row} of {self.scanlines} "
+            f"({len(self.data) - self.pos} bytes left)",
+        )
+
+    # ----- new-style run-length scanlines
+    def _new_style(self) -> None:
+        """Decode new-style scanlines until the image is complete or an old-style one begins."""
+        data, n, width = self.data, len(self.data), self.length
+        heads = array.array("I" if n < 2**32 else "Q")  # file offset of every chunk header
+        record = heads.append
+        first = row = self.done // width
+        starts = [self.pos]  # file offset of each scanline
+        chunks = [0]  # chunks before each scanline
+        pos = self.pos
+        try:
+            while row < self.scanlines:
+                if pos + 4 > n:
+                    raise IndexError
+                if data[pos] != 2 or data[pos + 1] != 2 or data[pos + 2] & 128:
+                    break  # an old-style scanline follows
+                if data[pos + 2] << 8 | data[pos + 3] != width:
+                    declared = data[pos + 2] << 8 | data[pos + 3]
+                    raise BadInputError(
+                        self.path, f"corrupt RLE data: scanline {row} declares length {declared}, expected {width}"
+                    )
+                pos += 4
+                for _component in range(4):
+                    filled = 0
+                    while filled < width:
+                        c = data[pos]
+                        record(pos)
+                        if c > 128:
+                            filled += c - 128
+                            pos += 2
+                        elif c:
+                            filled += c
+                            pos += c + 1
+                        else:
+                            raise BadInputError(self.path, f"corrupt RLE data: zero-length chunk at scanline {row}")
+                    if filled != width:
+                        raise BadInputError(self.path, f"corrupt RLE data: chunk overruns scanline {row}")
+                if pos > n:
+                    raise IndexError
+                row += 1
+                starts.append(pos)
+                chunks.append(len(heads))
+        except IndexError:
+            self.pos, self.done = starts[-1], row * width
+            raise self._truncated("run-length encoded") from None
+        self._gather(first, starts, chunks, np.frombuffer(heads, dtype=np.uint32 if heads.itemsize == 4 else np.uint64))
+        self.pos, self.done = pos, row * width
+
+    def _gather(self, first: int, starts: list[int], chunks: list[int], heads: np.ndarray) -> None:
+        """Expand the walked scanlines first, first + 1, ... into self.out, a block at a time.
+
+        Within a block the source offset of every output byte is a cumulative sum: +1 inside
+        a literal chunk, +0 inside a run, and a jump to the chunk's first value byte at the
+        start of each chunk.
+        """
+        src, width, count = self.src, self.length, len(starts) - 1
+        step = max(1, _BLOCK_BYTES // (4 * width))
+        for b0 in range(0, count, step):
+            b1 = min(count, b0 + step)
+            a = starts[b0]
+            head = heads[chunks[b0] : chunks[b1]].astype(np.int64) - a
+            code = src[head + a].astype(np.int32)
+            literal = code <= 128
+            length = np.where(literal, code, code - 128)
+            begin = head + 1  # first value byte, relative to a
+            last = begin + (length - 1) * literal  # source of each chunk's last output byte
+            step_in = np.repeat(literal.astype(np.int32), length)
+            out_start = np.cumsum(length) - length
+            step_in[out_start] = begin - np.concatenate(([0], last[:-1]))
+            source = np.cumsum(step_in, dtype=np.int64 if starts[b1] - a >= 2**31 else np.int32)
+            planes = src[a : starts[b1]][source]
+            target = self.out[(first + b0) * width : (first + b1) * width].reshape(b1 - b0, width, 4)
+            target[...] = planes.reshape(b1 - b0, 4, width).transpose(0, 2, 1)
+
+    # ----- flat and pre-1991 run-length scanlines
+    def _old_style(self) -> None:
+        """Decode old-style scanlines until the image is complete or a new-style one begins.
+
+        Windows of 4-byte groups are expanded at once (:meth:`_old_window`) up to the first
+        group whose meaning depends on where a scanline ends (a repeat crossing a scanline
+        end, a repeat after a repeat that completed a scanline, the first pixel, a new-style
+        start); such groups go one by one through :meth:`_old_groups`, a transcription of
+        ``oldreadcolrs``. The window shrinks where such groups are frequent.
+        """
+        total = self.scanlines * self.length
+        done, pos, shift, window, one_by_one = self.done, self.pos, 0, min(256, _OLD_WINDOW), 64
+        while done < total:
+            groups = min((len(self.data) - pos) // 4, window)
+            if groups == 0:
+                self.done, self.pos = done, pos
+                raise self._truncated("flat/old-style")
+            g = self.src[pos : pos + 4 * groups].reshape(groups, 4)
+            used, done, shift, more = self._old_window(g, done, shift)
+            if more and used < groups:
+                if used < 16:  # special groups are dense here: walk longer stretches one by one
+                    one_by_one = min(2 * one_by_one, 1 << 14)
+                    g = self.src[pos : pos + 4 * min((len(self.data) - pos) // 4, used + one_by_one)].reshape(-1, 4)
                 else:
-                    raise BadInputError(path, f"corrupt RLE data: zero-length chunk at scanline {row}")
-                counts.append(c)
-                filled += c
-            if filled != width or pos > n_total:
-                raise BadInputError(path, f"corrupt or truncated RLE data at scanline {row}")
-    start = np.asarray(starts, dtype=np.int64)
-    count = np.asarray(counts, dtype=np.int64)
-    chunk_of = np.repeat(np.arange(len(count)), count)
-    first_out = np.cumsum(count) - count
-    offset = np.arange(chunk_of.size, dtype=np.int64) - first_out[chunk_of]
-    offset[np.asarray(runs, dtype=bool)[chunk_of]] = 0  # a run repeats its one value byte
-    source = np.frombuffer(buf, dtype=np.uint8)
-    planes = source[start[chunk_of] + offset].reshape(height, 4, width)
-    return planes.transpose(0, 2, 1)
+                    one_by_one = 64
+                taken, done, shift, more = self._old_groups(g, used, min(len(g), used + one_by_one), done, shift)
+                window = min(max(64, 2 * used), _OLD_WINDOW)
+                used = taken
+            elif used == groups:
+                window = min(2 * window, _OLD_WINDOW)
+            pos += 4 * used
+            if not more:
+                break
+        self.done, self.pos = done, pos
+
+    def _old_window(self, g: np.ndarray, done: int, shift: int) -> tuple[int, int, int, bool]:
+        """Expand the longest prefix of groups g that needs no scanline bookkeeping.
+
+        Returns (groups used, pixels done, repeat shift, whether old-style groups may follow).
+        """
+        width, total, groups = self.length, self.scanlines * self.length, len(g)
+        repeat = (g[:, 0] == 1) & (g[:, 1] == 1) & (g[:, 2] == 1)
+        if not repeat.any():  # flat pixels: only new-style starts can interrupt them
+            first, more = min(groups, total - done), True
+            if self.rle_ok:
+                starts = np.arange((-done) % width, first, width)
+                looks = (g[starts, 0] == 2) & (g[starts, 1] == 2) & (g[starts, 2] < 128)
+                if looks.any():
+                    first, more = int(starts[np.argmax(looks)]), False
+            self.out[done : done + first] = g[:first]
+            done += first
+            return first, done, 0 if first else shift, more and done < total
+        index = np.arange(groups)
+        last_plain = np.maximum.accumulate(np.where(repeat, -1, index))
+        run = index - last_plain - 1 + np.where(last_plain < 0, shift // 8, 0)  # k-th repeat in a row
+        exponent = g[:, 3].astype(np.int64)
+        shifted = np.where(run >= 4, np.where(exponent > 0, total + 1, 0), exponent << (8 * np.clip(run, 0, 3)))
+        count = np.where(repeat, shifted, 1)
+        end = done + np.cumsum(count)
+        start = end - count
+        filling = repeat & (count > 0)
+        completes = filling & (end % width == 0)
+        special = filling & ((start // width != (end - 1) // width) | (end > total) | (start == 0))
+        special[1:] |= repeat[1:] & completes[:-1]  # Radiance restarts the shift on the next scanline
+        special |= start >= total
+        if self.rle_ok:
+            special |= (
+                ~repeat & (start % width == 0) & (g[:, 0] == 2) & (g[:, 1] == 2) & (g[:, 2] < 128)
+            )
+        first = int(np.argmax(special)) if special.any() else groups
+        if first:
+            out32 = self.out.view(np.uint32).reshape(-1)
+            values = np.ascontiguousarray(g[:first]).view(np.uint32).reshape(-1)
+            copies = repeat[:first] & (count[:first] > 0)
+            if copies.any():
+                source = last_plain[:first]
+                previous = out32[done - 1] if done else np.uint32(0)  # a leading repeat: the pixel before
+                values = np.where(copies, np.where(source >= 0, values[np.maximum(source, 0)], previous), values)
+            produced = int(end[first - 1]) - done
+            out32[done : done + produced] = np.repeat(values, count[:first])
+            done += produced
+            last = first - 1
+            shift = 8 * (int(run[last]) + 1) if repeat[last] and not completes[last] else 0
+        more = done < total and not (
+            first < groups and self.rle_ok and not repeat[first] and done % width == 0 and g[first, 0] == 2
+            and g[first, 1] == 2 and g[first, 2] < 128
+        )
+        return first, done, shift, more
+
+    def _old_groups(self, g: np.ndarray, i0: int, i1: int, done: int, shift: int) -> tuple[int, int, int, bool]:
+        """Groups g[i0:i1] one at a time, as color.c ``oldreadcolrs``; same return as _old_window."""
+        out32 = self.out.view(np.uint32).reshape(-1)
+        values = np.ascontiguousarray(g[i0:i1]).view(np.uint32).reshape(-1).tolist()
+        width, total = self.length, self.scanlines * self.length
+        for i, (r, gr, b, e) in enumerate(g[i0:i1].tolist(), start=i0):
+            if done == total:
+                return i, done, shift, False
+            if r == 1 and gr == 1 and b == 1:
+                count = e << min(shift, 64)  # any non-zero count << 64 exceeds a scanline
+                if count:
+                    if done == 0:
+                        raise BadInputError(self.path, "corrupt RGBE data: run-length repeat before the first pixel")
+                    take = min(count, width - done % width)
+                    out32[done : done + take] = out32[done - 1]
+                    done += take
+                    if done % width == 0:  # scanline complete: the next one starts afresh
+                        shift = 0
+                        continue
+                shift += 8
+            else:
+                if self.rle_ok and done % width == 0 and r == 2 and gr == 2 and b < 128:
+                    return i, done, shift, False  # a new-style scanline starts here
+                out32[done] = values[i - i0]
+                done += 1
+                shift = 0
+        return i1, done, shift, done < total
 
 
+def _smallest_encoding(length: int) -> int:
+    """Fewest bytes any scanline of ``length`` pixels can take: old-style, a pixel or repeat
+    groups (k groups repeat up to 256**k - 1 pixels); new-style, 4 + 4·2·ceil(length/127)."""
+    groups = 1
+    while 256**groups - 1 < length:
+        groups += 1
+    smallest = 4 * groups
+    if _RLE_MIN_WIDTH <= length <= _RLE_MAX_WIDTH:
+        smallest = min(smallest, 4 + 8 * -(-length // 127))
+    return smallest
+
+
+# ------------------------------------------------------------------------------------------- reading
 def read_hdr(path: str | Path) -> np.ndarray:
-    """Read a Radiance RGBE picture (new-style run-length encoded or flat).
+    """Read a Radiance picture (RGBE or XYZE; new-style run-length, pre-1991 run-length or flat).
 
-    The resolution line may be ``-Y H +X W`` (standard: top row first) or have either
-    axis reversed; transposed layouts (``+X ... Y ...``) and the pre-1991 run-length
-    scheme are refused. Pixel values are divided by the product of the ``EXPOSURE``
-    header lines (Radiance semantics; 1 when absent); ``COLORCORR`` is ignored.
+    Follows the Radiance library (``header.c``, ``resolu.c``, ``color.c``):
+
+    - Header: starts with ``#?`` and ends at the first empty line, ``\\n`` or ``\\r\\n``.
+      ``FORMAT=32-bit_rle_rgbe`` (default) or ``32-bit_rle_xyze``; pixel values are
+      divided by the product of the ``EXPOSURE=`` lines and, per channel, of the
+      ``COLORCORR=`` lines (``pvalue -o``: original values). ``PRIMARIES=`` (RGBE only)
+      converts from the given primaries to Radiance's standard ones, with von Kries white
+      adaptation; XYZE converts with Radiance's ``xyz2rgbmat`` and divides by the white
+      luminous efficacy 179 lm/W (both as ``ra_xyze -r``), then colours outside the RGB
+      gamut are desaturated to it (``clipgamut``). ``PIXASPECT=`` and other lines are
+      ignored.
+    - Resolution line: any of the eight orientations ``±Y H ±X W`` / ``±X W ±Y H``; the
+      first axis is the slow one, ``-`` means decreasing (Y grows upward).
+    - Scanlines: new-style run-length, pre-1991 run-length (repeat pixels ``1 1 1 n``) or
+      flat, decided per scanline.
+
+    Pixels decode as mantissa · 2^(e − 136) (Ward; no ½ offset). The standard RGB is
+    Rec.709 red and blue, green at x = 0.290 and equal-energy white (Radiance ``color.h``).
+
+    Parameters
+    ----------
+    path
+        A regular file (FIFOs and devices are refused without opening them).
 
     Returns
     -------
     numpy.ndarray
-        ``(H, W, 3)`` float32, row 0 at the top.
+        ``(H, W, 3)`` float32 linear RGB, finite; row 0 at the top, column 0 at the left.
+        Units as stored (Radiance: W·sr⁻¹·m⁻² per channel) after the header scalings.
+
+    Raises
+    ------
+    BadInputError
+        Not a regular file or over ``SHRM_MAX_FILE_BYTES``; not a Radiance picture; an
+        unsupported ``FORMAT``, unreadable ``EXPOSURE``/``COLORCORR``/``PRIMARIES`` or
+        resolution line; W·H over ``SHRM_MAX_PIXELS``; fewer bytes than the most compact
+        encoding of the declared size (checked before anything is allocated); truncated
+        or corrupt scanlines; values that overflow float32 after the scalings.
 
     Examples
     --------
@@ -166,33 +556,64 @@ def read_hdr(path: str | Path) -> np.ndarray:
     """
     path = Path(path)
     data = read_bytes(path, "image")
-    height, width, flip_rows, flip_cols, exposure, pos = _parse_hdr_header(path, data)
-    n_bytes = height * width * 4
-    is_rle = (
-        _RLE_MIN_WIDTH <= width <= _RLE_MAX_WIDTH
-        and len(data) >= pos + 4
-        and data[pos] == 2
-        and data[pos + 1] == 2
-        and data[pos + 2] < 128
-    )
-    if is_rle:
-        rgbe = _decode_rle(path, data, pos, height, width)
-    else:
-        if len(data) < pos + n_bytes:
-            raise BadInputError(
-                path, f"truncated flat RGBE data: {len(data) - pos} bytes, expected {n_bytes} for {width}x{height}"
-            )
-        rgbe = np.frombuffer(data, dtype=np.uint8, count=n_bytes, offset=pos).reshape(height, width, 4)
-    image = _rgbe_to_float(rgbe)
-    if flip_rows:
-        image = image[::-1]
-    if flip_cols:
-        image = image[:, ::-1]
-    if exposure != 1.0:
-        image = image / np.float32(exposure)
-    return np.ascontiguousarray(image)
+    head = _parse_header(path, data)
+    check_pixels(path, head.height, head.width)
+    scanlines, length = head.scanlines, head.scanline_length
+    available, needed = len(data) - head.pos, scanlines * _smallest_encoding(length)
+    if available < needed:
+        raise BadInputError(
+            path,
+            f"truncated RGBE data: {available:,} bytes after the header, but {scanlines:,} scanlines of "
+            f"{length:,} pixels need at least {needed:,} in any encoding",
+        )
+    rgbe = _Decoder(path, data, head.pos, scanlines, length).run()
+    del data
+
+    # per-channel division (EXPOSURE, COLORCORR), then a colour matrix (XYZE, PRIMARIES)
+    divisor = [head.exposure * c for c in head.colorcorr]
+    if not all(math.isfinite(d) and d > 0 for d in divisor):
+        raise BadInputError(path, f"EXPOSURE x COLORCORR = {' '.join(f'{d:g}' for d in divisor)} is not finite and > 0")
+    matrix = None
+    if head.xyz:
+        matrix = _XYZ_TO_STANDARD / WHITE_EFFICACY
+    elif head.primaries is not None:
+        matrix = _primaries_matrix(head.primaries)
+    with np.errstate(over="ignore", under="ignore"):  # overflow shows as non-finite pixels below
+        if matrix is not None:
+            transform = (matrix / np.array(divisor)[None, :]).T.astype(np.float32)
+        elif divisor[0] == divisor[1] == divisor[2]:
+            transform = None if divisor[0] == 1.0 else np.float32(divisor[0])
+        else:
+            transform = np.array(divisor, dtype=np.float32)
+
+    image = np.empty((head.height, head.width, 3), dtype=np.float32)
+    target = image if head.ydecr else image[::-1]  # pix2loc: row 0 of the result is the top
+    if head.xdecr:
+        target = target[:, ::-1]
+    if not head.ymajor:
+        target = target.transpose(1, 0, 2)  # scanlines are columns
+    step = max(1, _BLOCK_BYTES // (4 * length))
+    for s0 in range(0, scanlines, step):
+        pixels = rgbe[s0 : s0 + step]
+        if transform is None:  # straight into the result
+            rows = target[s0 : s0 + step]
+            rows[...] = pixels[..., :3]
+            rows *= _EXPONENT_SCALE[pixels[..., 3]][..., None]
+            continue
+        block = _rgbe_to_float(pixels)
+        with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+            if matrix is not None:
+                block = block @ transform
+                _clip_gamut(block)
+            else:
+                block /= transform
+        if not np.all(np.isfinite(block)):
+            raise BadInputError(path, "pixel values overflow float32 after EXPOSURE / COLORCORR / colour conversion")
+        target[s0 : s0 + step] = block
+    return image
 
 
+# ------------------------------------------------------------------------------------------- writing
 def _encode_rle_component(values: np.ndarray, out: bytearray) -> None:
     """Append one component of one scanline as RLE chunks (runs of >= 4 equal bytes)."""
     n = values.size
@@ -221,18 +642,24 @@ def _encode_rle_component(values: np.ndarray, out: bytearray) -> None:
 
 
 def write_hdr(path: str | Path, image: np.ndarray, rle: bool = True) -> None:
-    """Write a Radiance RGBE picture (``-Y H +X W``), atomically.
+    """Write a Radiance RGBE picture (``-Y H +X W``, ``FORMAT=32-bit_rle_rgbe``), atomically.
 
     Parameters
     ----------
     path
-        Destination file.
+        Destination file; its folder must exist.
     image
-        Non-negative linear RGB, row 0 at the top; each pixel keeps about 8 bits of
-        mantissa relative to its largest channel (relative error <= 0.4 % there).
+        ``(H, W, 3)`` non-negative finite linear RGB, row 0 at the top; each pixel keeps
+        about 8 bits of mantissa relative to its largest channel (relative error <= 0.4 %
+        there). Values must stay below 2**127.
     rle
         Use new-style run-length encoding (only possible for widths 8..32767; other
         widths are written flat).
+
+    Raises
+    ------
+    BadInputError
+        Wrong shape or dtype, negative / non-finite / too large values, missing folder.
     """
     path = Path(path)
     image = check_rgb(path, image)

@@ -161,8 +161,8 @@ def _hdr_rle_bytes() -> bytes:
     [
         ("magic.hdr", b"P6\n", "magic"),
         ("noend.hdr", b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n", "truncated Radiance header"),
-        ("format.hdr", b"#?RADIANCE\nFORMAT=32-bit_rle_xyze\n\n-Y 1 +X 1\n\0\0\0\0", "pixel format"),
-        ("res.hdr", HEADER + b"+X 2 +Y 2\n", "resolution"),
+        ("format.hdr", b"#?RADIANCE\nFORMAT=32-bit_rle_cmyk\n\n-Y 1 +X 1\n\0\0\0\0", "pixel format"),
+        ("res.hdr", HEADER + b"+X 2 +X 2\n", "resolution"),  # all 8 [-+]Y/X orders are valid; X twice is not
         ("zero.hdr", HEADER + b"-Y 0 +X 8\n", "zero-size"),
         ("flat.hdr", HEADER + b"-Y 2 +X 2\n" + b"\x80" * 12, "truncated flat"),
         ("rle.hdr", _hdr_rle_bytes()[:-3], "truncated"),
