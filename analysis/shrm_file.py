@@ -12,7 +12,7 @@ Layout (see ``data_specs/shrm_file.md``): a NumPy ``.npz`` archive with
 from __future__ import annotations
 
 import json
-import zipfile
+import math
 from pathlib import Path
 from typing import Any
 
@@ -20,25 +20,133 @@ import numpy as np
 
 from ..brdf_io.atomic import atomic_path
 from ..brdf_io.errors import BadInputError
-from ..brdf_io.jsonutil import to_jsonable
+from ..brdf_io.jsonutil import loads_strict, to_jsonable
+from ..brdf_io.npz_safe import NpzMember, read_npz
 
-__all__ = ["save_shrm", "read_shrm_fields", "FORMAT", "VERSION"]
+__all__ = ["save_shrm", "read_shrm_fields", "check_header", "FORMAT", "VERSION", "MAX_ORDER"]
 
 FORMAT = "shrmkit-shrm"
 VERSION = 1
 ORIENTATION = "z-up; row i at theta=(i+1/2)pi/H, column j at phi=2pi(j+1/2)/W from +x toward +y"
+#: Largest order F or P a header may state (no array is sized by F; P is also bounded by the
+#: element limit through the (P+1)² coefficient planes).
+MAX_ORDER = 100_000
+# 0-d unicode header: 2**24 characters is far more than a header ever needs
+_MEMBERS = {
+    "coeffs": NpzMember("f", "float32", ndim=4, itemsize=4),
+    "header": NpzMember("U", "a JSON string", ndim=0, max_bytes=4 * 2**24),
+    "cube": NpzMember("f", "float32", ndim=5, itemsize=4, required=False),
+}
+_REQUIRED_KEYS = ("format", "version", "F", "P", "tolerance", "eps", "grid", "orientation", "meta")
+
+
+def _is_int(value: Any) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def check_header(source: object, header: Any, has_cube: bool) -> None:
+    """Validate a parsed SHRM header (``data_specs/shrm_file.md``, "Load checks").
+
+    Parameters
+    ----------
+    source
+        The file named in the errors.
+    header
+        The parsed JSON header.
+    has_cube
+        Whether the archive holds a ``cube`` array (the header's ``cube`` must agree).
+
+    Raises
+    ------
+    BadInputError
+        Not an object; another format or version; a missing key; ``F``/``P`` not whole
+        numbers in [0, :data:`MAX_ORDER`]; ``tolerance`` not null or a number in (0, 1);
+        ``eps`` not an object of finite numbers or nulls; ``grid`` not ``"latlong"``;
+        ``orientation`` not a string; ``meta`` not an object; ``cube`` not null or a string,
+        or disagreeing with the arrays.
+    """
+    if not isinstance(header, dict):
+        raise BadInputError(source, f"not a shrmkit SHRM file (the header is a JSON {type(header).__name__})")
+    if header.get("format") != FORMAT:
+        raise BadInputError(source, f"not a shrmkit SHRM file (format {header.get('format')!r})")
+    version = header.get("version")
+    if not _is_int(version) or version != VERSION:
+        raise BadInputError(source, f"unsupported SHRM format version {version!r} (expected {VERSION})")
+    missing = [k for k in _REQUIRED_KEYS if k not in header]
+    if missing:
+        raise BadInputError(source, f"SHRM header lacks key(s) {', '.join(missing)}")
+    for key in ("F", "P"):
+        value = header[key]
+        if not _is_int(value) or not 0 <= value <= MAX_ORDER:
+            raise BadInputError(source, f"header {key}={value!r} is not a whole number in [0, {MAX_ORDER}]")
+    tolerance = header["tolerance"]
+    if tolerance is not None and not (_is_number(tolerance) and 0.0 < tolerance < 1.0):
+        raise BadInputError(source, f"header tolerance={tolerance!r} is not null or a number in (0, 1)")
+    eps = header["eps"]
+    if not isinstance(eps, dict):
+        raise BadInputError(source, f"header eps is a JSON {type(eps).__name__}, expected an object")
+    for key, value in eps.items():
+        if value is not None and not _is_number(value):
+            raise BadInputError(source, f"header eps[{key!r}]={value!r} is not a finite number or null")
+    if header["grid"] != "latlong":
+        raise BadInputError(source, f"header grid={header['grid']!r}; only 'latlong' is supported")
+    if not isinstance(header["orientation"], str):
+        raise BadInputError(source, "header orientation is not a string")
+    if not isinstance(header["meta"], dict):
+        raise BadInputError(source, f"header meta is a JSON {type(header['meta']).__name__}, expected an object")
+    cube = header.get("cube")
+    if cube is not None and not isinstance(cube, str):
+        raise BadInputError(source, f"header cube={cube!r} is not null or a string")
+    if (cube is not None) != has_cube:
+        raise BadInputError(
+            source, "header describes a cube map but the file has no cube array" if cube is not None
+            else "the file has a cube array but its header says cube null",
+        )
+
+
+def _check_arrays(source: object, P: int, coeffs: np.ndarray, cube: np.ndarray | None) -> None:
+    n = (P + 1) ** 2
+    if coeffs.ndim != 4 or coeffs.shape[0] != n or coeffs.shape[3] != 3:
+        raise BadInputError(source, f"coefficient array {coeffs.dtype} {coeffs.shape} does not match P={P}: "
+                            f"expected ({n}, H, W, 3)")
+    H, W = coeffs.shape[1:3]
+    if H < 1 or W != 2 * H:
+        raise BadInputError(source, f"coefficient map of {H} x {W} (rows x columns); expected H >= 1, W = 2H")
+    if cube is not None and (
+        cube.ndim != 5 or cube.shape[:2] != (n, 6) or cube.shape[2] != cube.shape[3] or cube.shape[2] < 1
+        or cube.shape[4] != 3
+    ):
+        raise BadInputError(source, f"cube array {cube.dtype} {cube.shape} does not match P={P}: "
+                            f"expected ({n}, 6, S, S, 3), S >= 1")
+    for name, array in (("coefficients", coeffs), ("cube coefficients", cube)):
+        if array is not None and not np.all(np.isfinite(array)):
+            raise BadInputError(source, f"{int(np.count_nonzero(~np.isfinite(array)))} non-finite {name}")
 
 
 def save_shrm(path: str | Path, shrm: Any) -> Path:
     """Write ``shrm`` (an :class:`~shrmkit.analysis.shrm.SHRM`: ``F``, ``P``, ``coeffs``, ``tolerance``,
-    ``eps``, ``meta``, ``cube``) to ``path`` (``.shrm.npz``) atomically; returns the path."""
+    ``eps``, ``meta``, ``cube``) to ``path`` (``.shrm.npz``) atomically; returns the path.
+
+    A tolerance that is not finite (an SHRM built by hand) is written as ``null``; non-finite
+    ``eps`` and ``meta`` numbers as ``null``.
+
+    Raises
+    ------
+    BadInputError
+        What :func:`read_shrm_fields` would refuse (negative orders, shapes, non-finite
+        coefficients): nothing is written.
+    """
     path = Path(path)
     header = {
         "format": FORMAT,
         "version": VERSION,
         "F": int(shrm.F),
         "P": int(shrm.P),
-        "tolerance": float(shrm.tolerance),
+        "tolerance": to_jsonable(float(shrm.tolerance)),
         "eps": to_jsonable(shrm.eps),
         "grid": "latlong",
         "orientation": ORIENTATION,
@@ -48,9 +156,12 @@ def save_shrm(path: str | Path, shrm: Any) -> Path:
     arrays = {"coeffs": np.asarray(shrm.coeffs, dtype=np.float32)}
     if shrm.cube is not None:
         arrays["cube"] = np.asarray(shrm.cube, dtype=np.float32)
+    text = json.dumps(header, allow_nan=False)
+    check_header(path, loads_strict(text, path, "SHRM header"), "cube" in arrays)
+    _check_arrays(path, header["P"], arrays["coeffs"], arrays.get("cube"))
     with atomic_path(path, suffix=".npz") as tmp:
         with open(tmp, "wb") as handle:
-            np.savez_compressed(handle, header=json.dumps(header), **arrays)
+            np.savez_compressed(handle, header=text, **arrays)
     return path
 
 
@@ -58,33 +169,33 @@ def read_shrm_fields(path: str | Path) -> dict[str, Any]:
     """Read and validate a file written by :func:`save_shrm`; returns the keyword arguments of
     :class:`~shrmkit.analysis.shrm.SHRM` (``shrmkit.load_shrm`` builds the object).
 
+    Every member's declared dtype, shape and size are checked against the limits before it is
+    read (:func:`~shrmkit.brdf_io.npz_safe.read_npz`), then the whole header
+    (:func:`check_header`) and the arrays against it.
+
+    Returns
+    -------
+    dict
+        ``F``, ``P`` (int), ``coeffs`` (float32 ((P+1)², H, W, 3)), ``tolerance`` (float; NaN
+        when the header says null), ``eps``, ``meta`` (dicts), ``cube`` (float32
+        ((P+1)², 6, S, S, 3) or None).
+
     Raises
     ------
     BadInputError
-        Missing or unreadable file, wrong format or version, inconsistent shapes,
+        Missing, special or unreadable file; a member of the wrong dtype or with a declared
+        size over the limits or unlike the archive's; a header that is not strict JSON or
+        fails :func:`check_header`; array shapes that disagree with P (or an empty map);
         non-finite coefficients.
     """
     path = Path(path)
-    if not path.is_file():
-        raise BadInputError(path, "no such SHRM file")
-    try:
-        with np.load(path, allow_pickle=False) as archive:
-            coeffs = archive["coeffs"]
-            header = json.loads(str(archive["header"]))
-            cube = archive["cube"] if "cube" in archive.files else None
-    except (OSError, ValueError, KeyError, zipfile.BadZipFile, json.JSONDecodeError, EOFError) as err:
-        raise BadInputError(path, f"not a readable .shrm.npz file ({type(err).__name__}: {err})") from None
-    if not isinstance(header, dict) or header.get("format") != FORMAT:
-        raise BadInputError(path, f"not a shrmkit SHRM file (format {header.get('format')!r})")
-    if header.get("version") != VERSION:
-        raise BadInputError(path, f"unsupported SHRM format version {header.get('version')!r} (expected {VERSION})")
-    F, P = int(header["F"]), int(header["P"])
-    if coeffs.dtype != np.float32 or coeffs.ndim != 4 or coeffs.shape[0] != (P + 1) ** 2 or coeffs.shape[3] != 3:
-        raise BadInputError(path, f"coefficient array {coeffs.dtype} {coeffs.shape} does not match P={P}")
-    if cube is not None and (cube.dtype != np.float32 or cube.shape[:2] != ((P + 1) ** 2, 6) or cube.ndim != 5):
-        raise BadInputError(path, f"cube array {cube.dtype} {cube.shape} does not match P={P}")
-    for name, array in (("coefficients", coeffs), ("cube coefficients", cube)):
-        if array is not None and not np.all(np.isfinite(array)):
-            raise BadInputError(path, f"{int(np.count_nonzero(~np.isfinite(array)))} non-finite {name}")
-    return {"F": F, "P": P, "coeffs": coeffs, "tolerance": float(header["tolerance"]), "eps": header["eps"],
+    arrays = read_npz(path, _MEMBERS, what="an SHRM file")
+    header = loads_strict(str(arrays["header"][()]), path, "SHRM header")
+    coeffs = np.asarray(arrays["coeffs"], dtype=np.float32)
+    cube = None if "cube" not in arrays else np.asarray(arrays["cube"], dtype=np.float32)
+    check_header(path, header, cube is not None)
+    F, P = header["F"], header["P"]
+    _check_arrays(path, P, coeffs, cube)
+    tolerance = math.nan if header["tolerance"] is None else float(header["tolerance"])
+    return {"F": F, "P": P, "coeffs": coeffs, "tolerance": tolerance, "eps": header["eps"],
             "meta": header["meta"], "cube": cube}

@@ -622,7 +622,9 @@ def _prepare(case: dict, readers: dict[str, Reader], work: Path) -> dict:
     if reader.text_seeds:
         spec = reader.text_seeds[int(rng.integers(0, len(reader.text_seeds)))]
         target, desc = mutate_spec(rng, spec) if case["index"] >= len(reader.text_seeds) else (spec, "seed")
-        return {**case, "target": target, "names": [target], "mutation": desc, "is_seed": desc == "seed"}
+        # a message may quote the spec (repr) or escape its control characters
+        names = [target, repr(target), target.encode("unicode_escape").decode(), "empty" if not target.strip() else ""]
+        return {**case, "target": target, "names": names, "mutation": desc, "is_seed": desc == "seed"}
     seed_path = reader.seeds[int(rng.integers(0, len(reader.seeds)))]
     kind = reader.mutations[int(rng.integers(0, len(reader.mutations)))]
     if case["index"] < len(reader.seeds):  # the first cases are the seeds themselves: they must load

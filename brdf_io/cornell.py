@@ -18,7 +18,9 @@ Cornell University Program of Computer Graphics measurements, as distributed wit
 
 from __future__ import annotations
 
+import math
 import os
+import re
 from pathlib import Path
 
 import numpy as np
@@ -26,8 +28,9 @@ import numpy as np
 from .brdf import BRDF, Kind
 from .colour import WAVELENGTHS_NM, spectral_to_linear_srgb
 from .errors import BadInputError, ScatteredEvalError
+from .limits import check_elements, read_bytes
 
-__all__ = ["ScatteredBRDF", "read_cornell", "SCATTERED_EVAL_MESSAGE"]
+__all__ = ["ScatteredBRDF", "read_cornell", "SCATTERED_EVAL_MESSAGE", "MAX_MEASURED_RHO", "MAX_WAVELENGTHS"]
 
 SCATTERED_EVAL_MESSAGE = (
     "scattered measurements cannot be evaluated everywhere: fit a model "
@@ -95,20 +98,27 @@ class ScatteredBRDF(BRDF):
         raise ScatteredEvalError(f"{self.name}: {SCATTERED_EVAL_MESSAGE}")
 
 
-def _numbers(path: Path, line_no: int, text: str) -> list[float]:
-    try:
-        return [float(tok) for tok in text.split()]
-    except ValueError:
-        bad = next(tok for tok in text.split() if not _is_float(tok))
-        raise BadInputError(path, f"line {line_no}: {bad!r} is not a number") from None
+#: Largest spectral BRDF value accepted, 1/sr. The Cornell data peak at 655 1/sr; a value a
+#: thousand times larger than any measured specular peak is a broken file, not a measurement.
+MAX_MEASURED_RHO = 1e6
+#: Largest wavelength count accepted in the header (the reader converts exactly 31).
+MAX_WAVELENGTHS = 1000
+_MAX_TOKEN = 64  # longest number token, characters
+_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+_NON_FINITE = re.compile(r"[+-]?(?:nan|inf|infinity)", re.IGNORECASE)
 
 
-def _is_float(tok: str) -> bool:
-    try:
-        float(tok)
-    except ValueError:
-        return False
-    return True
+def _number(path: Path, line_no: int, token: str) -> float:
+    """One decimal number token (``1``, ``-0.5``, ``2.5e-3``); BadInputError otherwise."""
+    if len(token) <= _MAX_TOKEN and _NUMBER.fullmatch(token):
+        value = float(token)
+        if math.isfinite(value):
+            return value
+        raise BadInputError(path, f"line {line_no}: non-finite number {token!r} (overflows a float)")
+    if _NON_FINITE.fullmatch(token):
+        raise BadInputError(path, f"line {line_no}: non-finite number {token!r}")
+    shown = token if len(token) <= _MAX_TOKEN else token[:_MAX_TOKEN] + "..."
+    raise BadInputError(path, f"line {line_no}: {shown!r} is not a number")
 
 
 def read_cornell(path: str | os.PathLike[str]) -> ScatteredBRDF:
@@ -117,35 +127,45 @@ def read_cornell(path: str | os.PathLike[str]) -> ScatteredBRDF:
     Returns
     -------
     ScatteredBRDF
-        With ``L`` the incident and ``V`` the scattered directions, ``spectral`` the
-        file's values, ``rgb`` their linear sRGB (brdf_io/colour.py), clipped at 0.
+        With ``L`` the incident and ``V`` the scattered directions, (n, 3) unit vectors;
+        ``spectral`` the file's values, (n, 31) in 1/sr; ``rgb`` their linear sRGB
+        (brdf_io/colour.py), clipped at 0, (n, 3) in 1/sr.
 
     Raises
     ------
     BadInputError
-        Unreadable or non-numeric content, a wavelength count or list other than
-        31 values 400, 410, ..., 700 nm, a row with the wrong number of values (truncated
-        file), angles outside the upper hemisphere, non-finite or negative values, no rows.
+        Missing file, a FIFO, device or folder (refused before it is opened), a file over
+        the size limit, non-ASCII or non-numeric content, a number token other than a
+        decimal number (``nan``, ``inf``, ``1e999``, more than 64 characters), a wavelength
+        count that is not a whole number in [1, 1000], a wavelength list other than the 31
+        values 400, 410, ..., 700 nm, a row with the wrong number of values (truncated
+        file), θ outside [0, π/2], |φ| above 2π, negative values or values above
+        :data:`MAX_MEASURED_RHO`, no rows.
     """
     path = Path(path)
     try:
-        text = path.read_text(encoding="ascii")
-    except (OSError, UnicodeDecodeError) as err:
-        raise BadInputError(path, f"cannot read Cornell .brdf file ({err})") from None
+        text = read_bytes(path, "Cornell .brdf file").decode("ascii")
+    except UnicodeDecodeError as err:
+        raise BadInputError(path, f"cannot read Cornell .brdf file: not ASCII text (byte {err.start})") from None
+    lines = text.splitlines()
     n_wavelengths: int | None = None
     wavelengths: list[float] = []
-    rows: list[list[float]] = []
+    data: np.ndarray | None = None
+    n_rows = 0
     row_lines: list[int] = []
-    for line_no, line in enumerate(text.splitlines(), start=1):
+    for line_no, line in enumerate(lines, start=1):
         body = line.split("#", 1)[0].strip()
         if not body:
             continue
-        numbers = _numbers(path, line_no, body)
+        numbers = [_number(path, line_no, tok) for tok in body.split()]
         if n_wavelengths is None:
             # header 1: the number of wavelengths (possibly followed by the first ones)
             count = numbers[0]
-            if count != int(count) or count < 1:
-                raise BadInputError(path, f"line {line_no}: wavelength count {count!r} is not a positive integer")
+            if count != int(count) or not 1 <= count <= MAX_WAVELENGTHS:
+                raise BadInputError(
+                    path, f"line {line_no}: wavelength count {count!r} is not a positive integer "
+                    f"(at most {MAX_WAVELENGTHS})"
+                )
             n_wavelengths = int(count)
             numbers = numbers[1:]
         if len(wavelengths) < n_wavelengths:
@@ -161,33 +181,49 @@ def read_cornell(path: str | os.PathLike[str]) -> ScatteredBRDF:
             raise BadInputError(
                 path, f"line {line_no}: {len(numbers)} numbers, expected 4 angles + {n_wavelengths} values"
             )
-        rows.append(numbers)
+        if data is None:  # at most one row per remaining line: checked, then allocated once
+            shape = (len(lines) - line_no + 1, 4 + n_wavelengths)
+            check_elements(path, shape, "Cornell measurement rows")
+            data = np.empty(shape)
+        data[n_rows] = numbers
+        n_rows += 1
         row_lines.append(line_no)
     if n_wavelengths is None or len(wavelengths) < n_wavelengths:
         raise BadInputError(path, "no wavelength header (count, then the wavelengths in nm)")
     if n_wavelengths != WAVELENGTHS_NM.size or not np.allclose(wavelengths, WAVELENGTHS_NM):
+        shown = wavelengths if len(wavelengths) <= 40 else [*wavelengths[:40], "..."]
         raise BadInputError(
-            path, f"wavelengths {wavelengths} are not the 31 values 400, 410, ..., 700 nm this reader converts"
+            path, f"wavelengths {shown} are not the 31 values 400, 410, ..., 700 nm this reader converts"
         )
-    if not rows:
+    if data is None:
         raise BadInputError(path, "no measurement rows")
-    data = np.array(rows)
-    bad = ~np.all(np.isfinite(data), axis=1)
-    if np.any(bad):
-        raise BadInputError(path, f"line {row_lines[int(np.argmax(bad))]}: non-finite number")
+    data = data[:n_rows]
     theta_i, phi_i, theta_s, phi_s = data[:, :4].T
     thetas = np.stack((theta_i, theta_s), axis=1)
     bad = np.any((thetas < 0) | (thetas > np.pi / 2 + 1e-6), axis=1)
     if np.any(bad):
         k = int(np.argmax(bad))
         raise BadInputError(
-            path, f"line {row_lines[k]}: theta_i={theta_i[k]!r}, theta_s={theta_s[k]!r} outside [0, pi/2]"
+            path, f"line {row_lines[k]}: theta_i={float(theta_i[k])!r}, theta_s={float(theta_s[k])!r} outside [0, pi/2]"
+        )
+    bad = (np.abs(phi_i) > 2 * np.pi + 1e-6) | (np.abs(phi_s) > 2 * np.pi + 1e-6)
+    if np.any(bad):
+        k = int(np.argmax(bad))
+        raise BadInputError(
+            path, f"line {row_lines[k]}: phi_i={float(phi_i[k])!r}, phi_s={float(phi_s[k])!r} outside [-2pi, 2pi]"
         )
     spectral = data[:, 4:]
     bad = np.any(spectral < 0, axis=1)
     if np.any(bad):
         k = int(np.argmax(bad))
-        raise BadInputError(path, f"line {row_lines[k]}: negative BRDF value {spectral[k].min()!r}")
+        raise BadInputError(path, f"line {row_lines[k]}: negative BRDF value {float(spectral[k].min())!r}")
+    bad = np.any(spectral > MAX_MEASURED_RHO, axis=1)
+    if np.any(bad):
+        k = int(np.argmax(bad))
+        raise BadInputError(
+            path, f"line {row_lines[k]}: BRDF value {float(spectral[k].max())!r} above {MAX_MEASURED_RHO:g} 1/sr "
+            "(not a plausible measurement)"
+        )
     rgb = spectral_to_linear_srgb(spectral)
     return ScatteredBRDF(
         L=_direction(theta_i, phi_i),  # incident direction = light

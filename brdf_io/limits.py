@@ -99,6 +99,8 @@ def regular_file(path: str | Path, what: str = "file") -> int:
         raise BadInputError(path, "no such file") from None
     except OSError as err:
         raise BadInputError(path, f"cannot read ({err.strerror or err})") from None
+    except ValueError:  # a NUL character in the path
+        raise BadInputError(repr(str(path)), "not a valid file name (contains a NUL character)") from None
     if stat.S_ISDIR(info.st_mode):
         raise BadInputError(path, f"is a folder, expected a {what}")
     if not stat.S_ISREG(info.st_mode):

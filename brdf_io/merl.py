@@ -29,7 +29,9 @@ from .atomic import atomic_path
 from .brdf import BRDF, Kind
 from .errors import BadInputError
 from .halfdiff import directions_to_halfdiff, halfdiff_to_directions
+from .limits import check_elements, regular_file
 from .masked_grid import MaskedTableBRDF, MissingAwareGrid, eval_with_mask
+from .table import MAX_TABLE_RHO
 
 __all__ = [
     "MERL_DIMS",
@@ -118,11 +120,20 @@ class MerlBRDF(MaskedTableBRDF):
 def read_merl(path: str | os.PathLike[str]) -> MerlBRDF:
     """Read a MERL ``.binary`` file (data_specs/merl_binary.md).
 
+    Returns
+    -------
+    MerlBRDF
+        ``values`` of shape (3, 90, 90, 180), rho in 1/sr, NaN where the file stores a
+        negative number (a missing measurement).
+
     Raises
     ------
     BadInputError
-        Unreadable file, header dims other than (90, 90, 180), a length other than the
-        12 + 3·8·n bytes the header implies (truncated or trailing bytes), NaN or Inf.
+        Missing file, a FIFO, device or folder (refused before it is opened, by
+        :func:`~shrmkit.brdf_io.limits.regular_file`), a file over the size limit, a length
+        other than the 12 + 3·8·n bytes the header implies (truncated or trailing bytes;
+        checked against the file size before any data is read), header dims other than
+        (90, 90, 180), NaN or Inf, rho above :data:`~shrmkit.brdf_io.table.MAX_TABLE_RHO`.
 
     Examples
     --------
@@ -150,36 +161,49 @@ def read_merl(path: str | os.PathLike[str]) -> MerlBRDF:
     >>> folder.cleanup()
     """
     path = Path(path)
+    size = regular_file(path, "MERL .binary file")
+    if size < _HEADER_BYTES:
+        raise BadInputError(path, f"{size} bytes, shorter than the 12-byte MERL header")
     try:
-        data = path.read_bytes()
+        with path.open("rb") as handle:
+            head = handle.read(_HEADER_BYTES)
+            dims = tuple(int(d) for d in np.frombuffer(head, dtype=_HEADER, count=3))
+            if min(dims) <= 0:
+                raise BadInputError(path, f"header dims {dims} are not positive: not a MERL .binary file")
+            # 3 channels of n float64 after the header (Python integers: no overflow)
+            expected = _HEADER_BYTES + 3 * _SAMPLE.itemsize * dims[0] * dims[1] * dims[2]
+            if size != expected:
+                raise BadInputError(
+                    path,
+                    f"{'truncated' if size < expected else 'trailing bytes'}: header dims {dims} imply "
+                    f"{expected} bytes (12 + 3*8*n), the file has {size}",
+                )
+            if dims != MERL_DIMS:
+                raise BadInputError(path, f"header dims {dims}; only the MERL sampling {MERL_DIMS} is supported")
+            check_elements(path, (3, *dims), "MERL table")
+            data = handle.read(expected - _HEADER_BYTES + 1)
     except OSError as err:
         raise BadInputError(path, f"cannot read MERL file ({err.strerror or err})") from None
-    if len(data) < _HEADER_BYTES:
-        raise BadInputError(path, f"{len(data)} bytes, shorter than the 12-byte MERL header")
-    dims = tuple(int(d) for d in np.frombuffer(data, dtype=_HEADER, count=3))
-    if min(dims) <= 0:
-        raise BadInputError(path, f"header dims {dims} are not positive: not a MERL .binary file")
-    # 3 channels of n float64 after the header
-    expected = _HEADER_BYTES + 3 * _SAMPLE.itemsize * dims[0] * dims[1] * dims[2]
-    if len(data) != expected:
-        raise BadInputError(
-            path,
-            f"{'truncated' if len(data) < expected else 'trailing bytes'}: header dims {dims} imply "
-            f"{expected} bytes (12 + 3*8*n), the file has {len(data)}",
-        )
-    if dims != MERL_DIMS:
-        raise BadInputError(path, f"header dims {dims}; only the MERL sampling {MERL_DIMS} is supported")
+    if len(data) != expected - _HEADER_BYTES:
+        raise BadInputError(path, "file changed size while being read")
     # channel-major planes (R, G, B), each [θ_h][θ_d][φ_d] with φ_d fastest (C order)
-    stored = np.frombuffer(data, dtype=_SAMPLE, offset=_HEADER_BYTES).reshape(3, *MERL_DIMS)
+    stored = np.frombuffer(data, dtype=_SAMPLE).reshape(3, *MERL_DIMS)
     bad = ~np.isfinite(stored)
     if np.any(bad):
         c, i, j, k = (int(x[0]) for x in np.nonzero(bad))
         raise BadInputError(
-            path, f"{int(bad.sum())} non-finite value(s), first {stored[c, i, j, k]!r} at channel {c}, "
+            path, f"{int(bad.sum())} non-finite value(s), first {float(stored[c, i, j, k])!r} at channel {c}, "
             f"index ({i}, {j}, {k})"
         )
     # negative = missing measurement; scale per channel R, G, B
     values = np.where(stored < 0, np.nan, stored * MERL_SCALE[:, None, None, None])
+    huge = values > MAX_TABLE_RHO
+    if np.any(huge):
+        c, i, j, k = (int(x[0]) for x in np.nonzero(huge))
+        raise BadInputError(
+            path, f"{int(huge.sum())} value(s) above rho = {MAX_TABLE_RHO:g} 1/sr, first stored "
+            f"{float(stored[c, i, j, k])!r} at channel {c}, index ({i}, {j}, {k})"
+        )
     return MerlBRDF(values, name=path.stem, source=str(path))
 
 
@@ -194,15 +218,19 @@ def tabulate_merl(brdf: BRDF) -> np.ndarray:
     Raises
     ------
     BadInputError
-        The BRDF returned negative or non-finite values.
+        The BRDF returned negative, infinite or above
+        :data:`~shrmkit.brdf_io.table.MAX_TABLE_RHO` values.
     """
     th, td, pd = merl_sample_angles()
     L, V = halfdiff_to_directions(th[:, None, None], td[None, :, None], pd[None, None, :])
     rho, has = eval_with_mask(brdf, L, V)
     above = (L[..., 2] > 0) & (V[..., 2] > 0)
     rho = np.where((has & above)[..., None], rho, np.nan)
-    if np.any(np.isinf(rho)) or np.any(rho < 0):
-        raise BadInputError(brdf.name, "the BRDF returned negative or infinite values at MERL sample positions")
+    if np.any(np.isinf(rho)) or np.any(rho < 0) or np.any(rho > MAX_TABLE_RHO):
+        raise BadInputError(
+            brdf.name,
+            f"the BRDF returned negative, infinite or above-{MAX_TABLE_RHO:g} values at MERL sample positions",
+        )
     return np.ascontiguousarray(np.moveaxis(rho, -1, 0))
 
 
@@ -220,7 +248,8 @@ def write_merl(path: str | os.PathLike[str], brdf_or_values: BRDF | np.ndarray) 
     Raises
     ------
     BadInputError
-        Wrong shape, negative or infinite values.
+        Wrong shape, negative or infinite values, values above
+        :data:`~shrmkit.brdf_io.table.MAX_TABLE_RHO` (what :func:`read_merl` refuses).
 
     Examples
     --------
@@ -252,8 +281,10 @@ def write_merl(path: str | os.PathLike[str], brdf_or_values: BRDF | np.ndarray) 
         values = np.asarray(brdf_or_values, dtype=np.float64)
         if values.shape != (3, *MERL_DIMS):
             raise BadInputError(path, f"MERL values must have shape (3, 90, 90, 180), got {values.shape}")
-        if np.any(np.isinf(values)) or np.any(values < 0):
-            raise BadInputError(path, "MERL values must be finite and non-negative (NaN marks missing)")
+        if np.any(np.isinf(values)) or np.any(values < 0) or np.any(values > MAX_TABLE_RHO):
+            raise BadInputError(
+                path, f"MERL values must be finite, non-negative and at most {MAX_TABLE_RHO:g} (NaN marks missing)"
+            )
     # divide by the per-channel scale; missing -> -1 (any negative number means missing)
     stored = np.where(np.isnan(values), -1.0, values / MERL_SCALE[:, None, None, None])
 

@@ -8,10 +8,11 @@ Models
 ``phong``
     RH02 §6.3 (eq. in Appendix D): rho_hat = (s+1)/(2π) max(R·L, 0)^s with R the mirror
     direction of V. The model *defines* rho_hat; there is no horizon clipping, so the
-    lobe is exactly radially symmetric about R.
+    lobe is exactly radially symmetric about R; ``eval`` = rho_hat / max(cos θ_i, 1e-20).
 ``microfacet``
     RH02 eq. 11: rho_hat = exp(-(θ_h/σ)²) / (4πσ²), θ_h the angle between N and the half
-    vector; zero where N·L <= 0. The model defines rho_hat; ``eval`` divides by cos θ_i.
+    vector; zero where N·L <= 0. The model defines rho_hat; ``eval`` divides by
+    max(cos θ_i, 1e-20).
 ``lambert``
     rho = albedo / π.
 ``lafortune``
@@ -21,6 +22,9 @@ Models
     Cook & Torrance 1982 with a Beckmann (Walter et al. 2007 Smith G1 rational
     approximation) or GGX (exact separable Smith G1) distribution and Schlick's Fresnel:
     rho = kd/π + ks D(θ_h) F(V·H) G(L, V) / (4 cos θ_i cos θ_o).
+
+Parameter bounds (``MAX_SCALE`` ... ``COS_FLOOR`` below; data_specs/spec_strings.md) keep
+every model's values finite for every pair of unit directions; the spec parser enforces them.
 
 References
 ----------
@@ -37,6 +41,15 @@ import numpy as np
 from .brdf import BRDF, Kind, as_directions
 
 __all__ = [
+    "COS_FLOOR",
+    "MAX_SCALE",
+    "MAX_EXPONENT",
+    "SIGMA_RANGE",
+    "ALPHA_RANGE",
+    "MAX_LAFORTUNE_COEFF",
+    "MAX_LOBE_PEAK",
+    "MAX_LOBES",
+    "lafortune_lobe_peak",
     "PhongLobe",
     "SimplifiedMicrofacet",
     "Lambert",
@@ -46,6 +59,46 @@ __all__ = [
     "smith_g1_over_cos",
     "rgb",
 ]
+
+
+# Parameter bounds (data_specs/spec_strings.md; enforced by the spec parser, brdf_io/specs.py).
+# Inside them every model's ρ and ρ̂ are finite for every pair of unit directions, at most
+# about 1e33 1/sr (ρ̂/cos θ_i right at the horizon), checked on dense direction grids at the
+# extreme parameters (tests/brdf_io/test_hostile_brdf_files.py).
+
+#: ρ = ρ̂ / max(cos θ_i, COS_FLOOR) for the models that define ρ̂ (Phong, RH02 microfacet):
+#: a light direction within 1e-20 rad of the horizon (closer than any direction made from a
+#: float angle: cos(π/2) = 6.1e-17) no longer divides by zero or a denormal.
+COS_FLOOR = 1e-20
+#: Largest ``ks`` of ``phong``, ``microfacet`` and ``cook-torrance`` (and ``phong`` ρ̂ peak
+#: ks (s+1)/(2π) ≤ 1.6e12 with s at :data:`MAX_EXPONENT`).
+MAX_SCALE = 1e6
+#: Largest exponent: Phong ``s`` and Lafortune ``n`` (a lobe narrower than 0.03°).
+MAX_EXPONENT = 1e7
+#: RH02 microfacet σ, radians: 0.005 (0.29°, ρ̂ peak 3200 ks; the fit's own lower bound, and about
+#: where the frequency analysis still fits in memory) to 2.
+SIGMA_RANGE = (5e-3, 2.0)
+#: Cook–Torrance roughness α.
+ALPHA_RANGE = (1e-4, 4.0)
+#: Largest |Cxy|, |Cz| of a Lafortune lobe.
+MAX_LAFORTUNE_COEFF = 1e6
+#: Largest peak ks max(|Cxy|, |Cz|)^n of one Lafortune lobe, 1/sr (its maximum over all
+#: pairs of unit directions, since |LxVx + LyVy| + |LzVz| ≤ 1).
+MAX_LOBE_PEAK = 1e12
+#: Most lobes of a Lafortune model.
+MAX_LOBES = 16
+
+
+def lafortune_lobe_peak(cxy: np.ndarray, cz: np.ndarray, n: np.ndarray, ks: np.ndarray) -> np.ndarray:
+    """Per channel, the largest value ks max(Cxy (LxVx+LyVy) + Cz LzVz, 0)^n of a Lafortune
+    lobe over all unit directions, ks max(|Cxy|, |Cz|)^n (1/sr; ``inf`` if it overflows)."""
+    big = np.maximum(np.abs(np.asarray(cxy, dtype=np.float64)), np.abs(np.asarray(cz, dtype=np.float64)))
+    n = np.asarray(n, dtype=np.float64)
+    ks = np.asarray(ks, dtype=np.float64)
+    with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
+        log_peak = np.log(ks) + np.where(n > 0, n * np.log(np.where(big > 0, big, 1.0)), 0.0)
+        log_peak = np.where((big == 0) & (n > 0), -np.inf, log_peak)
+        return np.where(ks > 0, np.exp(np.minimum(log_peak, 1000.0)), 0.0)
 
 
 def rgb(value: float | tuple[float, float, float] | np.ndarray) -> np.ndarray:
@@ -105,11 +158,12 @@ class _DefinedByRhoHat(_Analytic):
     """A model that defines ρ̂ = ρ cos θ_i directly (RH02's Phong and simplified microfacet)."""
 
     def eval(self, L: np.ndarray, V: np.ndarray) -> np.ndarray:
-        """ρ = ρ̂ / cos θ_i above the surface, 0 below."""
+        """ρ = ρ̂ / max(cos θ_i, :data:`COS_FLOOR`) above the surface, 0 below."""
         L, V = as_directions(L, V)
         cos_i = L[..., 2]
         above = (cos_i > 0) & (V[..., 2] > 0)
-        return np.where(above[..., None], self.rho_hat(L, V) / np.where(above, cos_i, 1.0)[..., None], 0.0)
+        divisor = np.where(above, np.maximum(cos_i, COS_FLOOR), 1.0)
+        return np.where(above[..., None], self.rho_hat(L, V) / divisor[..., None], 0.0)
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -223,7 +277,7 @@ def smith_g1_over_cos(cos_t: np.ndarray, alpha: float, distribution: str) -> np.
     s = np.sqrt(1.0 - c * c)
     if distribution == "ggx":
         return 2.0 / (c + np.sqrt(c * c + alpha**2 * s * s))
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # branches np.where discards
         a = np.where(s > 0, c / (alpha * np.where(s > 0, s, 1.0)), np.inf)
         rational = (3.535 + 2.181 * a) / (alpha * s * (1.0 + 2.276 * a + 2.577 * a * a))
         return np.where(a < 1.6, rational, 1.0 / np.where(c > 0, c, 1.0))

@@ -16,13 +16,48 @@ Public objects: :func:`parse_params`, :class:`SpecParams`.
 
 from __future__ import annotations
 
+import math
+import re
 from collections.abc import Iterable, Sequence
 
 import numpy as np
 
 from .errors import BadInputError
 
-__all__ = ["parse_params", "SpecParams"]
+__all__ = ["parse_params", "parse_number", "SpecParams", "MAX_NUMBER_CHARS"]
+
+#: Longest number a spec value may spell, characters (``0.123456789012345678e-300`` is 25).
+MAX_NUMBER_CHARS = 64
+_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+_NON_FINITE = re.compile(r"[+-]?(?:nan|inf|infinity)", re.IGNORECASE)
+
+
+def _shown(text: str, limit: int = MAX_NUMBER_CHARS) -> str:
+    """``repr`` of a value for a message, cut to ``limit`` characters."""
+    return repr(text) if len(text) <= limit else repr(text[:limit]) + f"... ({len(text)} characters)"
+
+
+def parse_number(text: str) -> float:
+    """One finite decimal number (``8``, ``-0.5``, ``2.5e-3``; spaces around it ignored).
+
+    Raises
+    ------
+    ValueError
+        With the reason: not a decimal number (including Python-only spellings such as
+        ``1_000``), ``nan``/``inf``, a number that overflows a float (``1e999``), or a
+        spelling longer than :data:`MAX_NUMBER_CHARS` characters.
+    """
+    token = text.strip()
+    if len(token) > MAX_NUMBER_CHARS:
+        raise ValueError(f"is not a number of at most {MAX_NUMBER_CHARS} characters")
+    if _NON_FINITE.fullmatch(token):
+        raise ValueError("is not finite")
+    if not _NUMBER.fullmatch(token):
+        raise ValueError("is not a number")
+    value = float(token)
+    if not math.isfinite(value):
+        raise ValueError("is not finite (overflows a float)")
+    return value
 
 
 def parse_params(
@@ -95,21 +130,24 @@ class SpecParams:
         """The one or three (r/g/b) finite numbers given for ``key``."""
         self._ask(key)
         text = self.raw[key]
-        try:
-            values = [float(v) for v in text.split("/")]
-        except ValueError:
-            raise BadInputError(self.spec, f"parameter {key}={text!r} is not a number") from None
-        if len(values) not in (1, 3):
-            raise BadInputError(self.spec, f"parameter {key}={text!r}: give one value or r/g/b")
-        if not all(np.isfinite(values)):
-            raise BadInputError(self.spec, f"parameter {key}={text!r} is not finite")
+        parts = text.split("/")
+        if len(parts) not in (1, 3):
+            raise BadInputError(self.spec, f"parameter {key}={_shown(text)}: give one value or r/g/b")
+        values = []
+        for part in parts:
+            try:
+                values.append(parse_number(part))
+            except ValueError as err:
+                raise BadInputError(self.spec, f"parameter {key}={_shown(text)} {err}") from None
         return values
 
     def _check_range(self, key: str, values: list[float], lo: float, hi: float, lo_open: bool) -> None:
         for v in values:
             if v < lo or v > hi or (lo_open and v == lo):
                 bracket = "(" if lo_open else "["
-                raise BadInputError(self.spec, f"parameter {key}={self.raw[key]} outside {bracket}{lo:g}, {hi:g}]")
+                raise BadInputError(
+                    self.spec, f"parameter {key}={self.raw[key][:MAX_NUMBER_CHARS]} outside {bracket}{lo:g}, {hi:g}]"
+                )
 
     def color(
         self,
@@ -153,7 +191,9 @@ class SpecParams:
             return default
         value = self.raw[key].lower() if fold_case else self.raw[key]
         if value not in options:
-            raise BadInputError(self.spec, f"parameter {key}={self.raw[key]!r}: choose one of {', '.join(options)}")
+            raise BadInputError(
+                self.spec, f"parameter {key}={_shown(self.raw[key])}: choose one of {', '.join(options)}"
+            )
         return value
 
     def finish(self) -> None:

@@ -18,34 +18,49 @@ R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering", SIGGRA
 
 from __future__ import annotations
 
-import json
 import re
 from collections.abc import Callable
 from pathlib import Path
 
+import numpy as np
+
 from .brdf import BRDF
 from .cornell import read_cornell
 from .errors import BadInputError
+from .jsonutil import loads_strict
+from .limits import read_bytes, regular_file
 from .merl import read_merl
 from .models import (
+    ALPHA_RANGE,
+    MAX_EXPONENT,
+    MAX_LAFORTUNE_COEFF,
+    MAX_LOBE_PEAK,
+    MAX_LOBES,
+    MAX_SCALE,
+    SIGMA_RANGE,
     CookTorrance,
     Lafortune,
     LafortuneLobe,
     Lambert,
     PhongLobe,
     SimplifiedMicrofacet,
+    lafortune_lobe_peak,
 )
 from .spec_params import SpecParams, parse_params
 from .table import read_table
 
-__all__ = ["parse_spec", "brdf_from_spec", "load_brdf", "MODEL_NAMES"]
+__all__ = ["parse_spec", "brdf_from_spec", "load_brdf", "MODEL_NAMES", "MAX_JSON_BYTES"]
 
 _SPEC_RE = re.compile(r"^\s*([a-z][a-z0-9_-]*)\s*(?::(.*))?$")
+#: Largest ``.json`` model file read, bytes (a fit document is a few kilobytes).
+MAX_JSON_BYTES = 2**24
 
 
 def parse_spec(spec: str) -> tuple[str, dict[str, str]]:
     """Split ``name:key=value,...`` into the name and a dict of raw value strings
     (:func:`~shrmkit.brdf_io.spec_params.parse_params`)."""
+    if not spec.strip().isprintable():
+        raise BadInputError(repr(spec), "a spec string cannot hold control characters (line breaks, NUL, ...)")
     match = _SPEC_RE.match(spec)
     if not match:
         raise BadInputError(spec, "not a spec string of the form name:key=value,...")
@@ -55,13 +70,11 @@ def parse_spec(spec: str) -> tuple[str, dict[str, str]]:
 
 
 def _phong(p: SpecParams) -> BRDF:
-    return PhongLobe(s=p.scalar("s", None, 0.0, 1e7), ks=p.color("ks", 1.0, 0.0))
+    return PhongLobe(s=p.scalar("s", None, 0.0, MAX_EXPONENT), ks=p.color("ks", 1.0, 0.0, MAX_SCALE))
 
 
 def _microfacet(p: SpecParams) -> BRDF:
-    return SimplifiedMicrofacet(
-        sigma=p.scalar("sigma", None, 0.0, 2.0, lo_open=True), ks=p.color("ks", 1.0, 0.0)
-    )
+    return SimplifiedMicrofacet(sigma=p.scalar("sigma", None, *SIGMA_RANGE), ks=p.color("ks", 1.0, 0.0, MAX_SCALE))
 
 
 def _lambert(p: SpecParams) -> BRDF:
@@ -72,26 +85,35 @@ def _lafortune(p: SpecParams) -> BRDF:
     kd = p.color("kd", 0.0, 0.0, 1.0)
     lobes = []
     suffixes = {re.sub(r"^(cxy|cz|n|ks)", "", k) for k in p.raw if re.match(r"^(cxy|cz|n|ks)\d*$", k)}
+    numbered = [s for s in suffixes if s]
+    if any(len(s) > 2 or s.startswith("0") for s in numbered) or len(suffixes) > MAX_LOBES:
+        shown = sorted(s if len(s) <= 8 else s[:8] + "..." for s in numbered)
+        raise BadInputError(p.spec, f"lafortune lobes must be numbered 1, 2, ..., {MAX_LOBES} (got {shown})")
     order = sorted(suffixes, key=lambda s: 1 if s == "" else int(s))
     for k, sfx in enumerate(order, start=1):
         if (sfx == "" and k != 1) or (sfx != "" and int(sfx) != k):
             raise BadInputError(p.spec, f"lafortune lobes must be numbered 1, 2, 3, ... (got {order})")
-        lobes.append(
-            LafortuneLobe(
-                cxy=p.color(f"cxy{sfx}", -1.0),
-                cz=p.color(f"cz{sfx}", 1.0),
-                n=p.color(f"n{sfx}", None, 0.0, 1e7),
-                ks=p.color(f"ks{sfx}", 1.0, 0.0),
-            )
+        lobe = LafortuneLobe(
+            cxy=p.color(f"cxy{sfx}", -1.0, -MAX_LAFORTUNE_COEFF, MAX_LAFORTUNE_COEFF),
+            cz=p.color(f"cz{sfx}", 1.0, -MAX_LAFORTUNE_COEFF, MAX_LAFORTUNE_COEFF),
+            n=p.color(f"n{sfx}", None, 0.0, MAX_EXPONENT),
+            ks=p.color(f"ks{sfx}", 1.0, 0.0),
         )
+        peak = lafortune_lobe_peak(lobe.cxy, lobe.cz, lobe.n, lobe.ks)
+        if np.any(peak > MAX_LOBE_PEAK):
+            raise BadInputError(
+                p.spec, f"lafortune lobe {k}: peak ks*max(|cxy|,|cz|)^n = {float(peak.max()):.3g} exceeds "
+                f"{MAX_LOBE_PEAK:g} 1/sr",
+            )
+        lobes.append(lobe)
     return Lafortune(kd=kd, lobes=tuple(lobes))
 
 
 def _cook_torrance(p: SpecParams) -> BRDF:
     return CookTorrance(
         kd=p.color("kd", 0.0, 0.0, 1.0),
-        ks=p.color("ks", 1.0, 0.0),
-        alpha=p.scalar("alpha", None, 1e-4, 4.0),
+        ks=p.color("ks", 1.0, 0.0, MAX_SCALE),
+        alpha=p.scalar("alpha", None, *ALPHA_RANGE),
         f0=p.color("f0", 0.04, 0.0, 1.0),
         distribution=p.choice("dist", "beckmann", ("beckmann", "ggx")),
     )
@@ -115,6 +137,7 @@ def brdf_from_spec(spec: str) -> BRDF:
     BadInputError
         Unknown model or parameter, a missing parameter, or a value out of range.
     """
+    spec = spec.strip()  # a line break read along with the spec is not part of it
     name, raw = parse_spec(spec)
     if name not in _MODELS:
         raise BadInputError(spec, f"unknown BRDF model {name!r}; known: {', '.join(MODEL_NAMES)}")
@@ -125,14 +148,21 @@ def brdf_from_spec(spec: str) -> BRDF:
 
 
 def _read_model_json(path: Path) -> BRDF:
-    try:
-        doc = json.loads(path.read_text())
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as err:
-        raise BadInputError(path, f"not a readable JSON model file ({err})") from None
-    spec = doc.get("model_spec") if isinstance(doc, dict) else None
+    """The model of a ``.json`` file with a string key ``model_spec`` (data_specs/fit_json.md)."""
+    size = regular_file(path, "JSON model file")
+    if size > MAX_JSON_BYTES:
+        raise BadInputError(path, f"JSON model file of {size:,} bytes; at most {MAX_JSON_BYTES:,}")
+    doc = loads_strict(read_bytes(path, "JSON model file"), path, "JSON model file")
+    if not isinstance(doc, dict):
+        raise BadInputError(path, f"JSON model file holds a JSON {type(doc).__name__}, not an object")
+    spec = doc.get("model_spec")
     if not isinstance(spec, str):
         raise BadInputError(path, "JSON model file has no string key 'model_spec'")
-    return brdf_from_spec(spec)
+    try:
+        return brdf_from_spec(spec)
+    except BadInputError as err:
+        shown = spec if len(spec) <= 200 else spec[:200] + "..."
+        raise BadInputError(path, f"model_spec {shown!r}: {err.problem}") from None
 
 
 # extension -> reader
@@ -153,13 +183,24 @@ def load_brdf(spec_or_path: str | Path) -> BRDF:
     """Load a BRDF from a spec string (``"microfacet:sigma=0.2"``) or a file.
 
     Files are recognised by extension: ``.binary`` (MERL), ``.npz`` (shrmkit table),
-    ``.brdf`` (Cornell scattered measurements), ``.json`` (a fitted model).
+    ``.brdf`` (Cornell scattered measurements), ``.json`` (a fitted model: an object with
+    a string key ``model_spec``, strict UTF-8 JSON of at most :data:`MAX_JSON_BYTES`).
+
+    Returns
+    -------
+    BRDF
+        An analytic model, a :class:`~shrmkit.brdf_io.merl.MerlBRDF` or
+        :class:`~shrmkit.brdf_io.table.TableBRDF` (``eval`` gives ρ in 1/sr, shape
+        (..., 3)), or a :class:`~shrmkit.brdf_io.cornell.ScatteredBRDF`.
 
     Raises
     ------
     BadInputError
-        A missing file, an unknown file type, or a bad spec (the message names the spec,
-        the parameter and its value).
+        A missing file, a folder, FIFO or device (refused before it is opened), an unknown
+        file type, any problem its reader finds (naming the file; a bad ``model_spec``
+        inside a ``.json`` file names the file and the spec), or a bad spec (the message
+        names the spec, the parameter and its value; parameter bounds in
+        ``data_specs/spec_strings.md``).
 
     Examples
     --------
@@ -198,17 +239,28 @@ def load_brdf(spec_or_path: str | Path) -> BRDF:
     >>> load_brdf("microfacet:sigma=-1")
     Traceback (most recent call last):
     ...
-    shrmkit.brdf_io.errors.BadInputError: microfacet:sigma=-1: parameter sigma=-1 outside (0, 2]
+    shrmkit.brdf_io.errors.BadInputError: microfacet:sigma=-1: parameter sigma=-1 outside [0.005, 2]
     """
     text = str(spec_or_path)
+    shown = text if text.isprintable() else repr(text)  # errors stay one line
+    if not text.strip() or "\0" in text:
+        raise BadInputError(repr(text), "neither a BRDF file nor a BRDF spec (empty, or holds NUL)")
     path = Path(text)
     known = (*_FILE_READERS, ".json")
     if path.suffix.lower() in known:
-        if not path.exists():
-            raise BadInputError(path, "no such file")
+        if not _exists(path):
+            raise BadInputError(shown, "no such file")
         return _read_brdf_file(path)
     if ":" in text or text.split(":")[0] in _MODELS:
         return brdf_from_spec(text)
-    if path.exists():
-        raise BadInputError(path, f"unknown BRDF file type {path.suffix!r}; known: {', '.join(known)}")
-    raise BadInputError(text, f"neither an existing file nor a BRDF spec ({', '.join(MODEL_NAMES)})")
+    if _exists(path):
+        raise BadInputError(shown, f"unknown BRDF file type {path.suffix!r}; known: {', '.join(known)}")
+    raise BadInputError(shown, f"neither an existing file nor a BRDF spec ({', '.join(MODEL_NAMES)})")
+
+
+def _exists(path: Path) -> bool:
+    """Whether ``path`` names anything (a name too long for the OS names nothing)."""
+    try:
+        return path.exists()
+    except (OSError, ValueError):
+        return False

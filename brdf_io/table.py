@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import json
 import os
-import zipfile
 from pathlib import Path
 from typing import Any
 
@@ -32,9 +31,12 @@ from .atomic import atomic_path
 from .brdf import BRDF, Kind
 from .errors import BadInputError
 from .halfdiff import spherical_angles
+from .jsonutil import loads_strict
 from .masked_grid import MaskedTableBRDF, MissingAwareGrid, eval_with_mask
+from .npz_safe import NpzMember, read_npz
 
 __all__ = [
+    "MAX_TABLE_RHO",
     "TABLE_FORMAT",
     "TABLE_FORMAT_VERSION",
     "TableBRDF",
@@ -45,7 +47,20 @@ __all__ = [
 
 TABLE_FORMAT = "shrmkit-brdf-table"
 TABLE_FORMAT_VERSION = 1
-_KEYS = ("theta_i", "theta_o", "phi_d", "values", "metadata")
+#: Largest value a table (or a MERL file) may hold, rho in 1/sr. Far above any measurement
+#: and above any analytic model within its parameter bounds (< 1e33 even at the horizon,
+#: data_specs/spec_strings.md), low enough that sums and squares of values stay finite.
+MAX_TABLE_RHO = 1e40
+_MAX_NAME = 1000  # longest metadata name used as the BRDF's name
+_REAL = "a real-number array (float, int)"
+_MEMBERS = {
+    "theta_i": NpzMember("fiu", _REAL),
+    "theta_o": NpzMember("fiu", _REAL),
+    "phi_d": NpzMember("fiu", _REAL),
+    "values": NpzMember("fiu", "floating point values"),
+    # 0-d unicode string; 2**24 characters is far more than the metadata ever needs
+    "metadata": NpzMember("U", "a JSON string", ndim=0, max_bytes=4 * 2**24),
+}
 
 
 # --------------------------------------------------------------------------------------
@@ -55,7 +70,8 @@ _KEYS = ("theta_i", "theta_o", "phi_d", "values", "metadata")
 
 def _check_axis(source: object, name: str, axis: Any, hi: float) -> np.ndarray:
     try:
-        a = np.asarray(axis, dtype=np.float64)
+        with np.errstate(over="ignore", invalid="ignore"):  # float128 beyond float64: caught as non-finite
+            a = np.asarray(axis, dtype=np.float64)
     except (TypeError, ValueError):
         raise BadInputError(source, f"grid {name} is not numeric") from None
     if a.ndim != 1 or a.size < 1:
@@ -65,10 +81,14 @@ def _check_axis(source: object, name: str, axis: Any, hi: float) -> np.ndarray:
     if np.any(np.diff(a) <= 0):
         k = int(np.argmax(np.diff(a) <= 0))
         raise BadInputError(
-            source, f"grid {name} is not strictly increasing ({name}[{k}]={a[k]!r}, {name}[{k + 1}]={a[k + 1]!r})"
+            source,
+            f"grid {name} is not strictly increasing "
+            f"({name}[{k}]={float(a[k])!r}, {name}[{k + 1}]={float(a[k + 1])!r})",
         )
     if a[0] < 0 or a[-1] > hi + 1e-12:
-        raise BadInputError(source, f"grid {name} spans [{a[0]!r}, {a[-1]!r}], outside [0, {hi!r}] radians")
+        raise BadInputError(
+            source, f"grid {name} spans [{float(a[0])!r}, {float(a[-1])!r}], outside [0, {hi!r}] radians"
+        )
     return a
 
 
@@ -76,18 +96,25 @@ def _check_values(source: object, values: Any, shape: tuple[int, int, int]) -> n
     v = np.asarray(values)
     if v.dtype.kind not in "fiu":
         raise BadInputError(source, f"values have dtype {v.dtype}, expected floating point")
-    v = v.astype(np.float64)
+    with np.errstate(over="ignore", invalid="ignore"):  # float128 beyond float64: caught as infinite
+        v = v.astype(np.float64)
     if v.shape not in (shape, (*shape, 3)):
         raise BadInputError(
             source, f"values have shape {v.shape}; the grid needs {shape} (scalar) or {(*shape, 3)} (RGB)"
         )
     if np.any(np.isinf(v)):
         raise BadInputError(source, f"values contain {int(np.sum(np.isinf(v)))} infinite value(s)")
+    huge = v > MAX_TABLE_RHO
+    if np.any(huge):
+        raise BadInputError(
+            source,
+            f"values contain {int(huge.sum())} value(s) above {MAX_TABLE_RHO:g} 1/sr (max {float(v[huge].max())!r})",
+        )
     negative = v < 0  # NaN compares false: NaN is allowed (missing)
     if np.any(negative):
         raise BadInputError(
             source,
-            f"values contain {int(negative.sum())} negative value(s) (min {v[negative].min()!r}); "
+            f"values contain {int(negative.sum())} negative value(s) (min {float(v[negative].min())!r}); "
             "mark missing samples with NaN",
         )
     return v
@@ -253,45 +280,41 @@ def write_table(
 def read_table(path: str | os.PathLike[str]) -> TableBRDF:
     """Read a BRDF table written by :func:`write_table` (data_specs/brdf_table.md).
 
+    The archive is read through :func:`~shrmkit.brdf_io.npz_safe.read_npz`: each member's
+    declared dtype, shape and size are checked against the limits
+    (:mod:`~shrmkit.brdf_io.limits`) and the archive before anything is decompressed.
+
+    Returns
+    -------
+    TableBRDF
+        The grid (radians), the values (n_ti, n_to, n_pd[, 3]) in 1/sr with NaN missing,
+        the metadata dictionary; ``name`` from the metadata (default: the file stem).
+
     Raises
     ------
     BadInputError
-        Unreadable file, missing keys, wrong format or version, invalid grid or values.
+        Not a regular file, not a readable archive, missing keys, a member of the wrong
+        dtype or a declared size over the limits or unlike the archive's, metadata that is
+        not strict JSON or not of this format and version, an invalid grid, values that
+        are negative, infinite or above :data:`MAX_TABLE_RHO`.
     """
     path = Path(path)
-    try:
-        # open the file ourselves: np.load leaks its handle when the zip is corrupt
-        with path.open("rb") as f, np.load(f, allow_pickle=False) as npz:
-            missing = [k for k in _KEYS if k not in npz.files]
-            if missing:
-                raise BadInputError(
-                    path, f"missing key(s) {', '.join(missing)}; a table has {', '.join(_KEYS)}"
-                )
-            arrays = {k: npz[k] for k in _KEYS}
-    except BadInputError:
-        raise
-    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as err:
-        raise BadInputError(path, f"not a readable .npz table ({err})") from None
-    meta_array = arrays["metadata"]
-    if meta_array.shape != () or meta_array.dtype.kind != "U":
-        raise BadInputError(path, "metadata must be a JSON string")
-    try:
-        metadata = json.loads(str(meta_array))
-    except json.JSONDecodeError as err:
-        raise BadInputError(path, f"metadata is not valid JSON ({err})") from None
+    arrays = read_npz(path, _MEMBERS, what="a BRDF table")
+    metadata = loads_strict(str(arrays["metadata"][()]), path, "metadata JSON")
     if not isinstance(metadata, dict) or metadata.get("format") != TABLE_FORMAT:
         raise BadInputError(path, f"metadata does not say format {TABLE_FORMAT!r}")
     version = metadata.get("format_version")
-    if version != TABLE_FORMAT_VERSION:
+    if type(version) is not int or version != TABLE_FORMAT_VERSION:
         raise BadInputError(
             path, f"format_version {version!r} is not supported (this reader reads {TABLE_FORMAT_VERSION})"
         )
     if metadata.get("units") != "1/sr":
         raise BadInputError(path, f"units {metadata.get('units')!r}; expected '1/sr'")
     name = metadata.get("name")
+    usable = isinstance(name, str) and 0 < len(name) <= _MAX_NAME and name.isprintable()
     return TableBRDF(
         arrays["theta_i"], arrays["theta_o"], arrays["phi_d"], arrays["values"],
-        name=name if isinstance(name, str) and name else path.stem,
+        name=name if usable else path.stem,
         source=str(path),
         metadata=metadata,
     )

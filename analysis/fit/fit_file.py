@@ -17,6 +17,8 @@ import nlopt
 
 from ..._version import __version__
 from ...brdf_io.atomic import atomic_path
+from ...brdf_io.errors import BadInputError
+from ...brdf_io.specs import brdf_from_spec
 from .optimize import FitResult
 
 __all__ = ["FIT_FORMAT", "FIT_FORMAT_VERSION", "fit_document", "write_fit_json"]
@@ -77,8 +79,20 @@ def fit_document(result: FitResult, source: str | os.PathLike[str] | None = None
 def write_fit_json(
     path: str | os.PathLike[str], result: FitResult, source: str | os.PathLike[str] | None = None
 ) -> Path:
-    """Write :func:`fit_document` to ``path`` atomically (temporary file + ``os.replace``)."""
-    text = json.dumps(fit_document(result, source), indent=2, allow_nan=False) + "\n"
+    """Write :func:`fit_document` to ``path`` atomically (temporary file + ``os.replace``).
+
+    Raises
+    ------
+    BadInputError
+        The fitted model's ``model_spec`` would not load back (a parameter outside the
+        bounds of ``data_specs/spec_strings.md``): nothing is written.
+    """
+    doc = fit_document(result, source)
+    try:
+        brdf_from_spec(doc["model_spec"])  # what load_brdf("fit.json") will do
+    except BadInputError as err:
+        raise BadInputError(path, f"the fitted model would not load back: {err.problem}") from None
+    text = json.dumps(doc, indent=2, allow_nan=False) + "\n"
     with atomic_path(path) as tmp:
         tmp.write_text(text, encoding="utf-8")
     return Path(path)
