@@ -20,13 +20,16 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from .brdf import BRDF
 from .cornell import read_cornell
+from .curet import curet_samples, read_curet
 from .errors import BadInputError
+from .gonio import gonio_wavelengths, read_gonio_csv
 from .jsonutil import loads_strict
 from .limits import read_bytes, regular_file
 from .merl import read_merl
@@ -46,10 +49,14 @@ from .models import (
     SimplifiedMicrofacet,
     lafortune_lobe_peak,
 )
+from .rgl import read_rgl
 from .spec_params import SpecParams, parse_params
 from .table import read_table
 
-__all__ = ["parse_spec", "brdf_from_spec", "load_brdf", "MODEL_NAMES", "MAX_JSON_BYTES"]
+__all__ = [
+    "parse_spec", "brdf_from_spec", "load_brdf", "brdf_sources", "BRDF_FILE_TYPES", "BrdfFileType", "MODEL_NAMES",
+    "MAX_JSON_BYTES",
+]
 
 _SPEC_RE = re.compile(r"^\s*([a-z][a-z0-9_-]*)\s*(?::(.*))?$")
 #: Largest ``.json`` model file read, bytes (a fit document is a few kilobytes).
@@ -165,26 +172,80 @@ def _read_model_json(path: Path) -> BRDF:
         raise BadInputError(path, f"model_spec {shown!r}: {err.problem}") from None
 
 
-# extension -> reader
-_FILE_READERS: dict[str, Callable[[Path], BRDF]] = {
-    ".binary": read_merl,
-    ".npz": read_table,
-    ".brdf": read_cornell,
+@dataclass(frozen=True)
+class BrdfFileType:
+    """One entry of the BRDF file-type registry (keyed by suffix).
+
+    ``read(path)`` — or ``read(path, selector)`` when ``selector`` says what the part after
+    ``#`` in ``"file#…"`` picks — returns the BRDF; ``members(path)`` lists the selectors
+    a whole file expands to (``shrm report FILE`` analyses each), None for one-BRDF files.
+    """
+
+    read: Callable[..., BRDF]
+    what: str
+    selector: str | None = None
+    members: Callable[[Path], list[str]] | None = None
+
+
+def _curet_members(path: Path) -> list[str]:
+    return [str(n) for n in curet_samples(path)]
+
+
+def _gonio_members(path: Path) -> list[str]:
+    return [f"{w:g}" for w in gonio_wavelengths(path)]
+
+
+# suffix -> file type: a new format touches this entry and its reader module
+BRDF_FILE_TYPES: dict[str, BrdfFileType] = {
+    ".binary": BrdfFileType(read_merl, "MERL table (data_specs/merl_binary.md)"),
+    ".npz": BrdfFileType(read_table, "shrmkit table (data_specs/brdf_table.md)"),
+    ".brdf": BrdfFileType(read_cornell, "Cornell scattered measurements (data_specs/cornell_brdf.md)"),
+    ".bsdf": BrdfFileType(read_rgl, "RGL measured material, Mitsuba tensor_file (data_specs/rgl_bsdf.md)"),
+    ".dat": BrdfFileType(read_curet, "CURET abrdf.dat beside table.txt (data_specs/curet.md)",
+                         selector="sample number 1..61 or name", members=_curet_members),
+    ".csv": BrdfFileType(read_gonio_csv, "gonioreflectometer CSV (data_specs/gonio_csv.md)",
+                         selector="wavelength in nm", members=_gonio_members),
+    ".json": BrdfFileType(lambda path: _read_model_json(path), "fitted model (data_specs/fit_json.md)"),
 }
 
 
-def _read_brdf_file(path: Path) -> BRDF:
-    if path.suffix.lower() == ".json":
-        return _read_model_json(path)
-    return _FILE_READERS[path.suffix.lower()](path)
+def _split_selector(text: str) -> tuple[str, str | None]:
+    """``"file.dat#12"`` -> (``"file.dat"``, ``"12"``) for file types with a selector."""
+    base, sep, selector = text.rpartition("#")
+    if sep and Path(base).suffix.lower() in BRDF_FILE_TYPES and BRDF_FILE_TYPES[Path(base).suffix.lower()].selector:
+        return base, selector
+    return text, None
+
+
+def brdf_sources(spec_or_path: str | Path) -> list[str]:
+    """The BRDFs a command-line argument names: ``[text]`` for a spec or a one-BRDF file,
+    ``["FILE#sel", …]`` for a whole multi-BRDF file (the 61 CURET samples, each
+    wavelength of a gonioreflectometer CSV).
+
+    Raises
+    ------
+    BadInputError
+        As the file's reader, when its members cannot be listed.
+    """
+    text = str(spec_or_path)
+    base, selector = _split_selector(text)
+    kind = BRDF_FILE_TYPES.get(Path(base).suffix.lower())
+    if selector is not None or kind is None or kind.members is None or not _exists(Path(base)):
+        return [text]
+    members = kind.members(Path(base))
+    return [text] if len(members) <= 1 else [f"{base}#{m}" for m in members]
 
 
 def load_brdf(spec_or_path: str | Path) -> BRDF:
     """Load a BRDF from a spec string (``"microfacet:sigma=0.2"``) or a file.
 
-    Files are recognised by extension: ``.binary`` (MERL), ``.npz`` (shrmkit table),
-    ``.brdf`` (Cornell scattered measurements), ``.json`` (a fitted model: an object with
-    a string key ``model_spec``, strict UTF-8 JSON of at most :data:`MAX_JSON_BYTES`).
+    Files are recognised by extension (:data:`BRDF_FILE_TYPES`): ``.binary`` (MERL),
+    ``.npz`` (shrmkit table), ``.brdf`` (Cornell scattered measurements), ``.bsdf`` (RGL
+    measured material), ``.dat`` (CURET: ``abrdf.dat#12`` picks sample 12, by number or
+    name), ``.csv`` (gonioreflectometer table: ``PTFE.data.csv#532`` picks 532 nm),
+    ``.json`` (a fitted model: an object with a string key ``model_spec``, strict UTF-8
+    JSON of at most :data:`MAX_JSON_BYTES`). :func:`brdf_sources` expands a whole
+    multi-BRDF file into its members.
 
     Returns
     -------
@@ -245,12 +306,14 @@ def load_brdf(spec_or_path: str | Path) -> BRDF:
     shown = text if text.isprintable() else repr(text)  # errors stay one line
     if not text.strip() or "\0" in text:
         raise BadInputError(repr(text), "neither a BRDF file nor a BRDF spec (empty, or holds NUL)")
-    path = Path(text)
-    known = (*_FILE_READERS, ".json")
-    if path.suffix.lower() in known:
+    base, selector = _split_selector(text)
+    path = Path(base)
+    known = tuple(BRDF_FILE_TYPES)
+    kind = BRDF_FILE_TYPES.get(path.suffix.lower())
+    if kind is not None:
         if not _exists(path):
-            raise BadInputError(shown, "no such file")
-        return _read_brdf_file(path)
+            raise BadInputError(shown if selector is None else path, "no such file")
+        return kind.read(path) if selector is None else kind.read(path, selector)
     if ":" in text or text.split(":")[0] in _MODELS:
         return brdf_from_spec(text)
     if _exists(path):
