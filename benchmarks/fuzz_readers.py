@@ -623,7 +623,7 @@ def _prepare(case: dict, readers: dict[str, Reader], work: Path) -> dict:
         spec = reader.text_seeds[int(rng.integers(0, len(reader.text_seeds)))]
         target, desc = mutate_spec(rng, spec) if case["index"] >= len(reader.text_seeds) else (spec, "seed")
         # a message may quote the spec (repr) or escape its control characters
-        names = [target, target.strip(), repr(target), target.encode("unicode_escape").decode(),
+        names = [target, target.strip(), repr(target), repr(target.strip()), target.encode("unicode_escape").decode(),
                  "empty" if not target.strip() else ""]
         return {**case, "target": target, "names": names, "mutation": desc, "is_seed": desc == "seed"}
     seed_path = reader.seeds[int(rng.integers(0, len(reader.seeds)))]

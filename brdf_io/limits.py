@@ -149,13 +149,14 @@ def check_pixels(source: object, height: int, width: int) -> None:
 
 
 def check_elements(source: object, shape: tuple[int, ...], what: str = "array") -> int:
-    """Refuse a declared array shape with a negative axis or more than
-    :func:`max_elements` elements; return the element count."""
+    """Refuse a declared array shape with a negative axis, more than :func:`max_elements`
+    elements, or an axis longer than that (even beside a zero-length one: numpy refuses
+    such shapes); return the element count."""
     if any(int(n) < 0 for n in shape):
         raise BadInputError(source, f"{what} declares a negative size {tuple(shape)}")
     count = math.prod(int(n) for n in shape)
     limit = max_elements()
-    if count > limit:
+    if count > limit or any(int(n) > limit for n in shape):  # an empty array may still name a huge axis
         raise BadInputError(
             source, f"{what} of shape {tuple(shape)} = {count:,} elements exceeds the {limit:,}-element limit "
             "(SHRM_MAX_ELEMENTS)",
