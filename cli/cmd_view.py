@@ -1,0 +1,98 @@
+"""``shrm view``: a self-contained HTML page that renders the SHRM of ENV and BRDF live (WebGL2).
+
+Parse and check the options, prefilter (``analysis.shrm.prefilter``), build the page with
+:func:`shrmkit.render.webgl_page.build_view` and write it. The page format, its size budget and
+its URL parameters are in ``data_specs/view_html.md``.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from ..analysis.shrm import prefilter
+from ..analysis.tolerance import DEFAULT_EPS
+from ..brdf_io.atomic import check_writable
+from ..brdf_io.errors import BadInputError
+from ..brdf_io.specs import load_brdf
+from ..render.output import TONE_MAPS
+from ..render.webgl_page import (
+    DEFAULT_MESH,
+    DEFAULT_VIEW,
+    STILL_RENDERERS,
+    VIEW_MODES,
+    ViewBudget,
+    build_view,
+    page_html,
+    write_view,
+)
+from .common import (
+    add_env_orientation,
+    add_order_rule,
+    add_window_option,
+    load_env_arg,
+    number_in,
+    order_rule,
+    tolerance,
+)
+
+HELP = "write a self-contained HTML page that renders the SHRM of ENV and BRDF live in the browser (WebGL2)"
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("brdf", metavar="BRDF", help="BRDF spec or file")
+    p.add_argument("--env", default="builtin:sky", help="environment map spec or file (default builtin:sky)")
+    p.add_argument("--mesh", default=None,
+                   help=f"mesh file or builtin: spec (default {DEFAULT_MESH}); decimated to the page's mesh budget")
+    p.add_argument("--eps", type=tolerance, default=DEFAULT_EPS,
+                   help=f"SHRM tolerance epsilon (default {DEFAULT_EPS:g})")
+    p.add_argument("--size", type=number_in(8, 1024, integer=True), default=None, metavar="S",
+                   help="SHRM rows S (S x 2S lat-long) for the prefilter; default 10 F, then lowered to fit the page")
+    add_window_option(p)
+    add_order_rule(p)
+    p.add_argument("--mode", choices=VIEW_MODES, default="distant", help="initial render mode (default distant)")
+    p.add_argument("--exposure", type=number_in(-30.0, 30.0, unit=" stops"), default=None,
+                   help="initial exposure in stops (default: the environment's mean brought to middle grey)")
+    p.add_argument("--tone", choices=TONE_MAPS, default="filmic", help="tone mapping (default filmic)")
+    p.add_argument("--azimuth", type=number_in(-360.0, 360.0, unit=" degrees"), default=DEFAULT_VIEW["azimuth"],
+                   help=f"initial camera azimuth about z from +x, degrees (default {DEFAULT_VIEW['azimuth']:g})")
+    p.add_argument("--elevation", type=number_in(-89.0, 89.0, unit=" degrees"), default=DEFAULT_VIEW["elevation"],
+                   help=f"initial camera elevation, degrees (default {DEFAULT_VIEW['elevation']:g})")
+    p.add_argument("--zoom", type=number_in(0.25, 10.0), default=DEFAULT_VIEW["zoom"], help="initial zoom (default 1)")
+    p.add_argument("--no-background", action="store_true", help="start with a black background (the page toggles it)")
+    default_mb = ViewBudget().page_bytes / 2**20
+    p.add_argument("--budget-mb", type=number_in(0.25, 1024.0, unit=" MiB"), default=default_mb,
+                   help=f"size budget of the page in MiB (default {default_mb:g}); the SHRM maps are reduced to fit")
+    p.add_argument("--still", choices=STILL_RENDERERS, default="auto",
+                   help="renderer of the still image shown without WebGL2: cpu (CPU reference, sphere), gl (VTK "
+                   "offscreen, the mesh), auto (cpu for the sphere, gl for a mesh when available), none")
+    p.add_argument("-o", "--output", required=True, help="output .html page")
+    add_env_orientation(p)
+
+
+def run(args: argparse.Namespace) -> int:
+    out = Path(args.output)
+    if out.suffix.lower() not in (".html", ".htm"):
+        raise BadInputError(out, "output must be an .html file")
+    budget = ViewBudget(page_bytes=int(args.budget_mb * 2**20))
+    check_writable(out)
+    env = load_env_arg(args.env, args)
+    brdf = load_brdf(args.brdf)
+    shrm = prefilter(env, brdf, eps=args.eps, size=args.size, window=args.window, **order_rule(args))
+    page = build_view(
+        shrm, env, mesh=args.mesh, mode=args.mode, exposure=args.exposure, tone=args.tone, azimuth=args.azimuth,
+        elevation=args.elevation, zoom=args.zoom, background=not args.no_background, budget=budget, still=args.still,
+    )
+    text = page_html(page)
+    write_view(out, text)
+    s = page.data["shrm"]
+    mesh = page.data["mesh"]
+    print(f"SHRM F={shrm.F} P={shrm.P} on {shrm.height}x{shrm.width} (eps {args.eps:g}, achieved eps_B "
+          f"{shrm.eps['reflected']:.3g})")
+    print(f"page: P={s['P']}, maps {s['height']}x{s['width']}, mesh {mesh['name']} {mesh['triangles']} triangles, "
+          f"still image: {page.still_renderer}")
+    for note in page.notes:
+        print(f"note: {note}")
+    print(f"wrote {out} ({len(text.encode('utf-8')) / 2**20:.2f} MiB of {budget.page_bytes / 2**20:g} MiB); open it "
+          f"in a browser, e.g. {out.resolve().as_uri()}#azimuth={args.azimuth:g}&elevation={args.elevation:g}")
+    return 0

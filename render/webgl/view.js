@@ -1,0 +1,583 @@
+/* shrmkit SHRM viewer: WebGL2, plain JavaScript, no dependencies, no network.
+ *
+ * Page format, URL parameters and the math: data_specs/view_html.md. The page is written by
+ * shrmkit.render.webgl_page; this file is package data (render/webgl/view.js) inlined there,
+ * together with the GLSL files of the same folder (window.ShrmViewShaders).
+ *
+ *   ShrmView.mount(root, data, {hash: true|false})
+ *
+ * root: the element holding <canvas class="shrm-view-canvas">, <img class="shrm-view-fallback">
+ * and <div class="shrm-view-ui">; data: the JSON document of the page. State is reported on
+ * root.dataset: state ("loading", "ready", "fallback"), reason (why the fallback is shown),
+ * frames (frames drawn so far) and view (the view drawn last, as URL parameters).
+ */
+(function () {
+  "use strict";
+  if (window.ShrmView) return;
+
+  const DEG = Math.PI / 180;
+  const MODES = ["distant", "perpixel"];
+  const TONES = ["srgb", "filmic"];
+  const LIMITS = {
+    azimuth: [-1e6, 1e6],
+    elevation: [-89, 89],
+    zoom: [0.25, 10],
+    exposure: [-30, 30],
+  };
+
+  // ---------------------------------------------------------------------------------------
+  // decoding of the embedded arrays (little-endian, base64)
+  // ---------------------------------------------------------------------------------------
+  function bytesOf(b64) {
+    const bin = atob(b64);
+    const out = new Uint8Array(bin.length);
+    for (let i = 0; i < bin.length; ++i) out[i] = bin.charCodeAt(i);
+    return out;
+  }
+
+  let halfTable = null;
+  function halfToFloat() {
+    if (halfTable) return halfTable;
+    halfTable = new Float32Array(65536);
+    for (let h = 0; h < 65536; ++h) {
+      const s = h & 0x8000 ? -1 : 1;
+      const e = (h >> 10) & 0x1f;
+      const f = h & 0x3ff;
+      let v;
+      if (e === 0) v = s * f * Math.pow(2, -24);
+      else if (e === 31) v = f ? NaN : s * Infinity;
+      else v = s * (1 + f / 1024) * Math.pow(2, e - 15);
+      halfTable[h] = v;
+    }
+    return halfTable;
+  }
+
+  // ---------------------------------------------------------------------------------------
+  // real SH (DESIGN §2 basis, flat index l² + l + m), the recurrence of render/glsl.py sh_glsl
+  // (and render/webgl/shrm_sum.glsl), in double precision
+  // ---------------------------------------------------------------------------------------
+  function realSH(P, v) {
+    const Y = new Float64Array((P + 1) * (P + 1));
+    const x = v[0], y = v[1], z = v[2];
+    let cm = 1, sm = 0;
+    let fmm = 1 / Math.sqrt(4 * Math.PI);
+    for (let m = 0; m <= P; ++m) {
+      if (m > 0) {
+        fmm *= -Math.sqrt((2 * m + 1) / (2 * m));
+        const c = cm * x - sm * y;
+        const s = cm * y + sm * x;
+        cm = c;
+        sm = s;
+      }
+      const k = m === 0 ? fmm : Math.SQRT2 * (m % 2 ? -1 : 1) * fmm;
+      let h1 = 0, h2 = 0;
+      for (let l = m; l <= P; ++l) {
+        let h;
+        if (l === m) h = 1;
+        else if (l === m + 1) h = Math.sqrt(2 * m + 3) * z;
+        else {
+          const a = Math.sqrt((4 * l * l - 1) / (l * l - m * m));
+          const b = Math.sqrt((4 * (l - 1) * (l - 1) - 1) / ((l - 1) * (l - 1) - m * m));
+          h = a * (z * h1 - h2 / b);
+        }
+        const c0 = l * l + l;
+        if (m === 0) Y[c0] = k * h;
+        else {
+          Y[c0 + m] = k * h * cm;
+          Y[c0 - m] = k * h * sm;
+        }
+        h2 = h1;
+        h1 = h;
+      }
+    }
+    return Y;
+  }
+
+  // ---------------------------------------------------------------------------------------
+  // camera: shrmkit.render.webgl_page.page_camera
+  // ---------------------------------------------------------------------------------------
+  const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+  const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+  const scale = (a, s) => [a[0] * s, a[1] * s, a[2] * s];
+  const sub = (a, b) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+  const unit = (a) => scale(a, 1 / Math.sqrt(dot(a, a)));
+
+  function viewDirection(view) {
+    const az = view.azimuth * DEG;
+    const el = view.elevation * DEG;
+    return [Math.cos(el) * Math.cos(az), Math.cos(el) * Math.sin(az), Math.sin(el)];
+  }
+
+  function pageCamera(view, cam, width, height) {
+    const dir = viewDirection(view);
+    const forward = scale(dir, -1);
+    const up0 = [0, 0, 1];
+    const up = unit(sub(up0, scale(forward, dot(up0, forward))));
+    const right = cross(forward, up);
+    const eye = scale(dir, cam.distance);
+    let tanY = Math.tan(Math.asin(cam.margin / cam.distance)) / view.zoom;
+    if (width < height) tanY *= height / width;
+    return { eye, forward, right, up, dir, tanY, aspect: width / height };
+  }
+
+  // column-major view-projection matrix of the camera (symmetric frustum, as vtkCamera)
+  function viewProjection(c, near, far) {
+    const t = c.tanY, a = c.aspect;
+    const r = c.right, u = c.up, f = c.forward, e = c.eye;
+    // view matrix rows: right, up, -forward; translation -rows . eye
+    const V = [
+      [r[0], r[1], r[2], -dot(r, e)],
+      [u[0], u[1], u[2], -dot(u, e)],
+      [-f[0], -f[1], -f[2], dot(f, e)],
+      [0, 0, 0, 1],
+    ];
+    const P = [
+      [1 / (a * t), 0, 0, 0],
+      [0, 1 / t, 0, 0],
+      [0, 0, (far + near) / (near - far), (2 * far * near) / (near - far)],
+      [0, 0, -1, 0],
+    ];
+    const out = new Float32Array(16);
+    for (let i = 0; i < 4; ++i) {
+      for (let j = 0; j < 4; ++j) {
+        let s = 0;
+        for (let k = 0; k < 4; ++k) s += P[i][k] * V[k][j];
+        out[j * 4 + i] = s;
+      }
+    }
+    return out;
+  }
+
+  // ---------------------------------------------------------------------------------------
+  // view parameters: defaults from the data, then the URL hash
+  // ---------------------------------------------------------------------------------------
+  function clampNumber(name, value, fallback) {
+    const v = Number(value);
+    if (!Number.isFinite(v)) return fallback;
+    const lim = LIMITS[name];
+    return lim ? Math.min(Math.max(v, lim[0]), lim[1]) : v;
+  }
+
+  function parseView(text, base) {
+    const view = Object.assign({}, base);
+    const params = new URLSearchParams(text.replace(/^#/, ""));
+    for (const name of ["azimuth", "elevation", "zoom", "exposure"]) {
+      if (params.has(name)) view[name] = clampNumber(name, params.get(name), view[name]);
+    }
+    if (params.has("mode") && MODES.includes(params.get("mode"))) view.mode = params.get("mode");
+    if (params.has("tone") && TONES.includes(params.get("tone"))) view.tone = params.get("tone");
+    if (params.has("background")) view.background = !["0", "false", "off", "black"].includes(params.get("background"));
+    if (params.has("ui")) view.ui = !["0", "false", "off"].includes(params.get("ui"));
+    return view;
+  }
+
+  function formatView(view) {
+    const r = (x) => String(Math.round(x * 1000) / 1000);
+    return (
+      `azimuth=${r(view.azimuth)}&elevation=${r(view.elevation)}&zoom=${r(view.zoom)}` +
+      `&exposure=${r(view.exposure)}&mode=${view.mode}&background=${view.background ? 1 : 0}&tone=${view.tone}`
+    );
+  }
+
+  // ---------------------------------------------------------------------------------------
+  // WebGL set-up
+  // ---------------------------------------------------------------------------------------
+  function shaderSource(parts, defines) {
+    const head = [
+      "#version 300 es",
+      "precision highp float;",
+      "precision highp int;",
+      "precision highp sampler2D;",
+    ];
+    for (const [k, v] of Object.entries(defines || {})) head.push(`#define ${k} ${v}`);
+    return head.join("\n") + "\n" + parts.map((p) => {
+      if (!(p in window.ShrmViewShaders)) throw new Error(`shader part ${p} missing`);
+      return `// ---- ${p}\n` + window.ShrmViewShaders[p];
+    }).join("\n");
+  }
+
+  function compile(gl, type, source, name) {
+    const s = gl.createShader(type);
+    gl.shaderSource(s, source);
+    gl.compileShader(s);
+    if (!gl.getShaderParameter(s, gl.COMPILE_STATUS)) {
+      throw new Error(`${name}: ${gl.getShaderInfoLog(s)}`);
+    }
+    return s;
+  }
+
+  function program(gl, vertParts, fragParts, defines, name) {
+    const p = gl.createProgram();
+    gl.attachShader(p, compile(gl, gl.VERTEX_SHADER, shaderSource(vertParts, defines), name + " (vertex)"));
+    gl.attachShader(p, compile(gl, gl.FRAGMENT_SHADER, shaderSource(fragParts, defines), name + " (fragment)"));
+    gl.bindAttribLocation(p, 0, "aPosition");
+    gl.bindAttribLocation(p, 1, "aNormal");
+    gl.linkProgram(p);
+    if (!gl.getProgramParameter(p, gl.LINK_STATUS)) throw new Error(`${name}: ${gl.getProgramInfoLog(p)}`);
+    const uniforms = {};
+    const n = gl.getProgramParameter(p, gl.ACTIVE_UNIFORMS);
+    for (let i = 0; i < n; ++i) {
+      const info = gl.getActiveUniform(p, i);
+      uniforms[info.name] = gl.getUniformLocation(p, info.name);
+    }
+    return { p, u: uniforms };
+  }
+
+  // an RGB texture read only with texelFetch (NEAREST: complete without float filtering)
+  function texture(gl, width, height, internal, type, data) {
+    const t = gl.createTexture();
+    gl.bindTexture(gl.TEXTURE_2D, t);
+    gl.pixelStorei(gl.UNPACK_ALIGNMENT, 1);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_S, gl.CLAMP_TO_EDGE);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_T, gl.CLAMP_TO_EDGE);
+    gl.texImage2D(gl.TEXTURE_2D, 0, internal, width, height, 0, gl.RGB, type, data);
+    return t;
+  }
+
+  function halfTexels(b64, count) {
+    const bytes = bytesOf(b64);
+    if (bytes.length !== count * 2) throw new Error(`expected ${count * 2} bytes of half floats, got ${bytes.length}`);
+    return new Uint16Array(bytes.buffer);
+  }
+
+  // ---------------------------------------------------------------------------------------
+  // the viewer
+  // ---------------------------------------------------------------------------------------
+  function mount(root, data, options) {
+    options = options || {};
+    const canvas = root.querySelector(".shrm-view-canvas");
+    const ui = root.querySelector(".shrm-view-ui");
+    const base = Object.assign({ ui: true }, data.view);
+    let view = options.hash ? parseView(window.location.hash, base) : Object.assign({}, base);
+    root.dataset.state = "loading";
+
+    function fallback(reason) {
+      root.dataset.state = "fallback";
+      root.dataset.reason = reason;
+      const note = root.querySelector(".shrm-view-fallback-note");
+      if (note) {
+        const still = data.still || {};
+        const v = still.view || {};
+        note.textContent = still.renderer && still.renderer !== "none"
+          ? `${reason}. Showing a still image instead (${still.renderer}; azimuth ${v.azimuth}°, ` +
+            `elevation ${v.elevation}°, mode ${v.mode}).`
+          : `${reason}.`;
+      }
+      return null;
+    }
+
+    let gl = null;
+    try {
+      gl = canvas.getContext("webgl2", {
+        alpha: false, antialias: false, depth: true, premultipliedAlpha: false, preserveDrawingBuffer: false,
+      });
+    } catch (e) {
+      gl = null;
+    }
+    if (!gl) return fallback("WebGL2 is not available in this browser");
+
+    const S = data.shrm;
+    const nc = (S.P + 1) * (S.P + 1);
+    const atlasW = S.cols * S.width;
+    const atlasH = S.rows * S.height;
+    let res;
+    try {
+      const maxTex = gl.getParameter(gl.MAX_TEXTURE_SIZE);
+      if (Math.max(atlasW, atlasH) > maxTex) throw new Error(`the coefficient atlas ${atlasW}x${atlasH} exceeds MAX_TEXTURE_SIZE ${maxTex}`);
+      const defines = { SHRM_P: S.P, SHRM_H: S.height, SHRM_W: S.width, SHRM_COLS: S.cols };
+      const objectFrag = ["latlong.glsl", "tonemap.glsl", "object_prelude.glsl"];
+      res = {
+        distant: program(gl, ["object.vert"], objectFrag.concat(["object_distant.frag"]), defines, "distant"),
+        perpixel: program(gl, ["object.vert"], objectFrag.concat(["shrm_sum.glsl", "object_perpixel.frag"]), defines, "perpixel"),
+        background: data.env
+          ? program(gl, ["background.vert"], ["latlong.glsl", "tonemap.glsl", "background.frag"], {}, "background")
+          : null,
+      };
+      const coef = halfTexels(S.texels, atlasW * atlasH * 3);
+      res.coefHalf = coef;
+      res.coefTex = texture(gl, atlasW, atlasH, gl.RGB16F, gl.HALF_FLOAT, coef);
+      if (data.env) {
+        const E = data.env;
+        res.envTex = texture(gl, E.width, E.height, gl.RGB16F, gl.HALF_FLOAT, halfTexels(E.texels, E.width * E.height * 3));
+      }
+      res.mapTex = null;
+      res.mapView = null;
+      // mesh
+      const M = data.mesh;
+      const pos = new Float32Array(bytesOf(M.positions).buffer);
+      const nrm = new Float32Array(bytesOf(M.normals).buffer);
+      const idxBytes = bytesOf(M.indices);
+      const idx = M.index_type === "uint16" ? new Uint16Array(idxBytes.buffer) : new Uint32Array(idxBytes.buffer);
+      if (pos.length !== M.vertices * 3 || nrm.length !== M.vertices * 3 || idx.length !== M.triangles * 3) {
+        throw new Error("mesh arrays do not match their counts");
+      }
+      res.vao = gl.createVertexArray();
+      gl.bindVertexArray(res.vao);
+      const vb = gl.createBuffer();
+      gl.bindBuffer(gl.ARRAY_BUFFER, vb);
+      gl.bufferData(gl.ARRAY_BUFFER, pos, gl.STATIC_DRAW);
+      gl.enableVertexAttribArray(0);
+      gl.vertexAttribPointer(0, 3, gl.FLOAT, false, 0, 0);
+      const nb = gl.createBuffer();
+      gl.bindBuffer(gl.ARRAY_BUFFER, nb);
+      gl.bufferData(gl.ARRAY_BUFFER, nrm, gl.STATIC_DRAW);
+      gl.enableVertexAttribArray(1);
+      gl.vertexAttribPointer(1, 3, gl.FLOAT, false, 0, 0);
+      const ib = gl.createBuffer();
+      gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, ib);
+      gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, idx, gl.STATIC_DRAW);
+      gl.bindVertexArray(null);
+      res.indexType = M.index_type === "uint16" ? gl.UNSIGNED_SHORT : gl.UNSIGNED_INT;
+      res.count = idx.length;
+      res.emptyVao = gl.createVertexArray();
+      const err = gl.getError();
+      if (err !== gl.NO_ERROR) throw new Error(`WebGL error 0x${err.toString(16)} during set-up`);
+    } catch (e) {
+      return fallback(`WebGL2 set-up failed: ${e.message}`);
+    }
+
+    // distant mode: the view map max(sum_c Y^r_c(V~) B~_c, 0) on the CPU (render/shader.py
+    // distant_update), float32, once per view direction
+    let tiles = null;
+    function viewMap(dir) {
+      const H = S.height, W = S.width, n = H * W * 3;
+      if (!tiles) {
+        const table = halfToFloat();
+        const inv = 1 / S.scale;
+        tiles = [];
+        for (let c = 0; c < nc; ++c) {
+          const tile = new Float32Array(n);
+          const ox = (c % S.cols) * W, oy = Math.floor(c / S.cols) * H;
+          for (let y = 0; y < H; ++y) {
+            let src = ((oy + y) * atlasW + ox) * 3;
+            let dst = y * W * 3;
+            for (let x = 0; x < W * 3; ++x) tile[dst++] = table[res.coefHalf[src++]] * inv;
+          }
+          tiles.push(tile);
+        }
+      }
+      const Y = realSH(S.P, dir);
+      const out = new Float32Array(n);
+      for (let c = 0; c < nc; ++c) {
+        const y = Y[c], tile = tiles[c];
+        if (y === 0) continue;
+        for (let t = 0; t < n; ++t) out[t] += y * tile[t];
+      }
+      for (let t = 0; t < n; ++t) if (!(out[t] > 0)) out[t] = 0;
+      return out;
+    }
+
+    function uploadViewMap(dir) {
+      const key = dir.join(",");
+      if (res.mapView === key) return;
+      const map = viewMap(dir);
+      if (!res.mapTex) res.mapTex = texture(gl, S.width, S.height, gl.RGB32F, gl.FLOAT, map);
+      else {
+        gl.bindTexture(gl.TEXTURE_2D, res.mapTex);
+        gl.texSubImage2D(gl.TEXTURE_2D, 0, 0, 0, S.width, S.height, gl.RGB, gl.FLOAT, map);
+      }
+      res.mapView = key;
+    }
+
+    let frames = 0;
+    let pending = false;
+    function draw() {
+      pending = false;
+      const dpr = window.devicePixelRatio || 1;
+      const w = Math.max(1, Math.round(canvas.clientWidth * dpr));
+      const h = Math.max(1, Math.round(canvas.clientHeight * dpr));
+      if (canvas.width !== w || canvas.height !== h) {
+        canvas.width = w;
+        canvas.height = h;
+      }
+      gl.viewport(0, 0, w, h);
+      const cam = pageCamera(view, data.camera, w, h);
+      const tone = TONES.indexOf(view.tone);
+      gl.disable(gl.BLEND);
+      gl.clearColor(0, 0, 0, 1);
+      gl.clearDepth(1);
+      gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
+      if (view.background && res.background) {
+        const b = res.background;
+        gl.useProgram(b.p);
+        gl.disable(gl.DEPTH_TEST);
+        gl.depthMask(false);
+        gl.activeTexture(gl.TEXTURE0);
+        gl.bindTexture(gl.TEXTURE_2D, res.envTex);
+        gl.uniform1i(b.u.uEnv, 0);
+        gl.uniform1f(b.u.uEnvScale, data.env.scale);
+        gl.uniform3fv(b.u.uForward, cam.forward);
+        gl.uniform3fv(b.u.uRight, cam.right);
+        gl.uniform3fv(b.u.uUp, cam.up);
+        gl.uniform1f(b.u.uTanY, cam.tanY);
+        gl.uniform2f(b.u.uSize, w, h);
+        gl.uniform1f(b.u.uExposure, view.exposure);
+        gl.uniform1i(b.u.uTone, tone);
+        gl.bindVertexArray(res.emptyVao);
+        gl.drawArrays(gl.TRIANGLES, 0, 3);
+        gl.depthMask(true);
+      }
+      const o = view.mode === "perpixel" ? res.perpixel : res.distant;
+      gl.useProgram(o.p);
+      gl.enable(gl.DEPTH_TEST);
+      gl.depthFunc(gl.LESS);
+      gl.activeTexture(gl.TEXTURE0);
+      if (view.mode === "perpixel") {
+        gl.bindTexture(gl.TEXTURE_2D, res.coefTex);
+        gl.uniform1i(o.u.uCoef, 0);
+        gl.uniform1f(o.u.uScale, S.scale);
+      } else {
+        // V~: from the mesh's bounding-box centre toward the eye (camera.view_direction)
+        uploadViewMap(unit(sub(cam.eye, data.mesh.center)));
+        gl.bindTexture(gl.TEXTURE_2D, res.mapTex);
+        gl.uniform1i(o.u.uMap, 0);
+      }
+      const near = Math.max(1e-3, data.camera.distance - 2), far = data.camera.distance + 2;
+      gl.uniformMatrix4fv(o.u.uViewProj, false, viewProjection(cam, near, far));
+      gl.uniform3fv(o.u.uEye, cam.eye);
+      gl.uniform1f(o.u.uExposure, view.exposure);
+      gl.uniform1i(o.u.uTone, tone);
+      gl.bindVertexArray(res.vao);
+      gl.drawElements(gl.TRIANGLES, res.count, res.indexType, 0);
+      gl.bindVertexArray(null);
+      frames += 1;
+      root.dataset.frames = String(frames);
+      root.dataset.view = formatView(view);
+      root.dataset.state = "ready";
+      const glErr = gl.getError();
+      if (glErr !== gl.NO_ERROR) root.dataset.glError = `0x${glErr.toString(16)}`;
+      syncControls();
+    }
+
+    function redraw() {
+      if (!pending) {
+        pending = true;
+        window.requestAnimationFrame(draw);
+      }
+    }
+
+    function storeHash() {
+      if (options.hash && window.history && window.history.replaceState) {
+        try {
+          window.history.replaceState(null, "", "#" + formatView(view) + (view.ui ? "" : "&ui=0"));
+        } catch (e) {
+          /* some file:// contexts refuse replaceState; the view still works */
+        }
+      }
+    }
+
+    // ---- controls (built here so that a page without JavaScript shows none)
+    const controls = {};
+    function syncControls() {
+      if (!controls.exposure) return;
+      controls.exposure.value = String(view.exposure);
+      controls.exposureText.textContent = `${view.exposure >= 0 ? "+" : ""}${view.exposure.toFixed(1)} EV`;
+      controls.background.checked = !!view.background;
+      controls.mode.value = view.mode;
+      root.classList.toggle("shrm-view-noui", !view.ui);
+    }
+
+    function buildControls() {
+      if (!ui) return;
+      const el = (tag, attrs, text) => {
+        const e = document.createElement(tag);
+        for (const [k, v] of Object.entries(attrs || {})) e.setAttribute(k, v);
+        if (text !== undefined) e.textContent = text;
+        return e;
+      };
+      const bar = el("div", { class: "shrm-view-controls" });
+      const expLabel = el("label", {}, "exposure ");
+      controls.exposure = el("input", { type: "range", min: "-12", max: "12", step: "0.1", "aria-label": "exposure" });
+      controls.exposureText = el("span", { class: "shrm-view-ev" });
+      expLabel.append(controls.exposure, controls.exposureText);
+      const bgLabel = el("label", {});
+      controls.background = el("input", { type: "checkbox" });
+      bgLabel.append(controls.background, document.createTextNode(" environment"));
+      if (!res.background) controls.background.disabled = true;
+      const modeLabel = el("label", {}, "mode ");
+      controls.mode = el("select", { "aria-label": "render mode" });
+      for (const m of MODES) controls.mode.append(el("option", { value: m }, m));
+      modeLabel.append(controls.mode);
+      const reset = el("button", { type: "button" }, "reset view");
+      bar.append(expLabel, bgLabel, modeLabel, reset);
+      ui.append(bar);
+      controls.exposure.addEventListener("input", () => {
+        view.exposure = clampNumber("exposure", controls.exposure.value, view.exposure);
+        redraw();
+      });
+      controls.exposure.addEventListener("change", storeHash);
+      controls.background.addEventListener("change", () => {
+        view.background = controls.background.checked;
+        redraw();
+        storeHash();
+      });
+      controls.mode.addEventListener("change", () => {
+        if (MODES.includes(controls.mode.value)) view.mode = controls.mode.value;
+        redraw();
+        storeHash();
+      });
+      reset.addEventListener("click", () => {
+        view = Object.assign({}, base, { ui: view.ui });
+        redraw();
+        storeHash();
+      });
+    }
+
+    // ---- orbit (drag) and zoom (wheel)
+    let drag = null;
+    canvas.addEventListener("pointerdown", (e) => {
+      drag = { x: e.clientX, y: e.clientY };
+      try { canvas.setPointerCapture(e.pointerId); } catch (err) { /* not capturable */ }
+    });
+    canvas.addEventListener("pointermove", (e) => {
+      if (!drag) return;
+      view.azimuth -= 0.4 * (e.clientX - drag.x);
+      view.elevation = clampNumber("elevation", view.elevation + 0.4 * (e.clientY - drag.y), view.elevation);
+      drag = { x: e.clientX, y: e.clientY };
+      redraw();
+    });
+    const endDrag = () => {
+      if (drag) storeHash();
+      drag = null;
+    };
+    canvas.addEventListener("pointerup", endDrag);
+    canvas.addEventListener("pointercancel", endDrag);
+    canvas.addEventListener("wheel", (e) => {
+      e.preventDefault();
+      view.zoom = clampNumber("zoom", view.zoom * Math.exp(-0.0015 * e.deltaY), view.zoom);
+      redraw();
+      storeHash();
+    }, { passive: false });
+    canvas.addEventListener("dblclick", () => {
+      view = Object.assign({}, base, { ui: view.ui });
+      redraw();
+      storeHash();
+    });
+    if (options.hash) {
+      window.addEventListener("hashchange", () => {
+        view = parseView(window.location.hash, base);
+        redraw();
+      });
+    }
+    window.addEventListener("resize", redraw);
+    canvas.addEventListener("webglcontextlost", (e) => {
+      e.preventDefault();
+      fallback("the WebGL2 context was lost");
+    });
+
+    // the info bar: a click folds the notes and the help away (and back)
+    const info = root.querySelector(".shrm-view-info");
+    if (info) {
+      info.title = "click to fold or unfold the details";
+      info.addEventListener("click", () => root.classList.toggle("shrm-view-folded"));
+    }
+    buildControls();
+    syncControls();
+    draw();
+    return { redraw, get view() { return Object.assign({}, view); } };
+  }
+
+  window.ShrmView = { mount, realSH, pageCamera, parseView, formatView };
+})();
