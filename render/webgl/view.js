@@ -562,6 +562,9 @@
       });
     }
     window.addEventListener("resize", redraw);
+    // the canvas may be hidden (0 × 0) when the first frame is drawn — e.g. until the
+    // fallback image is swapped out — so redraw whenever its laid-out size changes
+    if (typeof ResizeObserver === "function") new ResizeObserver(redraw).observe(canvas);
     canvas.addEventListener("webglcontextlost", (e) => {
       e.preventDefault();
       fallback("the WebGL2 context was lost");

@@ -443,3 +443,15 @@ def test_cli_view_bad_input(tmp_path: Path, capsys) -> None:
     with pytest.raises(SystemExit):
         main(["view", "phong:s=32", "--elevation", "120", "-o", str(tmp_path / "v.html")])
 
+
+
+@pytest.mark.slow
+def test_first_frame_fills_the_canvas_without_interaction(browser, material_pages) -> None:
+    """A page opened as is (no hash change, no resize, no input) draws at the canvas's laid-out
+    size: the first frame used to be drawn while the canvas was hidden, leaving it 1 × 1."""
+    _, _, url = material_pages[MATERIALS[0]]
+    assert browser.open(url) == "ready"
+    browser.evaluate("new Promise(r => setTimeout(() => requestAnimationFrame(r), 300))", await_promise=True)
+    width, height = browser.evaluate(
+        "(() => { const c = document.querySelector('#shrm-view canvas'); return [c.width, c.height]; })()")
+    assert width >= SIZE // 2 and height >= SIZE // 2, (width, height)
