@@ -8,7 +8,9 @@
 4. the SHRM of the built-in studio environment and the plastic, saved as ``.shrm.npz``;
 5. a preview render of a built-in mesh (torus knot with OpenGL; the CPU reference renders
    a sphere when no offscreen OpenGL context exists);
-6. reports on both materials with the summary table (``batch.run_batch``, quick profile).
+6. reports on both materials with the summary table (``batch.run_batch``, quick profile);
+   each ``report.html`` holds a live WebGL2 preview of the SHRM that works from ``file://``
+   (``explorer.live_views``) and BRDF Explorer's views of the table next to its fits.
 
 Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
 SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.

@@ -3,7 +3,10 @@ batch ``index.html`` (a table sortable by clicking its headers, a few lines of i
 
 The report body is the Markdown of ``markdown.report_sections`` turned into HTML by a
 small converter for exactly the subset it writes (tables, bullet lists, bold, code,
-fenced code, images), so no Markdown package is needed.
+fenced code, images), so no Markdown package is needed. A line ``<!-- live-view ID -->``
+(invisible in report.md) is replaced by the live WebGL2 preview of that id
+(``explorer.LiveView``, ``render.webgl_page.view_fragment``); the viewer script, its shaders
+and its style are kept once per page.
 """
 
 from __future__ import annotations
@@ -14,7 +17,8 @@ import re
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from .markdown import fmt, report_sections
+from ...render.webgl_page import webgl_sources
+from .markdown import LIVE_VIEW_MARK, fmt, report_sections
 
 __all__ = ["markdown_to_html", "report_html", "index_html", "data_uri"]
 
@@ -27,6 +31,7 @@ text-align:right}th{background:#f0f0f0}td:first-child,th:first-child{text-align:
 img{max-width:100%;border:1px solid #ddd;margin:.3em 0}code{background:#f4f4f4;padding:0 .2em}
 pre{background:#f4f4f4;padding:.6em;overflow:auto}.failed{color:#b00;font-weight:bold}.ok{color:#070}
 th.sortable{cursor:pointer}th.sortable:after{content:" \\2195";color:#999}
+.live-view{margin:.6em 0}.live-view .shrm-view{max-width:480px}.live-view .shrm-view img{border:0;margin:0}
 """
 
 _SORT_JS = """
@@ -38,6 +43,11 @@ document.querySelectorAll('table.sortable').forEach(function(t){
    var na=parseFloat(a),nc=parseFloat(c);if(!isNaN(na)&&!isNaN(nc))return asc?na-nc:nc-na;
    return asc?a.localeCompare(c):c.localeCompare(a);});rows.forEach(function(r){b.appendChild(r);});};});});
 """
+
+
+# view.js draws its first frame inside mount(), while the canvas is still hidden (data-state
+# "loading"): a 1 x 1 frame. A resize event makes every viewer draw again at its laid-out size.
+_REDRAW_JS = "<script>window.dispatchEvent(new Event('resize'));</script>"
 
 
 def data_uri(png: bytes) -> str:
@@ -57,19 +67,25 @@ def _cells(line: str) -> list[str]:
     return [p.strip().replace("\\|", "|") for p in parts]
 
 
-def markdown_to_html(text: str, images: Mapping[str, str] | None = None) -> str:
+def markdown_to_html(text: str, images: Mapping[str, str] | None = None, raw: Mapping[str, str] | None = None) -> str:
     """HTML of the Markdown subset written by ``markdown.py``.
 
     ``images`` maps an image file name to the ``src`` to use (e.g. a data URI); images
-    not in it keep their file name.
+    not in it are left out. ``raw`` maps a live-view id to the HTML that replaces its
+    ``<!-- live-view ID -->`` line (left out when absent).
     """
     images = images or {}
+    raw = raw or {}
     lines = text.split("\n")
     out: list[str] = []
     i = 0
     while i < len(lines):
         line = lines[i]
-        if line.startswith("```"):
+        if m := LIVE_VIEW_MARK.fullmatch(line.strip()):
+            if m.group(1) in raw:
+                out.append(f'<div class="live-view">{raw[m.group(1)]}</div>')
+            i += 1
+        elif line.startswith("```"):
             j = i + 1
             while j < len(lines) and not lines[j].startswith("```"):
                 j += 1
@@ -115,14 +131,35 @@ def _page(title: str, body: str, script: str = "") -> str:
             + (f"<script>{script}</script>" if script else "") + "</body></html>\n")
 
 
-def report_html(doc: dict[str, Any], pngs: Mapping[str, bytes]) -> str:
+def _viewer_once(fragments: Sequence[str]) -> list[str]:
+    """The fragments with the viewer's style, script and shaders left only in the first
+    (``view.js`` defines ``window.ShrmView`` once and every fragment mounts with it)."""
+    sources = webgl_sources()
+    shared = [f"<style>{sources['view.css']}</style>\n", f"<script>{sources['view.js']}</script>\n"]
+    shaders = re.compile(r"<script>window\.ShrmViewShaders = window\.ShrmViewShaders \|\| .*?;</script>\n", re.S)
+    out = []
+    for k, text in enumerate(fragments):
+        if k:
+            for part in shared:
+                text = text.replace(part, "", 1)
+            text = shaders.sub("", text, count=1)
+        out.append(text)
+    return out
+
+
+def report_html(doc: dict[str, Any], pngs: Mapping[str, bytes], views: Sequence[Any] = ()) -> str:
     """The self-contained ``report.html``: ``pngs`` maps file names (``plot_energy.png``,
-    ``preview_sphere.png``, ...) to PNG bytes, embedded as data URIs."""
+    ``preview_sphere.png``, ...) to PNG bytes, embedded as data URIs; ``views`` are the live
+    previews (``explorer.LiveView``: ``element_id``, ``html``), placed where the Markdown marks
+    them."""
     images = {name: data_uri(data) for name, data in pngs.items()}
+    raw = dict(zip([v.element_id for v in views], _viewer_once([v.html for v in views]), strict=True))
     parts = [f"<h1>BRDF report: {html.escape(doc['name'])}</h1>"]
     for title, body in report_sections(doc):
         parts.append(f"<h2>{html.escape(title)}</h2>")
-        parts.append(markdown_to_html(body, images))
+        parts.append(markdown_to_html(body, images, raw))
+    if views:
+        parts.append(_REDRAW_JS)
     return _page(f"shrm report: {doc['name']}", "\n".join(parts))
 
 

@@ -9,12 +9,21 @@ SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterator, Sequence
 from typing import Any
 
 from .plots import PLOT_TITLES
 
-__all__ = ["fmt", "md_table", "report_sections", "report_markdown"]
+__all__ = ["fmt", "md_table", "report_sections", "report_markdown", "LIVE_VIEW_MARK", "live_view_mark"]
+
+#: A line ``<!-- live-view ID -->``: where report.html puts the live preview ID (invisible in report.md).
+LIVE_VIEW_MARK = re.compile(r"<!-- live-view ([A-Za-z][A-Za-z0-9_-]{0,63}) -->")
+
+
+def live_view_mark(element_id: str) -> str:
+    """The Markdown line that marks where the live preview ``element_id`` goes."""
+    return f"<!-- live-view {element_id} -->"
 
 
 def fmt(value: Any, digits: int = 3) -> str:
@@ -181,12 +190,86 @@ def report_sections(doc: dict[str, Any], image_link: Any = None) -> Iterator[tup
         f"{v:g}°: {'/'.join(fmt(x) for x in rgb)}" for v, rgb in zip(a["views_deg"], a["rgb"], strict=True))
     yield "Data checks", body
 
+    explorer = doc.get("explorer")
+    if explorer:
+        yield "BRDF Explorer views", _explorer_body(doc, explorer, link)
+
     p = doc["preview"]
-    parts = [f"{img['key']} ({img['renderer']}, ε = {fmt(p['tolerance'])}, F = {p['F']}, P = {p['P']}, "
-             f"environment {p['env']}):\n\n" + link(f"preview_{img['key']}", img["file"], f"preview {img['key']}")
-             for img in p["images"]]
+    parts = _live_parts(doc.get("live_preview"))
+    parts += [f"{img['key']} ({img['renderer']}, ε = {fmt(p['tolerance'])}, F = {p['F']}, P = {p['P']}, "
+              f"environment {p['env']}):\n\n" + link(f"preview_{img['key']}", img["file"], f"preview {img['key']}")
+              for img in p["images"]]
     parts += [f"- {n}" for n in p["notes"]]
     yield "Preview", "\n\n".join(parts) if parts else "No preview."
+
+
+def _live_parts(live: dict[str, Any] | None) -> list[str]:
+    """The live previews (report.html only): one sentence and the mark per view, and the notes."""
+    if not live:
+        return []
+    parts = []
+    for v in live["views"]:
+        maps = f"maps {v['maps'][0]}×{v['maps'][1]}"
+        if v["maps"] != v["source_maps"] or v["P"] != v["source_P"]:
+            maps += (f" (reduced from {v['source_maps'][0]}×{v['source_maps'][1]}, P = {v['source_P']}, to fit "
+                     f"{live['budget_bytes'] / 2**20:g} MiB: estimated added error {fmt(100 * v['added_rel_rms'], 2)} "
+                     "% relative RMS)")
+        parts.append(f"**Live preview** under {v['env']} (WebGL2 in report.html: drag to orbit, wheel to zoom, "
+                     f"double-click to reset; F = {v['F']}, P = {v['P']}, {maps}; without WebGL2 the still image "
+                     f"`{v['still']}` is shown):")
+        parts.append(live_view_mark(v["element_id"]))
+    parts += [f"- {n}" for n in live["notes"]]
+    return parts
+
+
+def _explorer_body(doc: dict[str, Any], e: dict[str, Any], link: Any) -> str:
+    """The BRDF Explorer section (``explorer.py``): slice or samples, polar plots, albedo, lit spheres."""
+    parts = [f"The views could not be made: `{e['error']}`"] if e.get("error") else []
+    scattered = e["of"] == "measured samples"
+    fits = ", ".join(f["model"] for f in doc["fits"] if not f.get("error")) or "none"
+    if e.get("slice"):
+        s = e["slice"]
+        parts.append(f"Image slice: log10 of ρ's luminance (Rec. 709) on θ_h × θ_d (Rusinkiewicz half/difference "
+                     f"angles, {len(s['theta_h_deg'])} × {len(s['theta_d_deg'])} cells) at φ_d = "
+                     f"{fmt(s['phi_d_deg'])}°, the BRDF and each fit ({fits}) on one colour scale; magenta: no "
+                     f"measurement ({s['n_missing']} cells), grey: L or V below the surface "
+                     f"({len(s['below_surface'])} cells).")
+        parts.append(link("explorer_slice", "plot_explorer_slice.png", PLOT_TITLES["explorer_slice"]))
+    if e.get("samples"):
+        s = e["samples"]
+        parts.append(f"Scattered measurements, so no slice: the {s['n_in_plane']} samples within "
+                     f"{fmt(s['max_off_plane_deg'])}° of the plane of incidence ({s['n_shown']} shown) by θ_i and "
+                     "signed θ_o (> 0 on the mirror side).")
+        parts.append(link("explorer_samples", "plot_explorer_samples.png", PLOT_TITLES["explorer_samples"]))
+    if e.get("polar", {}).get("curves"):
+        incidences = ", ".join(f"{fmt(c['theta_i_deg'])}°" for c in e["polar"]["curves"])
+        parts.append(f"Polar plots of the plane of incidence at θ_i = {incidences}: angle = signed θ_o from the "
+                     "normal (the mirror direction on the right, the light dashed), radius = log10 of ρ's "
+                     "luminance; " + ("the measured samples" if scattered else "the BRDF") + " and each fit.")
+        parts.append(link("explorer_polar", "plot_explorer_polar.png", PLOT_TITLES["explorer_polar"]))
+    a = e.get("albedo")
+    if a:
+        rows = []
+        series = ([("brdf", a["measured_rgb"])] if a["measured_rgb"] is not None else []) + [
+            (m, v) for m, v in a["fitted_rgb"].items() if v is not None]
+        for label, rgb in series:
+            worst = max(range(len(rgb)), key=lambda k: max(rgb[k]))
+            rows.append([label, "/".join(fmt(x) for x in rgb[0]), max(rgb[worst]), a["views_deg"][worst],
+                         "yes" if max(rgb[worst]) <= 1.0 + 1e-3 else "no"])
+        parts.append("Directional albedo a(θ_v) = ∫ ρ(L, V) cos θ_i dω_i against the view angle "
+                     f"({a['nodes']} Gauss–Legendre nodes in cos θ_i); energy conservation is a ≤ 1"
+                     + (" (measured samples cannot be integrated: the fits only)." if scattered else "."))
+        parts.append(md_table(["of", "a(0°) RGB", "max channel", "at θ_v (°)", "≤ 1"], rows))
+        parts.append(link("explorer_albedo", "plot_explorer_albedo.png", PLOT_TITLES["explorer_albedo"]))
+    sp = e.get("sphere")
+    if sp and sp.get("file"):
+        light = sp["light"]
+        parts.append(f"Lit sphere: one distant light L = ({', '.join(fmt(x) for x in light)}) (45° from the view, "
+                     "upper left), orthographic view along −z, radiance ρ(L, V)·cos θ_i·π (a white Lambertian "
+                     "surface facing the light is 1), filmic tone map; "
+                     + ", ".join(f"{i['label']} (peak luminance {fmt(i['max_lum'])})" for i in sp["images"]) + ".")
+        parts.append(link("explorer_sphere", sp["file"], "Lit sphere under one distant light"))
+    return "\n\n".join(parts)
 
 
 def report_markdown(doc: dict[str, Any]) -> str:

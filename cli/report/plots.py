@@ -11,7 +11,13 @@ font caches) is still shared by the whole process, so :func:`make_plots` draws u
   (RH02 Fig. 8 style: how much P buys);
 - ``speed_error``: measured SHRM error against prefilter time per tolerance (and √ε_B);
 - ``fit_slices``: measured vs fitted ρ in the plane of incidence at a few view angles;
-- ``fit_bands``: fit error by view-elevation band (Green et al. 2007 Fig. 4 style).
+- ``fit_bands``: fit error by view-elevation band (Green et al. 2007 Fig. 4 style);
+- BRDF Explorer's views (``explorer.py``, Burley 2012): ``explorer_slice`` (θ_h × θ_d image
+  slice at one φ_d, log colour scale, missing cells marked) or ``explorer_samples``
+  (scattered measurements near the plane of incidence), ``explorer_polar`` (polar plots of
+  the plane of incidence, measured vs each fit) and ``explorer_albedo`` (directional albedo
+  against θ_v with the energy-conservation line at 1); :func:`image_row_plot` lays out the
+  lit spheres ``explorer.py`` renders.
 
 Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
 SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
@@ -25,12 +31,15 @@ from typing import Any
 import numpy as np
 from matplotlib import colormaps
 from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.cm import ScalarMappable
+from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
 
 from .shared_state import MATPLOTLIB_LOCK
 
 __all__ = ["PLOT_TITLES", "make_plots", "energy_plot", "accuracy_by_p_plot", "speed_error_plot",
-           "fit_slices_plot", "fit_bands_plot"]
+           "fit_slices_plot", "fit_bands_plot", "explorer_slice_plot", "explorer_samples_plot",
+           "explorer_polar_plot", "explorer_albedo_plot", "image_row_plot", "MISSING_COLOUR", "BELOW_COLOUR"]
 
 PLOT_TITLES = {
     "energy": "Captured energy against F (RH02 Fig. 6 style)",
@@ -38,7 +47,17 @@ PLOT_TITLES = {
     "speed_error": "Speed against error",
     "fit_slices": "Measured vs fitted slices (plane of incidence)",
     "fit_bands": "Fit error by view-elevation band",
+    "explorer_slice": "Image slice θ_h × θ_d (BRDF Explorer)",
+    "explorer_samples": "Measured samples near the plane of incidence",
+    "explorer_polar": "Polar plots of the plane of incidence (BRDF Explorer)",
+    "explorer_albedo": "Directional albedo against θ_v (BRDF Explorer)",
 }
+#: Slice cells without a measurement, and cells with L or V below the surface.
+MISSING_COLOUR = (1.0, 0.0, 1.0, 1.0)
+BELOW_COLOUR = (0.62, 0.62, 0.62, 1.0)
+#: Decades of ρ shown by the explorer's log scales (slice, polar plots), below the largest value.
+_DECADES = 4
+_POLAR_DECADES = 3
 _LUMA = np.array([0.2126, 0.7152, 0.0722])
 _DPI = 80
 
@@ -172,6 +191,169 @@ def fit_bands_plot(doc: dict[str, Any]) -> bytes:
     return _png(fig)
 
 
+def _grid(rows: list) -> np.ndarray:
+    return np.array([[np.nan if v is None else v for v in row] for row in rows], dtype=float)
+
+
+def _log_range(values: list[np.ndarray], decades: int = _DECADES) -> tuple[float, float]:
+    """(lo, hi) decades of a log scale: the decade above the largest positive value and at most
+    ``decades`` below it."""
+    finite = np.concatenate([np.ravel(v)[np.isfinite(np.ravel(v)) & (np.ravel(v) > 0)] for v in values] or
+                            [np.zeros(0)])
+    if finite.size == 0:
+        return -float(decades), 0.0
+    hi = float(np.ceil(np.log10(finite.max()) + 1e-9))
+    lo = max(hi - decades, float(np.floor(np.log10(finite.min()))))
+    return lo, max(hi, lo + 1.0)
+
+
+def explorer_slice_plot(doc: dict[str, Any]) -> bytes:
+    """log10 of ρ's luminance on the θ_h × θ_d slice: the BRDF and each fit on one colour scale;
+    missing cells magenta, cells below the surface grey."""
+    s = doc["explorer"]["slice"]
+    panels = [("brdf", _grid(s["lum"]))] + [(m, _grid(g)) for m, g in s["fitted_lum"].items() if g is not None]
+    lo, hi = _log_range([a for _, a in panels])
+    norm, cmap = Normalize(lo, hi), colormaps["inferno"]
+    missing = np.zeros(panels[0][1].shape, bool)
+    below = np.zeros_like(missing)
+    for i, j in s["missing"]:
+        missing[i, j] = True
+    for i, j in s["below_surface"]:
+        below[i, j] = True
+    fig = _figure(2.3 * len(panels) + 0.9, 2.7)
+    axes = []
+    for k, (label, a) in enumerate(panels):
+        ax = fig.add_subplot(1, len(panels), k + 1)
+        rgba = cmap(norm(np.log10(np.maximum(np.nan_to_num(a, nan=0.0), 10.0**lo))))
+        rgba[below] = BELOW_COLOUR
+        if k == 0:
+            rgba[missing] = MISSING_COLOUR
+        ax.imshow(rgba, origin="lower", extent=(0, 90, 0, 90), interpolation="nearest")
+        ax.set_title(label + (f" ({int(missing.sum())} cells missing)" if k == 0 and missing.any() else ""),
+                     fontsize=8)
+        ax.set_xlabel("θ_d (°)", fontsize=7)
+        if k == 0:
+            ax.set_ylabel("θ_h (°)", fontsize=7)
+        ax.set_xticks([0, 30, 60, 90])
+        ax.set_yticks([0, 30, 60, 90])
+        ax.tick_params(labelsize=6)
+        axes.append(ax)
+    bar = fig.colorbar(ScalarMappable(norm, cmap), ax=axes, fraction=0.03, pad=0.02)
+    bar.set_label(f"log10 ρ luminance (1/sr), φ_d = {s['phi_d_deg']:g}°", fontsize=7)
+    bar.ax.tick_params(labelsize=6)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=_DPI, metadata={"Software": None})
+    return buf.getvalue()
+
+
+def explorer_samples_plot(doc: dict[str, Any]) -> bytes:
+    """Scattered measurements within a few degrees of the plane of incidence: θ_i against
+    signed θ_o (> 0 on the mirror side), coloured by log10 of ρ's luminance."""
+    s = doc["explorer"]["samples"]
+    lum = _luma(s["rgb"]) if s["rgb"] else np.zeros(0)
+    lo, hi = _log_range([lum])
+    fig = _figure(4.6, 3.4)
+    ax = fig.add_subplot(1, 1, 1)
+    points = ax.scatter(s["theta_i_deg"], s["theta_o_deg"], c=np.log10(np.maximum(lum, 10.0**lo)), s=9,
+                        cmap="inferno", vmin=lo, vmax=hi, edgecolors="none")
+    ax.plot([0, 90], [0, 90], color="grey", lw=0.6, ls=":", label="mirror direction")
+    ax.set_xlabel("θ_i (°)")
+    ax.set_ylabel("signed θ_o (°)")
+    ax.set_xlim(0, 90)
+    ax.set_ylim(-90, 90)
+    ax.set_title(f"{s['n_shown']} of {s['n_in_plane']} samples within {s['max_off_plane_deg']:g}° of the plane",
+                 fontsize=8)
+    ax.legend(fontsize=7, loc="lower right")
+    bar = fig.colorbar(points, ax=ax)
+    bar.set_label("log10 ρ luminance (1/sr)", fontsize=7)
+    return _png(fig)
+
+
+def explorer_polar_plot(doc: dict[str, Any]) -> bytes:
+    """ρ's luminance in the plane of incidence as polar plots (angle: signed θ_o from the
+    normal, mirror side right; radius: log10 ρ over _POLAR_DECADES decades), one per θ_i."""
+    p = doc["explorer"]["polar"]
+    curves = p["curves"]
+    theta = np.radians(np.asarray(p["theta_o_deg"], dtype=float))
+
+    def lum(rgb: list) -> np.ndarray:
+        return np.array([np.nan if v is None else float(np.dot(v, _LUMA)) for v in rgb], dtype=float)
+
+    series = [lum(c["measured_rgb"]) for c in curves] + [lum(v) for c in curves for v in c["fitted_rgb"].values()
+                                                          if v is not None]
+    lo, hi = _log_range(series, decades=_POLAR_DECADES)
+    n = max(len(curves), 1)
+    fig = _figure(2.35 * n, 2.6)
+    cmap = colormaps["tab10"]
+    for k, c in enumerate(curves):
+        ax = fig.add_subplot(1, n, k + 1, projection="polar")
+        ax.set_theta_zero_location("N")
+        ax.set_theta_direction(-1)
+        ax.set_thetamin(-90)
+        ax.set_thetamax(90)
+
+        def radius(values: np.ndarray) -> np.ndarray:
+            with np.errstate(divide="ignore", invalid="ignore"):
+                return np.clip(np.log10(values) - lo, 0.0, None)
+
+        mtheta = np.radians(np.asarray(c["measured_theta_o_deg"], dtype=float))
+        measured = lum(c["measured_rgb"])
+        dense = mtheta.size == theta.size and np.allclose(mtheta, theta)
+        ax.plot(mtheta, radius(measured), "k-" if dense else "k.", lw=1.5, ms=3, label="measured")
+        for j, (model, rgb) in enumerate(c["fitted_rgb"].items()):
+            if rgb is not None:
+                ax.plot(theta, radius(lum(rgb)), lw=1, color=cmap(j), label=model)
+        ti = np.radians(c["theta_i_deg"])
+        ax.plot([-ti, -ti], [0, hi - lo], color="goldenrod", lw=1, ls="--", label="light")
+        ax.set_rlim(0, hi - lo)
+        ax.set_rticks(np.arange(1.0, hi - lo + 0.5, 1.0))
+        ax.set_yticklabels([])
+        ax.set_thetagrids([-90, -60, -30, 0, 30, 60, 90], fontsize=6)
+        ax.set_title(f"θ_i = {c['theta_i_deg']:g}°", fontsize=8)
+        ax.set_xlabel(f"rings: decades of ρ, 1e{lo:.0f} (centre) to 1e{hi:.0f}", fontsize=6, labelpad=-28)
+        if k == 0:
+            ax.legend(fontsize=6, loc="lower left", bbox_to_anchor=(-0.15, -0.25))
+    return _png(fig)
+
+
+def explorer_albedo_plot(doc: dict[str, Any]) -> bytes:
+    """Directional albedo against θ_v: luminance (solid) and the largest channel (dotted) of the
+    BRDF and of each fit, with energy conservation (albedo 1) as a line."""
+    a = doc["explorer"]["albedo"]
+    views = np.asarray(a["views_deg"], dtype=float)
+    fig = _figure(5.0, 3.2)
+    ax = fig.add_subplot(1, 1, 1)
+    series = ([("brdf", a["measured_rgb"], "k")] if a["measured_rgb"] is not None else []) + [
+        (m, v, colormaps["tab10"](j)) for j, (m, v) in enumerate(a["fitted_rgb"].items()) if v is not None]
+    top = 1.0
+    for label, rgb, colour in series:
+        values = np.asarray(rgb, dtype=float)
+        ax.plot(views, values @ _LUMA, "-", color=colour, lw=1.3, label=label)
+        ax.plot(views, values.max(axis=1), ":", color=colour, lw=1)
+        top = max(top, float(np.nanmax(values)))
+    ax.axhline(1.0, color="crimson", lw=1, ls="--", label="energy conservation")
+    ax.set_xlim(0, 90)
+    ax.set_ylim(0, 1.08 * top)
+    ax.set_xlabel("view angle θ_v (°)")
+    ax.set_ylabel("directional albedo")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, loc="best", title="solid: luminance, dotted: largest channel", title_fontsize=6)
+    return _png(fig)
+
+
+def image_row_plot(images: list[np.ndarray], titles: list[str]) -> bytes:
+    """8-bit images side by side with a title each (the explorer's lit spheres)."""
+    with MATPLOTLIB_LOCK:
+        n = max(len(images), 1)
+        fig = _figure(1.9 * n, 2.1)
+        for k, (image, title) in enumerate(zip(images, titles, strict=True)):
+            ax = fig.add_subplot(1, n, k + 1)
+            ax.imshow(image, interpolation="nearest")
+            ax.set_title(title, fontsize=8)
+            ax.set_axis_off()
+        return _png(fig)
+
+
 def make_plots(doc: dict[str, Any]) -> dict[str, bytes]:
     """Every plot the document has data for: ``{key: png_bytes}`` (keys of :data:`PLOT_TITLES`)."""
     if doc.get("status") != "ok":
@@ -184,4 +366,13 @@ def make_plots(doc: dict[str, Any]) -> dict[str, bytes]:
             plots["fit_slices"] = fit_slices_plot(doc)
         if any(f.get("bands") for f in doc.get("fits", [])):
             plots["fit_bands"] = fit_bands_plot(doc)
+        explorer = doc.get("explorer") or {}
+        if explorer.get("slice"):
+            plots["explorer_slice"] = explorer_slice_plot(doc)
+        if explorer.get("samples"):
+            plots["explorer_samples"] = explorer_samples_plot(doc)
+        if explorer.get("polar", {}).get("curves"):
+            plots["explorer_polar"] = explorer_polar_plot(doc)
+        if explorer.get("albedo"):
+            plots["explorer_albedo"] = explorer_albedo_plot(doc)
     return plots

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from ...brdf_io.atomic import atomic_path
+from .explorer import LiveView, ReportImage
 from .html import index_html, report_html
 from .markdown import report_markdown
 from .plots import make_plots
@@ -27,13 +28,24 @@ __all__ = ["report_files", "write_folder", "summary_row", "summary_columns", "wr
 
 def report_files(doc: dict[str, Any], previews: Sequence[Any] = ()) -> dict[str, bytes]:
     """Every file of a report folder: ``report.json``, ``report.md``, ``report.html`` and
-    the PNG plots and previews, as ``{file name: bytes}``."""
+    the PNG plots and previews, as ``{file name: bytes}``.
+
+    ``previews`` is what ``collect_report`` returns beside the document: preview images
+    (``preview_<key>.png``), ``explorer.ReportImage`` (the lit spheres, under their own file
+    name) and ``explorer.LiveView`` (live WebGL2 previews, embedded in ``report.html`` only)."""
     pngs = {f"plot_{key}.png": data for key, data in make_plots(doc).items()}
-    pngs.update({f"preview_{p.key}.png": p.png for p in previews})
+    views = []
+    for p in previews:
+        if isinstance(p, LiveView):  # embedded in report.html only
+            views.append(p)
+        elif isinstance(p, ReportImage):
+            pngs[p.file] = p.png
+        else:
+            pngs[f"preview_{p.key}.png"] = p.png
     files = {
         "report.json": (json.dumps(doc, indent=1, ensure_ascii=False, allow_nan=False) + "\n").encode("utf-8"),
         "report.md": report_markdown(doc).encode("utf-8"),
-        "report.html": report_html(doc, pngs).encode("utf-8"),
+        "report.html": report_html(doc, pngs, views).encode("utf-8"),
     }
     files.update(pngs)
     return files

@@ -18,6 +18,7 @@ import shrmkit
 from shrmkit.cli.report.checks import directional_albedo, reciprocity_check, scattered_reciprocity
 from shrmkit.cli.report.collect import collect_report, strip_timings
 from shrmkit.cli.report.options import profile
+from shrmkit.render.preview import PreviewImage
 
 NUM = (int, float)
 OPT_NUM = (int, float, type(None))
@@ -135,6 +136,8 @@ def test_report_matches_documented_schema(phong_report):
     # strict JSON: no NaN/Inf survives
     json.dumps(doc, allow_nan=False)
     # the preview image file named in the JSON is a PNG that was produced
+    # (beside the preview images come the explorer's lit sphere and the live views: explorer.py)
+    previews = [p for p in previews if isinstance(p, PreviewImage)]
     assert [img["key"] for img in doc["preview"]["images"]] == [p.key for p in previews] == ["sphere"]
     assert previews[0].png[:8] == b"\x89PNG\r\n\x1a\n"
 
