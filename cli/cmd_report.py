@@ -16,6 +16,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 
 from ..analysis.tolerance import DEFAULT_EPS
 from ..brdf_io.errors import BadInputError
+from ..brdf_io.specs import brdf_sources
 from ..render.mesh import load_mesh
 from .common import add_env_orientation, add_order_rule, add_window_option, stderr, stdout, tolerance
 from .report.batch import BRDF_SUFFIXES, run_batch
@@ -46,7 +47,9 @@ def _positive_int(text: str) -> int:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("brdfs", nargs="+", metavar="BRDF", help="BRDF files (.binary, .npz, .brdf, .json) or spec strings")
+    p.add_argument("brdfs", nargs="+", metavar="BRDF",
+                   help="BRDF files (.binary, .npz, .bsdf, .brdf, .json; CURET abrdf.dat and gonioreflectometer "
+                        ".csv: every member, or FILE#N for one) or spec strings")
     p.add_argument("--eps", type=tolerance, default=DEFAULT_EPS,
                    help=f"main tolerance (scene orders, preview; default {DEFAULT_EPS:g})")
     p.add_argument("--tolerances", type=_tolerances, default=None,
@@ -66,9 +69,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--quick", action="store_true",
                    help="quick profile: 32-row environments, fewer pairs, small fits (what tests and demo use)")
     p.add_argument("--out", default="shrm-report", help="output folder (default ./shrm-report)")
-    p.add_argument("--workers", type=_positive_int, default=1, help="parallel worker processes (default 1)")
+    p.add_argument("--workers", type=_positive_int, default=1,
+                   help="parallel worker processes, each with its share of the cores (default 1)")
     p.add_argument("--dask-scheduler", default=None, metavar="ADDRESS",
-                   help="run the per-BRDF tasks on this Dask distributed scheduler (tcp://host:8786)")
+                   help="run the per-BRDF tasks on this Dask distributed scheduler (tcp://host:8786); "
+                        "start workers with --nthreads 1 --nworkers N (see README)")
     p.add_argument("--max-F", type=_positive_int, default=None, help="cap on F (default 256, quick 96)")
     p.add_argument("--fit-samples", type=_positive_int, default=None, help="fit samples (default 16384, quick 4096)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -83,6 +88,7 @@ def options_from_args(args: argparse.Namespace):
 
     changes = {"eps": args.eps, "lobes": args.lobes, "preview": args.preview, "seed": args.seed, "mesh": args.mesh,
                "env_up": args.env_up, "env_flip": args.env_flip, "env_azimuth": args.env_azimuth,
+               "env_layer": args.env_layer, "env_part": args.env_part,
                "window": args.window, "criterion": args.criterion, "max_view_deg": args.max_view_deg}
     for key, value in (("tolerances", args.tolerances), ("envs", tuple(args.env) if args.env else None),
                        ("env_height", args.env_height), ("models", args.models), ("n_pairs", args.pairs),
@@ -122,8 +128,10 @@ def run(args: argparse.Namespace) -> int:
     options = options_from_args(args)
     _check_shared_inputs(options)
     _check_brdf_files(args.brdfs)
+    # a whole multi-BRDF file (the 61 CURET samples, a CSV's wavelengths) is one report per member
+    sources = [member for source in args.brdfs for member in brdf_sources(source)]
     t0 = time.perf_counter()
-    result = run_with_progress(list(args.brdfs), args.out, options, workers=args.workers,
+    result = run_with_progress(sources, args.out, options, workers=args.workers,
                                scheduler=args.dask_scheduler, show=not args.no_progress)
     for row in result.rows:
         where = result.out_dir / row["name"] / "report.html"
@@ -141,7 +149,8 @@ def _check_brdf_files(sources: list[str]) -> None:
     """A BRDF named by a file path that does not exist is a usage error (exit 2, nothing
     written); a file that exists but cannot be read is one failed report in the batch."""
     for source in sources:
-        path = Path(source)
+        base, sep, _ = source.rpartition("#")
+        path = Path(base if sep and Path(base).suffix.lower() in BRDF_SUFFIXES else source)
         if path.suffix.lower() in BRDF_SUFFIXES and not path.exists():
             raise BadInputError(path, "no such BRDF file")
 

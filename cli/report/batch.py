@@ -8,14 +8,24 @@ analyse) comes back as a ``status: failed`` report with its error, and the batch
 
 Three engines run the same task function:
 
-- serial (``workers=1``): in this process, with per-stage progress;
+- serial (``workers=1``): in this process, with per-stage progress, every core for
+  ducc0 and the BLAS (as the library functions use them);
 - ``workers=N``: :class:`concurrent.futures.ProcessPoolExecutor` with the ``spawn``
   start method (no fork of a process holding threads or an OpenGL context);
-- ``scheduler=ADDRESS``: a Dask ``distributed`` cluster (``Client(ADDRESS).map``); the
+- ``scheduler=ADDRESS``: a Dask ``distributed`` cluster (``Client.submit``); the
   workers need shrmkit installed and the BRDF files readable at the same paths. Results
   come back to this process, which writes them, so workers need no shared output folder.
 
-Results do not depend on the engine (every random choice is seeded per BRDF).
+Scaling (``threads.py``): a worker process gets its share of the cores, cores // N
+threads (at least 1) for ducc0, the BLAS and the preview, set once when it starts (the
+pool's ``initializer``; a Dask worker process at its first task, with cores // the task
+threads of all workers on its host); ``ReportTask.nthreads`` passes the same number to
+ducc0. Worker processes import the report modules once, at start. Tasks are submitted
+largest first (:func:`estimate_cost`), so that a long BRDF does not start last and finish
+alone; the summary keeps the input order.
+
+Results do not depend on the engine or the threads (every random choice is seeded per
+BRDF, and the SHTs give the same numbers on any number of threads).
 
 Folder names are the file stem or the sanitized spec (:func:`report_names`), at most
 :data:`MAX_NAME_CHARS` characters: a longer one is cut and a short hash of the full stem or
@@ -28,30 +38,39 @@ the summary is written.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
+import math
 import multiprocessing
+import os
 import re
+import socket
 import time
+from collections import defaultdict
 from collections.abc import Callable, Iterable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from ...brdf_io.errors import BadInputError
+from ...brdf_io.specs import BRDF_FILE_TYPES, load_brdf
 from ...render.preview import resolve_preview_mode
 from .collect import collect_report, failed_report, unique_names
 from .options import ReportOptions
+from .threads import configure_worker, threads_per_worker, usable_cores, worker_initializer
 from .writer import report_files, summary_row, write_folder, write_summary
 
 __all__ = ["BRDF_SUFFIXES", "MAX_NAME_CHARS", "ReportTask", "ReportOutcome", "BatchResult", "report_names", "run_task",
-           "run_batch"]
+           "run_batch", "estimate_cost", "largest_first"]
 
 #: ``progress(event, name, detail)``: event ``"start"``, ``"stage"`` (serial only) or ``"done"``.
 BatchProgress = Callable[[str, str, str], None]
 
 #: File suffixes of the BRDF files `shrm report` takes (MERL, our table, Cornell, a fitted model).
-BRDF_SUFFIXES = (".binary", ".npz", ".brdf", ".json")
+BRDF_SUFFIXES = tuple(BRDF_FILE_TYPES)  # the BRDF file-type registry's suffixes
 
 #: Longest report folder name kept as it is; a longer one becomes its first
 #: ``MAX_NAME_CHARS`` characters, ``-`` and 10 hex digits of the SHA-256 of the full stem/spec.
@@ -60,13 +79,15 @@ MAX_NAME_CHARS = 100
 
 @dataclass(frozen=True)
 class ReportTask:
-    """One BRDF to report on: its source (file or spec), folder name, options, and the
-    preview mode already resolved (``gl``, ``cpu`` or ``none``)."""
+    """One BRDF to report on: its source (file or spec), folder name, options, the
+    preview mode already resolved (``gl``, ``cpu`` or ``none``), and the ducc0 threads of
+    its SHTs (0: every core; a worker passes its share, ``threads.py``)."""
 
     source: str
     name: str
     options: ReportOptions
     preview_mode: str
+    nthreads: int = 0
 
 
 @dataclass(frozen=True)
@@ -115,8 +136,12 @@ def report_names(sources: Sequence[str]) -> list[str]:
     ``-2``, ``-3``…"""
     bases = []
     for source in sources:
-        path = Path(source)
-        raw = path.stem if path.suffix.lower() in BRDF_SUFFIXES or _is_file_name(path) else source
+        base_path, sep, selector = source.rpartition("#")
+        if sep and Path(base_path).suffix.lower() in BRDF_SUFFIXES:  # one member of a file: "abrdf.dat#12"
+            raw = f"{Path(base_path).stem}-{selector}"
+        else:
+            path = Path(source)
+            raw = path.stem if path.suffix.lower() in BRDF_SUFFIXES or _is_file_name(path) else source
         base = re.sub(r"[^A-Za-z0-9._-]+", "_", raw).strip("._") or "brdf"
         bases.append(_short_name(base, raw))
     return unique_names(bases)
@@ -127,11 +152,17 @@ def run_task(task: ReportTask, progress: Callable[[str], None] | None = None) ->
     t0 = time.perf_counter()
     try:
         doc, previews = collect_report(task.source, task.options, name=task.name,
-                                       preview_mode=task.preview_mode, progress=progress)
+                                       preview_mode=task.preview_mode, progress=progress, nthreads=task.nthreads)
     except Exception as err:  # any failure of one BRDF is reported, and the batch goes on
         message = str(err) if isinstance(err, BadInputError) else f"{type(err).__name__}: {err}"
         doc, previews = failed_report(task.source, task.name, task.options, message, time.perf_counter() - t0), []
-    return ReportOutcome(task.name, doc["status"] == "ok", summary_row(doc), report_files(doc, previews))
+    try:
+        files = report_files(doc, previews)
+    except Exception as err:  # a plot or page that cannot be made fails this BRDF, not the batch
+        doc = failed_report(task.source, task.name, task.options, f"writing the report: {type(err).__name__}: {err}",
+                            time.perf_counter() - t0)
+        files = report_files(doc, [])
+    return ReportOutcome(task.name, doc["status"] == "ok", summary_row(doc), files)
 
 
 def _serial(tasks: Sequence[ReportTask], progress: BatchProgress | None) -> Iterable[ReportOutcome]:
@@ -142,20 +173,124 @@ def _serial(tasks: Sequence[ReportTask], progress: BatchProgress | None) -> Iter
         yield run_task(task, stage)
 
 
+# ------------------------------------------------------------------------------ cost and order
+
+
+def _lobe_sharpness(brdf: Any) -> list[float]:
+    """Peak over mean of the cosine-weighted transfer ρ̂(·, V) over the incident hemisphere at
+    the views θ_v = 0°, 35°, 70° (about s + 2 at every view for a Phong lobe cos^s, 2 for
+    Lambert; growing with θ_v for a microfacet lobe, which stretches at grazing views)."""
+    n = 30
+    theta = (np.arange(n) + 0.5) * (np.pi / 2) / n
+    phi = (np.arange(4 * n) + 0.5) * (2 * np.pi) / (4 * n)
+    t, p = np.meshgrid(theta, phi, indexing="ij")
+    L = np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], axis=-1)
+    weight = np.sin(t) * (np.pi / 2 / n) * (2 * np.pi / (4 * n)) / (2 * np.pi)
+    out = []
+    for view in np.radians([0.0, 35.0, 70.0]):
+        V = np.array([np.sin(view), 0.0, np.cos(view)])
+        mirror = np.array([[-V[0], 0.0, V[2]]])
+        grid = brdf.rho_hat(L, np.broadcast_to(V, L.shape)).mean(axis=-1)
+        peak = max(float(grid.max()), float(brdf.rho_hat(mirror, V[None]).mean()))
+        mean = float((grid * weight).sum())
+        out.append(max(2.0, peak / mean) if mean > 0.0 and math.isfinite(peak) else 2.0)
+    return out
+
+
+#: estimated seconds per MB of a table file (a MERL table of 35 MB: 5 + 10.5 s)
+_TABLE_SECONDS_PER_MB = 0.3
+
+
+def estimate_cost(source: str) -> float:
+    """A rough, cheap estimate of a report's cost (about the seconds of a quick report on one
+    core), only used to start the costly BRDFs first.
+
+    A table file (``.binary``, ``.npz``, ``.brdf``; not read): 5 + 0.3 s per MB (a MERL table
+    ≈ 15.5). An analytic BRDF (a spec, or a fitted model's ``.json``): the orders P grow with
+    the change of the lobe with the view and F with the square root of its sharpness
+    (:func:`_lobe_sharpness`), so 5 + 2.5·sqrt(max sharpness)·max(0, ln(s70/s0) − 0.1): a
+    Phong or Lafortune lobe, the same at every view, costs about 5 whatever its exponent, a
+    microfacet lobe more the sharper it is (on 32 BRDFs the rank correlation with the
+    measured time was 0.81–0.87, ``benchmarks/batch_scaling.py``). A source that cannot be read
+    costs 0 (its report fails at once).
+    """
+    path = Path(source)
+    try:
+        if path.suffix.lower() in (".binary", ".npz", ".brdf") and path.is_file():
+            return 5.0 + _TABLE_SECONDS_PER_MB * path.stat().st_size / 1e6
+        brdf = load_brdf(source)
+        if brdf.kind != "analytic":  # pragma: no cover - every table suffix is handled above
+            return 5.0 + _TABLE_SECONDS_PER_MB * path.stat().st_size / 1e6
+        s = _lobe_sharpness(brdf)
+        return 5.0 + 2.5 * math.sqrt(max(s)) * max(0.0, math.log(s[-1] / s[0]) - 0.1)
+    except Exception:  # a bad BRDF: its report fails fast, whatever its place
+        return 0.0
+
+
+def largest_first(tasks: Sequence[ReportTask]) -> list[ReportTask]:
+    """``tasks`` by decreasing :func:`estimate_cost` (input order among equals)."""
+    costs = [estimate_cost(t.source) for t in tasks]
+    order = sorted(range(len(tasks)), key=lambda i: -costs[i])
+    return [tasks[i] for i in order]
+
+
+# ------------------------------------------------------------------------------ worker processes
+
+
 def _processes(tasks: Sequence[ReportTask], workers: int, progress: BatchProgress | None) -> Iterable[ReportOutcome]:
-    with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+    threads = threads_per_worker(workers)
+    preview_mode = tasks[0].preview_mode if tasks else None
+    with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
+                             initializer=worker_initializer, initargs=(threads, preview_mode)) as pool:
         futures = []
-        for task in tasks:
-            futures.append(pool.submit(run_task, task))
+        for task in largest_first(tasks):
+            futures.append(pool.submit(run_task, dataclasses.replace(task, nthreads=threads)))
             if progress is not None:
                 progress("start", task.name, "queued")
         for future in as_completed(futures):
             yield future.result()
 
 
+# ------------------------------------------------------------------------------------- Dask
+
+
+def _this_process() -> str:
+    """``host:pid`` of this process (a plain string: Dask passes it through untouched)."""
+    return f"{socket.gethostname()}:{os.getpid()}"
+
+
+def _dask_threads(client: Any) -> dict[str, int]:
+    """Threads per task of every worker the scheduler knows now: the usable cores of its
+    machine over the task threads of all workers on that host (at least 1)."""
+    try:
+        info = client.scheduler_info(n_workers=-1)["workers"]
+    except TypeError:  # pragma: no cover - distributed before 2025 lists every worker
+        info = client.scheduler_info()["workers"]
+    if not info:
+        return {}
+    cores = client.run(usable_cores, on_error="ignore")
+    per_host: dict[str, int] = defaultdict(int)
+    for w in info.values():
+        per_host[w.get("host", "")] += int(w.get("nthreads", 1))
+    return {addr: threads_per_worker(per_host[w.get("host", "")], cores.get(addr) if isinstance(
+        cores.get(addr), int) else None) for addr, w in info.items()}
+
+
+def _dask_task(task: ReportTask, threads: dict[str, int], driver: str) -> ReportOutcome:
+    """A report task on a Dask worker: the worker process gets its threads once (not the
+    driver's own process, for an in-process cluster), then :func:`run_task`."""
+    from distributed import get_worker  # lazy: runs on a Dask worker, where distributed is loaded
+
+    worker = get_worker()
+    n = threads.get(worker.address) or threads_per_worker(getattr(getattr(worker, "state", worker), "nthreads", 1))
+    if _this_process() != driver:
+        n = configure_worker(n, preview_mode=task.preview_mode)
+    return run_task(dataclasses.replace(task, nthreads=n))
+
+
 def _dask(tasks: Sequence[ReportTask], scheduler: str, progress: BatchProgress | None) -> Iterable[ReportOutcome]:
     try:  # lazy: Dask is an optional extra (shrmkit[dask]), loaded only for --dask-scheduler
-        from distributed import Client
+        from distributed import Client, as_completed as dask_completed  # noqa: I001
     except ImportError:  # pragma: no cover - depends on the installation
         raise BadInputError(None, "--dask-scheduler needs dask.distributed: pip install 'shrmkit[dask]'") from None
     try:
@@ -163,11 +298,14 @@ def _dask(tasks: Sequence[ReportTask], scheduler: str, progress: BatchProgress |
     except (OSError, TimeoutError, ValueError) as err:
         raise BadInputError(scheduler, f"cannot connect to the Dask scheduler: {err}") from None
     try:
-        futures = client.map(run_task, list(tasks), pure=False, key=[f"shrm-report-{t.name}" for t in tasks])
+        threads, driver = _dask_threads(client), _this_process()
+        ordered = largest_first(tasks)
+        futures = [client.submit(_dask_task, task, threads, driver, pure=False, key=f"shrm-report-{task.name}",
+                                 priority=len(ordered) - i) for i, task in enumerate(ordered)]
         if progress is not None:
-            for task in tasks:
+            for task in ordered:
                 progress("start", task.name, "submitted")
-        for future in futures:  # input order (as_completed would need a default client)
+        for future in dask_completed(futures, loop=client.loop):
             yield future.result()
     finally:
         client.close()
@@ -215,7 +353,9 @@ def run_batch(
     if scheduler:
         outcomes, engine = _dask(tasks, scheduler, progress), f"dask ({scheduler})"
     elif workers > 1 and len(tasks) > 1:
-        outcomes, engine = _processes(tasks, min(workers, len(tasks)), progress), f"{workers} processes"
+        n = min(workers, len(tasks))
+        engine = f"{workers} processes, {threads_per_worker(n)} thread(s) each"
+        outcomes = _processes(tasks, n, progress)
     else:
         outcomes, engine = _serial(tasks, progress), "serial"
     rows: dict[str, dict[str, Any]] = {}

@@ -51,6 +51,7 @@ from ...brdf_io.jsonutil import to_jsonable
 from ...brdf_io.specs import load_brdf
 from ...render.preview import PREVIEW_DISABLED, PreviewImage, render_previews, resolve_preview_mode
 from .checks import RECIPROCITY_TOLERANCE, data_checks
+from .explorer import explore, live_views
 from .options import ReportOptions, load_report_env
 from .shared_state import OPENGL_LOCK
 
@@ -225,7 +226,7 @@ def unique_names(names: list[str]) -> list[str]:
     return out
 
 
-def _environments(brdf: BRDF, options: ReportOptions, progress: Progress | None):
+def _environments(brdf: BRDF, options: ReportOptions, progress: Progress | None, nthreads: int = 0):
     # the headline measured error: pairs inside the view limit (the sampler of `shrm compare`)
     R, V, _ = sample_pairs(options.n_pairs, seed=options.seed, max_view_deg=options.max_view_deg)
     env_entries, speed_rows, main_shrms = [], [], []
@@ -243,7 +244,7 @@ def _environments(brdf: BRDF, options: ReportOptions, progress: Progress | None)
         Rb, Vb, theta_b, weight_b = band_pairs(env.radiance, max(16, options.n_pairs // len(BAND_EDGES)),
                                                BAND_EDGES, seed=options.seed)
         reference_b = reference_radiance(env, brdf, Rb, Vb)
-        lighting = lighting_coefficients(env.radiance, env.height - 1, name=env.name)
+        lighting = lighting_coefficients(env.radiance, env.height - 1, name=env.name, nthreads=max(nthreads, 1))
         entry: dict[str, Any] = {
             "name": env.name,
             "spec": spec,
@@ -255,7 +256,7 @@ def _environments(brdf: BRDF, options: ReportOptions, progress: Progress | None)
         for tol in options.all_tolerances:
             _stage(progress, f"prefilter {env.name} eps={tol:g}")
             shrm = prefilter(env, brdf, eps=tol, max_F=options.max_F, max_P=options.max_P, window=options.window,
-                             criterion=options.criterion, max_view_deg=options.max_view_deg)
+                             criterion=options.criterion, max_view_deg=options.max_view_deg, nthreads=nthreads)
             err = relative_rms(shrm.radiance(R, V), reference)  # clamped at 0, as rendered
             bands = beside_measured(band_relative_rms(shrm.radiance(Rb, Vb), reference_b, theta_b, BAND_EDGES,
                                                       weight_b), shrm.meta["view_bands"])
@@ -392,6 +393,7 @@ def collect_report(
     name: str | None = None,
     preview_mode: str | None = None,
     progress: Progress | None = None,
+    nthreads: int = 0,
 ) -> tuple[dict[str, Any], list[PreviewImage]]:
     """Compute the report of one BRDF.
 
@@ -408,6 +410,9 @@ def collect_report(
         (``preview.resolve_preview_mode``) — pass it resolved when running many reports.
     progress
         Optional ``progress(stage: str)``.
+    nthreads
+        ducc0 threads of the SHTs (``prefilter``'s ``nthreads``; 0: every core). A worker of a
+        batch passes its share of the cores (``threads.py``); the numbers do not depend on it.
 
     Returns
     -------
@@ -426,10 +431,11 @@ def collect_report(
     _stage(progress, "fits")
     fit_entries, fit_results = _fits(brdf, options)
     slices = _slices(brdf, fit_results, options.models)
+    explorer, explorer_images = explore(brdf, fit_results, options.models, albedo_nodes=options.albedo_nodes)
     analysed, analysis_of, analysis_note = _analysis_brdf(brdf, fit_entries, fit_results)
     _stage(progress, "orders")
     order_rows, eps_table, main_choice = _orders(analysed, options)
-    env_entries, speed_rows, main_shrms = _environments(analysed, options, progress)
+    env_entries, speed_rows, main_shrms = _environments(analysed, options, progress, nthreads)
     _stage(progress, "checks")
     checks = data_checks(brdf, analysed, seed=options.seed, albedo_nodes=options.albedo_nodes)
     _stage(progress, "preview")
@@ -453,6 +459,7 @@ def collect_report(
         "error": preview_error,
         "preview_seconds": time.perf_counter() - t0,
     }
+    live, views = live_views(main_shrms, previews, preview_mode=mode, preview_size=options.preview_size)
     doc = {
         "format": REPORT_FORMAT,
         "format_version": REPORT_FORMAT_VERSION,
@@ -468,15 +475,17 @@ def collect_report(
         "speed_vs_error": speed_rows,
         "fits": fit_entries,
         "fit_slices": slices,
+        "explorer": explorer,
         "data_checks": checks,
         "warnings": _warnings(checks, order_rows, fit_entries,
                               [n for n in preview_block["notes"] if n != PREVIEW_DISABLED], analysis_note),
         "preview": preview_block,
+        "live_preview": live,
         "error": None,
         "provenance": {"shrmkit_version": __version__, "numpy_version": np.__version__},
         "total_seconds": time.perf_counter() - t_start,
     }
-    return to_jsonable(doc, digits=REPORT_DIGITS), previews
+    return to_jsonable(doc, digits=REPORT_DIGITS), [*previews, *explorer_images, *views]
 
 
 def failed_report(source: str | Path, name: str, options: ReportOptions, error: str,

@@ -42,6 +42,8 @@ class ReportOptions:
     env_up, env_flip, env_azimuth
         Orientation of environment *files* (``load_env``'s ``up``, ``flip``, ``azimuth``);
         built-in environments only take the azimuth.
+    env_layer, env_part
+        The layer / part of OpenEXR environment files (``load_env``'s ``layer``, ``part``).
     env_height
         Environments are area-resampled to ``env_height`` × 2·``env_height``: the angular
         reference sums every pixel for every (R, V) pair, so keep it small.
@@ -77,6 +79,8 @@ class ReportOptions:
     env_up: str | None = None
     env_flip: bool = False
     env_azimuth: float = 0.0
+    env_layer: str | None = None
+    env_part: str | int | None = None
     models: tuple[str, ...] = DEFAULT_MODELS
     lobes: int = 1
     fit_samples: int = 16384
@@ -162,4 +166,4 @@ def load_report_env(spec: str, options: ReportOptions):  # -> EnvironmentMap
     """Load one of ``options.envs`` at ``env_height`` rows with the orientation options
     (the CLI's one rule, :func:`~shrmkit.cli.common.load_oriented_env`)."""
     return load_oriented_env(spec, up=options.env_up, flip=options.env_flip, azimuth=options.env_azimuth,
-                             height=options.env_height)
+                             layer=options.env_layer, part=options.env_part, height=options.env_height)

@@ -143,7 +143,9 @@ def speed_error_plot(doc: dict[str, Any]) -> bytes:
 
 
 def _luma(rgb: Any) -> np.ndarray:
-    return np.asarray(rgb, dtype=float) @ _LUMA
+    """Luminance of (..., 3) RGB; an empty list (no samples in a slice) gives an empty array."""
+    values = np.asarray(rgb, dtype=float)
+    return values.reshape(-1, 3) @ _LUMA if values.size == 0 else values @ _LUMA
 
 
 def fit_slices_plot(doc: dict[str, Any]) -> bytes:

@@ -144,7 +144,8 @@ def test_figures_drawn_from_four_threads_at_once():
     failed in every run (2 to 8 of the 12 sets of a round; see the module docstring)."""
     docs = [collect_report(s, tiny_options())[0] for s in ("lafortune:kd=0.2,n=30,ks=2", "phong:s=40",
                                                            "microfacet:sigma=0.3")]
-    expected = {"energy", "accuracy_by_p", "speed_error", "fit_slices", "fit_bands"}
+    expected = {"energy", "accuracy_by_p", "speed_error", "fit_slices", "fit_bands", "explorer_slice",
+                "explorer_polar", "explorer_albedo"}
     interval = sys.getswitchinterval()
     sys.setswitchinterval(1e-5)
     try:
