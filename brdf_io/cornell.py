@@ -18,9 +18,7 @@ Cornell University Program of Computer Graphics measurements, as distributed wit
 
 from __future__ import annotations
 
-import math
 import os
-import re
 from pathlib import Path
 
 import numpy as np
@@ -29,6 +27,7 @@ from .brdf import BRDF, Kind
 from .colour import WAVELENGTHS_NM, spectral_to_linear_srgb
 from .errors import BadInputError, ScatteredEvalError
 from .limits import check_elements, read_bytes
+from .spec_params import MAX_NUMBER_CHARS, NonFiniteNumberError, parse_number
 
 __all__ = ["ScatteredBRDF", "read_cornell", "SCATTERED_EVAL_MESSAGE", "MAX_MEASURED_RHO", "MAX_WAVELENGTHS"]
 
@@ -103,22 +102,17 @@ class ScatteredBRDF(BRDF):
 MAX_MEASURED_RHO = 1e6
 #: Largest wavelength count accepted in the header (the reader converts exactly 31).
 MAX_WAVELENGTHS = 1000
-_MAX_TOKEN = 64  # longest number token, characters
-_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
-_NON_FINITE = re.compile(r"[+-]?(?:nan|inf|infinity)", re.IGNORECASE)
-
-
 def _number(path: Path, line_no: int, token: str) -> float:
-    """One decimal number token (``1``, ``-0.5``, ``2.5e-3``); BadInputError otherwise."""
-    if len(token) <= _MAX_TOKEN and _NUMBER.fullmatch(token):
-        value = float(token)
-        if math.isfinite(value):
-            return value
-        raise BadInputError(path, f"line {line_no}: non-finite number {token!r} (overflows a float)")
-    if _NON_FINITE.fullmatch(token):
-        raise BadInputError(path, f"line {line_no}: non-finite number {token!r}")
-    shown = token if len(token) <= _MAX_TOKEN else token[:_MAX_TOKEN] + "..."
-    raise BadInputError(path, f"line {line_no}: {shown!r} is not a number")
+    """One decimal number token (``1``, ``-0.5``, ``2.5e-3``; :func:`parse_number`);
+    BadInputError otherwise."""
+    try:
+        return parse_number(token, strip=False)
+    except NonFiniteNumberError as err:
+        detail = " (overflows a float)" if err.overflow else ""
+        raise BadInputError(path, f"line {line_no}: non-finite number {token!r}{detail}") from None
+    except ValueError:
+        shown = token if len(token) <= MAX_NUMBER_CHARS else token[:MAX_NUMBER_CHARS] + "..."
+        raise BadInputError(path, f"line {line_no}: {shown!r} is not a number") from None
 
 
 def read_cornell(path: str | os.PathLike[str]) -> ScatteredBRDF:

@@ -40,6 +40,7 @@ import numpy as np
 from .cornell import ScatteredBRDF
 from .errors import BadInputError
 from .limits import read_bytes
+from .spec_params import MAX_NUMBER_CHARS, NonFiniteNumberError, parse_number
 
 __all__ = [
     "CURET_SAMPLE_NAMES",
@@ -115,20 +116,16 @@ def curet_files(path: str | os.PathLike[str]) -> tuple[Path, Path]:
     return values, table
 
 
-_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
-_MAX_TOKEN = 64  # longest number token, characters
-
-
 def _number(path: Path, line_no: int, token: str) -> float:
-    """One decimal number token (``1``, ``-0.5``, ``2.5e-3``); BadInputError otherwise
-    (``nan``, ``inf``, ``1_000``, hexadecimal and overflowing tokens included)."""
-    if len(token) <= _MAX_TOKEN and _NUMBER.fullmatch(token):
-        value = float(token)
-        if np.isfinite(value):
-            return value
-    if token.lower().lstrip("+-") in ("nan", "inf", "infinity") or _NUMBER.fullmatch(token):
-        raise BadInputError(path, f"line {line_no}: non-finite number {token[:_MAX_TOKEN]!r}")
-    raise BadInputError(path, f"line {line_no}: {token[:_MAX_TOKEN]!r} is not a number")
+    """One decimal number token (``1``, ``-0.5``, ``2.5e-3``; :func:`parse_number`);
+    BadInputError otherwise (``nan``, ``inf``, ``1_000``, hexadecimal and overflowing tokens
+    included)."""
+    try:
+        return parse_number(token, strip=False)
+    except NonFiniteNumberError:
+        raise BadInputError(path, f"line {line_no}: non-finite number {token[:MAX_NUMBER_CHARS]!r}") from None
+    except ValueError:
+        raise BadInputError(path, f"line {line_no}: {token[:MAX_NUMBER_CHARS]!r} is not a number") from None
 
 
 def _rows(path: Path, what: str, n_numbers: int, max_rows: int, layout: str) -> list[tuple[int, list[float]]]:

@@ -60,6 +60,7 @@ import numpy as np
 from .cornell import ScatteredBRDF
 from .errors import BadInputError
 from .limits import check_elements, read_bytes
+from .spec_params import MAX_NUMBER_CHARS, NonFiniteNumberError, parse_number
 
 __all__ = ["GONIO_COLUMNS", "read_gonio_csv", "gonio_wavelengths"]
 
@@ -96,20 +97,17 @@ def _columns(path: Path, header: list[str]) -> dict[str, int]:
     return found
 
 
-_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
-_MAX_TOKEN = 64  # longest number field, characters
-
-
 def _number(path: Path, line_no: int, key: str, field: str) -> float:
-    """One decimal number field; BadInputError naming line and column otherwise (``nan``,
-    ``inf``, ``1_000``, overflowing and empty fields included)."""
-    if len(field) <= _MAX_TOKEN and _NUMBER.fullmatch(field):
-        value = float(field)
-        if np.isfinite(value):
-            return value
-    if field.lower().lstrip("+-") in ("nan", "inf", "infinity") or _NUMBER.fullmatch(field):
-        raise BadInputError(path, f"line {line_no}: column {key}: {field[:_MAX_TOKEN]!r} is not finite")
-    raise BadInputError(path, f"line {line_no}: column {key}: {field[:_MAX_TOKEN]!r} is not a number")
+    """One decimal number field (:func:`parse_number`, blanks not allowed); BadInputError
+    naming line and column otherwise (``nan``, ``inf``, ``1_000``, overflowing and empty
+    fields included)."""
+    shown = field[:MAX_NUMBER_CHARS]
+    try:
+        return parse_number(field, strip=False)
+    except NonFiniteNumberError:
+        raise BadInputError(path, f"line {line_no}: column {key}: {shown!r} is not finite") from None
+    except ValueError:
+        raise BadInputError(path, f"line {line_no}: column {key}: {shown!r} is not a number") from None
 
 
 def _table(path: Path) -> tuple[np.ndarray, np.ndarray]:

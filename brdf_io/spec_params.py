@@ -24,7 +24,7 @@ import numpy as np
 
 from .errors import BadInputError
 
-__all__ = ["parse_params", "parse_number", "SpecParams", "MAX_NUMBER_CHARS"]
+__all__ = ["parse_params", "parse_number", "NonFiniteNumberError", "SpecParams", "MAX_NUMBER_CHARS"]
 
 #: Longest number a spec value may spell, characters (``0.123456789012345678e-300`` is 25).
 MAX_NUMBER_CHARS = 64
@@ -37,26 +37,38 @@ def _shown(text: str, limit: int = MAX_NUMBER_CHARS) -> str:
     return repr(text) if len(text) <= limit else repr(text[:limit]) + f"... ({len(text)} characters)"
 
 
-def parse_number(text: str) -> float:
-    """One finite decimal number (``8``, ``-0.5``, ``2.5e-3``; spaces around it ignored).
+class NonFiniteNumberError(ValueError):
+    """A number spelled ``nan``/``inf`` (``overflow`` False) or overflowing a float
+    (``1e999``, ``overflow`` True)."""
+
+    def __init__(self, message: str, overflow: bool) -> None:
+        super().__init__(message)
+        self.overflow = overflow
+
+
+def parse_number(text: str, *, strip: bool = True) -> float:
+    """One finite decimal number (``8``, ``-0.5``, ``2.5e-3``; spaces around it ignored
+    unless ``strip`` is False). The one definition of a number in every text format we
+    read (spec strings, Cornell, CURET and gonioreflectometer files).
 
     Raises
     ------
+    NonFiniteNumberError
+        ``nan``/``inf``, or a number that overflows a float (``1e999``).
     ValueError
-        With the reason: not a decimal number (including Python-only spellings such as
-        ``1_000``), ``nan``/``inf``, a number that overflows a float (``1e999``), or a
-        spelling longer than :data:`MAX_NUMBER_CHARS` characters.
+        Otherwise with the reason: not a decimal number (including Python-only spellings
+        such as ``1_000``), or a spelling longer than :data:`MAX_NUMBER_CHARS` characters.
     """
-    token = text.strip()
+    token = text.strip() if strip else text
     if len(token) > MAX_NUMBER_CHARS:
         raise ValueError(f"is not a number of at most {MAX_NUMBER_CHARS} characters")
     if _NON_FINITE.fullmatch(token):
-        raise ValueError("is not finite")
+        raise NonFiniteNumberError("is not finite", overflow=False)
     if not _NUMBER.fullmatch(token):
         raise ValueError("is not a number")
     value = float(token)
     if not math.isfinite(value):
-        raise ValueError("is not finite (overflows a float)")
+        raise NonFiniteNumberError("is not finite (overflows a float)", overflow=True)
     return value
 
 
