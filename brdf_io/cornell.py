@@ -102,6 +102,8 @@ class ScatteredBRDF(BRDF):
 MAX_MEASURED_RHO = 1e6
 #: Largest wavelength count accepted in the header (the reader converts exactly 31).
 MAX_WAVELENGTHS = 1000
+
+
 def _number(path: Path, line_no: int, token: str) -> float:
     """One decimal number token (``1``, ``-0.5``, ``2.5e-3``; :func:`parse_number`);
     BadInputError otherwise."""
