@@ -31,9 +31,10 @@ SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
 
 from __future__ import annotations
 
-import dataclasses
 import time
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -61,6 +62,7 @@ __all__ = [
     "eps_table",
     "choose_from_table",
     "choose_orders",
+    "choose_orders_many",
     "orders_on_grid_for",
     "DEFAULT_MAX_F",
     "DEFAULT_MAX_P",
@@ -83,7 +85,12 @@ class OrderChoice:
     tolerance
         Requested tolerance.
     table
-        ε[F, P] for F <= F0, P <= P0 of the rule (``criterion``), worst channel.
+        ε[F, P] for F <= F0, P <= P0 of the rule (``criterion``), worst channel. For
+        ``"bands"`` the columns the rule did not need (P beyond the first column that meets
+        the tolerance) are fitted when ``table`` is first read (:meth:`eps_at` reads one
+        entry without that).
+    searched_table
+        ``table`` as the search left it: NaN in the columns it did not need.
     capped
         True when the tolerance could not be met within ``max_F``/``max_P``; (F, P) are
         then the caps and ``eps`` what they achieve.
@@ -106,7 +113,7 @@ class OrderChoice:
     P: int
     eps: float
     tolerance: float
-    table: np.ndarray
+    searched_table: np.ndarray
     capped: bool
     converged: bool
     message: str
@@ -121,17 +128,30 @@ class OrderChoice:
 
     @property
     def F0(self) -> int:
-        return self.table.shape[0] - 1
+        return self.searched_table.shape[0] - 1
 
     @property
     def P0(self) -> int:
-        return self.table.shape[1] - 1
+        return self.searched_table.shape[1] - 1
+
+    @cached_property
+    def table(self) -> np.ndarray:
+        """The whole ε[F, P] table, (F0+1, P0+1) (computed once, on first use)."""
+        if not np.isnan(self.searched_table).any() or self.profile is None:
+            return self.searched_table
+        return band_eps_table(self.profile, self.coefficients, self.max_view_deg)
+
+    def eps_at(self, F: int, P: int) -> float:
+        """ε[F, P] of the rule's table (F <= F0, P <= P0), without filling the whole table."""
+        value = self.searched_table[F, P]
+        return float(self.table[F, P] if np.isnan(value) else value)
 
     @property
     def eps_rh02(self) -> float:
         """RH02's unweighted ε at the chosen (F, P) (energy fraction over all views)."""
-        table = self.table if self.rh02_table is None else self.rh02_table
-        return float(table[self.F, self.P])
+        if self.rh02_table is None:
+            return self.eps_at(self.F, self.P)
+        return float(self.rh02_table[self.F, self.P])
 
     def coefficients_for(self, P: int) -> BRDFCoefficients:
         """ρ̂_lpq for a representation of view order ``P``: the projection (``"rh02"``) or the
@@ -281,14 +301,60 @@ def choose_orders(
         ε outside (0, 1), caps or view limit out of range, an unknown criterion, an all-zero
         or non-finite BRDF.
     """
-    eps = _validate(eps, max_F, max_P, criterion, max_view_deg)
+    return choose_orders_many(brdf, (eps,), max_F=max_F, max_P=max_P, start_F=start_F, start_P=start_P,
+                              criterion=criterion, max_view_deg=max_view_deg)[0]
+
+
+def choose_orders_many(
+    brdf: BRDF | str | Path,
+    tolerances: Sequence[float],
+    *,
+    max_F: int = DEFAULT_MAX_F,
+    max_P: int = DEFAULT_MAX_P,
+    start_F: int = 24,
+    start_P: int = 4,
+    criterion: str = DEFAULT_CRITERION,
+    max_view_deg: float = DEFAULT_MAX_VIEW_DEG,
+) -> list[OrderChoice]:
+    """:func:`choose_orders` at each of ``tolerances`` (in that order), sharing the work.
+
+    Every choice starts on the same quadrature grid and the searches of nearby tolerances
+    visit the same grids: each grid's reparameterization, coefficients, view profile and
+    table are computed once for all of them (the table's columns up to the first that meets
+    the smallest tolerance, which holds the first column meeting any larger one). Each
+    result equals the one :func:`choose_orders` gives alone; its ``seconds`` is the time of
+    its own search given the grids already computed for the tolerances before it.
+
+    Raises
+    ------
+    BadInputError
+        As :func:`choose_orders`; also an empty ``tolerances``.
+    """
+    tolerances = [_validate(t, max_F, max_P, criterion, max_view_deg) for t in tolerances]
+    if not tolerances:
+        raise BadInputError(None, "no tolerance to choose orders for")
     if isinstance(brdf, str | Path):
         brdf = load_brdf(brdf)
+    stop_at = min(tolerances)
+    cache: dict[tuple[int, int, int], _OnGrid] = {}
+
+    def on_grid(grid: ReparamGrid) -> _OnGrid:
+        key = (grid.n_theta_i, grid.n_theta_o, grid.n_phi)
+        if key not in cache:
+            cache[key] = _on_grid(brdf, grid, max_F, max_P, criterion, max_view_deg, stop_at)
+        return cache[key]
+
+    return [_search(on_grid, tol, max_F, max_P, start_F, start_P, criterion, max_view_deg) for tol in tolerances]
+
+
+def _search(on_grid: Callable[[ReparamGrid], _OnGrid], eps: float, max_F: int, max_P: int, start_F: int,
+            start_P: int, criterion: str, max_view_deg: float) -> OrderChoice:
+    """The order search of :func:`choose_orders` at one tolerance, grids from ``on_grid``."""
     t0 = time.perf_counter()
     notes: list[str] = []
     F_goal, P_goal = min(start_F, max_F), min(start_P, max_P)
     for _ in range(24):
-        on = _on_grid(brdf, ReparamGrid.for_orders(F_goal, P_goal), max_F, max_P, criterion, max_view_deg, eps)
+        on = on_grid(ReparamGrid.for_orders(F_goal, P_goal))
         at_caps = on.coefficients.F0 >= max_F and on.coefficients.P0 >= max_P
         if not np.any(on.coefficients.energy > 0) and not at_caps:
             # a lobe far sharper than this grid (Phong s = 1e6) can fall between its nodes
@@ -311,15 +377,13 @@ def choose_orders(
         fine = ReparamGrid(
             int(grid.n_theta_i * 1.5), int(grid.n_theta_o * 1.5), int(grid.n_phi * 1.5) + (grid.n_phi % 2)
         )
-        on = _on_grid(brdf, fine, max_F, max_P, criterion, max_view_deg, eps)
+        on = on_grid(fine)
         F2, P2, capped2 = choose_from_table(on.table, eps)
         same = abs(F2 - F) <= 1 and P2 == P and capped2 == capped
         F, P, capped = F2, P2, capped2
         if same:
             converged = True
             break
-    if np.isnan(on.table).any():  # the search stopped at the chosen P: the whole table for the user
-        on = dataclasses.replace(on, table=band_eps_table(on.profile, on.coefficients, max_view_deg))
     if capped:
         notes.append(
             f"tolerance {eps:g} not met within the caps F<={max_F}, P<={max_P}: "
@@ -335,7 +399,7 @@ def choose_orders(
 def _choice(on: _OnGrid, F: int, P: int, eps: float, capped: bool, converged: bool, notes: list[str],
             seconds: float, criterion: str, max_view_deg: float) -> OrderChoice:
     return OrderChoice(
-        F=F, P=P, eps=float(on.table[F, P]), tolerance=float(eps), table=on.table, capped=capped,
+        F=F, P=P, eps=float(on.table[F, P]), tolerance=float(eps), searched_table=on.table, capped=capped,
         converged=converged, message="; ".join(notes), seconds=seconds, grid=on.grid,
         n_without_data=on.missing, coefficients=on.coefficients, criterion=criterion,
         max_view_deg=float(max_view_deg), profile=on.profile, rh02_table=on.rh02_table,

@@ -31,7 +31,7 @@ from ..brdf_io.latlong import bilinear_lookup, pixel_angles, pixel_directions
 from ..brdf_io.specs import load_brdf
 from .brdf_coeffs import BRDFCoefficients
 from .lighting import LightingCoefficients, alm_index
-from .orders import DEFAULT_MAX_F, DEFAULT_MAX_P, choose_orders, orders_on_grid_for
+from .orders import DEFAULT_MAX_F, DEFAULT_MAX_P, OrderChoice, choose_orders, orders_on_grid_for
 from .scene import lanczos_sigma, lanczos_window, reflected_error_parts, residual_bound, scene_for
 from .sh import Lambda, real_index, real_sph_harm
 from .shrm_file import read_shrm_fields, save_shrm
@@ -303,18 +303,21 @@ def global_shrm_latlong(
     root2 = np.sqrt(2.0)
     terms = itertools.groupby(_spin_terms(lighting, coefficients, F, P), key=lambda term: term[0])
     for p, p_terms in terms:
-        # real and imaginary parts of B_{p,−s}, s = 0..p, laid out (s, row, column, channel)
-        re = np.zeros((p + 1, height, width, 3))
-        im = np.zeros((p + 1, height, width, 3))
+        # real and imaginary parts of B_{p,−s}, s = 0..p, laid out (row, s, column, channel): each
+        # row's (p+1) × (column·channel) block is one right-hand side of the rotation below. The
+        # rotation runs in float32, the maps' storage type (relative rounding ~(p+1)·2⁻²⁴): it is
+        # memory-bound, and float32 halves the traffic
+        re = np.zeros((height, p + 1, width, 3), dtype=np.float32)
+        im = np.zeros((height, p + 1, width, 3), dtype=np.float32)
         for _, s, c, alm, lmax in p_terms:
             if azimuth_free and s > 0:
                 continue
             field = _synthesize_latlong(alm, s, lmax, height, width, nthreads)
-            re[s, ..., c] = field[0]
+            re[:, s, :, c] = field[0]
             if s:
-                im[s, ..., c] = field[1]
+                im[:, s, :, c] = field[1]
         if p == 0:
-            out[0] = re[0]
+            out[0] = re[:, 0]
             continue
         # Σ_q B_pq d̃_sq with B_{p,q>0} = (−1)^q conj(B_{p,−q}): the q > 0 columns fold onto the
         # q < 0 ones, + for the real part and − for the imaginary part
@@ -323,31 +326,25 @@ def global_shrm_latlong(
         d_pos = d[:, :, p + 1 :] * np.where(np.arange(1, p + 1) % 2, -1.0, 1.0)  # q = 1..p
         fold_re = d_neg.copy()
         fold_re[:, :, 1:] += d_pos
-        fold_im = d_neg.copy()
-        fold_im[:, :, 1:] -= d_pos
-        # flat (row, column·channel) views: broadcasting then runs over long contiguous rows
-        re_flat = re.reshape(p + 1, height, width * 3)
-        im_flat = im.reshape(p + 1, height, width * 3)
-        for s in range(p + 1):
-            # one row-scaled sum over q per output order s: for small p plain broadcasting
-            # beats a batched product of (p+1)×(p+1) matrices
-            t_re = fold_re[:, s, 0, None] * re_flat[0]
-            t_im = np.zeros_like(t_re)
-            for q in range(1, p + 1):
-                t_re += fold_re[:, s, q, None] * re_flat[q]
-                t_im += fold_im[:, s, q, None] * im_flat[q]
-            cos_sb = np.repeat(np.cos(s * phi), 3)[None, :]  # e^{−isβ}, per column·channel
-            sin_sb = np.repeat(np.sin(s * phi), 3)[None, :]
-            value_re = t_re * cos_sb
-            value_re += t_im * sin_sb
-            if s == 0:
-                out[real_index(p, 0)] = value_re.reshape(height, width, 3)
-                continue
-            value_im = t_im * cos_sb
-            value_im -= t_re * sin_sb
+        fold_re = fold_re.astype(np.float32)
+        fold_im = (d_neg[:, :, 1:] - d_pos).astype(np.float32)  # the q = 0 imaginary part is 0
+        # one (p+1) × (p+1) matrix per row times that row's fields: a batched product (BLAS)
+        t_re = fold_re @ re.reshape(height, p + 1, width * 3)  # (H, s, column·channel)
+        t_im = fold_im @ im[:, 1:].reshape(height, p, width * 3)
+        del re, im
+        s_phi = np.arange(p + 1)[:, None] * phi[None, :]  # e^{−isβ}, per (s, column·channel)
+        cos_sb = np.repeat(np.cos(s_phi), 3, axis=1).astype(np.float32)
+        sin_sb = np.repeat(np.sin(s_phi), 3, axis=1).astype(np.float32)
+        value_re = t_re * cos_sb
+        value_re += t_im * sin_sb
+        value_im = t_im * cos_sb
+        value_im -= t_re * sin_sb
+        del t_re, t_im
+        out[real_index(p, 0)] = value_re[:, 0].reshape(height, width, 3)
+        for s in range(1, p + 1):
             sign = -1.0 if s % 2 else 1.0
-            out[real_index(p, s)] = (root2 * sign * value_re).reshape(height, width, 3)
-            out[real_index(p, -s)] = (-root2 * sign * value_im).reshape(height, width, 3)
+            out[real_index(p, s)] = (np.float32(root2 * sign) * value_re[:, s]).reshape(height, width, 3)
+            out[real_index(p, -s)] = (np.float32(-root2 * sign) * value_im[:, s]).reshape(height, width, 3)
     return out
 
 
@@ -528,7 +525,9 @@ def undershoot_samples(coeffs: np.ndarray, P: int, views: list | None = None) ->
         for r0 in range(0, height, 32):  # row blocks keep the basis array small at high P
             rows = slice(r0, r0 + 32)
             basis = _row_basis(P, theta_v[rows], offset[rows], phi)  # (h, W, n_coef)
-            block[:, rows] = np.einsum("hwk,khwc->chw", basis, coeffs[:, rows])
+            # per pixel (1, n_coef) @ (n_coef, 3): a batched product over (h, W)
+            per_pixel = np.matmul(basis[:, :, None, :], coeffs[:, rows].transpose(1, 2, 0, 3))  # (h, W, 1, 3)
+            block[:, rows] = per_pixel[:, :, 0, :].transpose(2, 0, 1)
     return out
 
 
@@ -665,6 +664,17 @@ def default_size(F: int, P: int = 0, budget_bytes: int = DEFAULT_MAP_BUDGET_BYTE
     return max(8, min(rule, fits))
 
 
+def _check_given_orders(orders: OrderChoice, brdf: Any, eps: float, criterion: str, max_view_deg: float) -> None:
+    """Refuse an :class:`OrderChoice` made for another tolerance, rule or view limit."""
+    given = (orders.tolerance, orders.criterion, orders.max_view_deg)
+    if given != (float(eps), criterion, float(max_view_deg)):
+        raise BadInputError(
+            getattr(brdf, "name", None),
+            f"orders chosen at eps={given[0]:g}, criterion={given[1]}, max view {given[2]:g} deg do not match "
+            f"eps={eps:g}, criterion={criterion}, max view {max_view_deg:g} deg",
+        )
+
+
 def prefilter(
     env: Any,
     brdf: Any,
@@ -683,6 +693,7 @@ def prefilter(
     progress: Any = None,
     criterion: str = DEFAULT_CRITERION,
     max_view_deg: float = DEFAULT_MAX_VIEW_DEG,
+    orders: OrderChoice | None = None,
 ) -> SHRM:
     """Prefilter an environment into a global SHRM (RH02 §4–5, Appendix C).
 
@@ -705,6 +716,11 @@ def prefilter(
         [32, 1024] rows and a 256 MiB map budget; the meta says when the budget applied).
     F, P
         Force the orders instead of choosing them.
+    orders
+        The BRDF's :class:`~shrmkit.analysis.orders.OrderChoice` when the caller already has it
+        (:func:`~shrmkit.analysis.orders.choose_orders` of this ``brdf`` with the same ``eps``,
+        ``criterion`` and ``max_view_deg``; a report chooses them once for its tables): used
+        instead of choosing again. Ignored when both ``F`` and ``P`` are given.
     azimuth_free
         Keep only the q = 0 terms of the local SHRM (Kautz & McCool 2000; RH02 Fig. 9):
         B(α, β, θ_o) = Σ_p B_p0(α, β) Y_p0(ω_o'). Exact for radially symmetric lobes.
@@ -745,8 +761,9 @@ def prefilter(
     Raises
     ------
     BadInputError
-        ε outside (0, 1), an unreadable map or BRDF, an all-zero BRDF, sizes out of range, or
-        radiance that overflows float32 maps.
+        ε outside (0, 1), an unreadable map or BRDF, an all-zero BRDF, sizes out of range,
+        radiance that overflows float32 maps, or ``orders`` chosen at another tolerance, rule
+        or view limit.
 
     Examples
     --------
@@ -785,6 +802,8 @@ def prefilter(
     t0 = time.perf_counter()
     if F is not None and P is not None:
         orders = orders_on_grid_for(brdf, int(F), int(P), eps=eps, criterion=criterion, max_view_deg=max_view_deg)
+    elif orders is not None:
+        _check_given_orders(orders, brdf, eps, criterion, max_view_deg)
     else:
         orders = choose_orders(brdf, eps=eps, max_F=max_F, max_P=max_P, criterion=criterion,
                                max_view_deg=max_view_deg)
@@ -856,7 +875,11 @@ def prefilter(
                 t_budget = float(np.min(np.sqrt(np.clip(allowed - truncation, 0.0, None) / cost), initial=1.0))
         else:
             t_budget = _band_window_budget(orders, base, band_energy, F_B, P_B, eps, q_max)
-        del coeffs  # one map at a time: the 256 MiB default budget holds while windowing too
+        # the synthesis is linear in σ: the map at strength t is (1 − t)·unwindowed + t·full. Keep
+        # the unwindowed map for that when two maps fit the map budget; else one map at a time
+        # (the 256 MiB default budget holds while windowing too) and synthesize again
+        unwindowed = coeffs if 2 * coeffs.nbytes <= DEFAULT_MAP_BUDGET_BYTES else None
+        del coeffs
         coefficients = _windowed(base, full, F_B, P_B)
         coeffs = synthesize(coefficients)
         values_full = undershoot_samples(coeffs, P_B, views)
@@ -864,12 +887,18 @@ def prefilter(
         if strength == 1.0:
             sigma, values = full, values_full
         else:
-            del coeffs
             sigma = lanczos_sigma(F_B, P_B, strength) if strength > 0.0 else None
             coefficients = _windowed(base, sigma, F_B, P_B)
-            coeffs = synthesize(coefficients)
-            # the synthesis is linear in σ: these are the new map's samples (up to float32 rounding)
+            if unwindowed is not None:  # t·full + (1 − t)·unwindowed, in place (float32 rounding)
+                coeffs -= unwindowed
+                coeffs *= np.float32(strength)
+                coeffs += unwindowed
+            else:
+                del coeffs
+                coeffs = synthesize(coefficients)
+            # these are the new map's samples (up to float32 rounding)
             values += np.float32(strength) * (values_full - values)
+        del unwindowed
         del values_full
         reason = f"auto: undershoot {before:.3%} of the peak > threshold {WINDOW_THRESHOLD:.1%}"
         if strength == 0.0:
@@ -921,7 +950,7 @@ def prefilter(
             lighting_rows=(lighting.rows, lighting.source_rows), max_view_deg=orders.max_view_deg,
         ).eps_predicted
     eps_info = {
-        "brdf": float(orders.table[min(F_B, orders.F0), P_B]),
+        "brdf": orders.eps_at(min(F_B, orders.F0), P_B),
         "brdf_rh02": float(orders.rh02_table[min(F_B, orders.F0), P_B]),
         "lighting": float(lighting.eps()[min(F_B, lighting.lmax)]),
         "reflected": reflected,

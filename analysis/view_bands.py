@@ -333,24 +333,58 @@ def fit_view_coefficients(
     fo = legendre_f(P, P, np.cos(2.0 * profile.theta_v))  # (P+1, P+1, K)
     out = np.zeros_like(coefficients.coeffs)
     fitted = BRDFCoefficients(coeffs=out, energy=coefficients.energy, name=coefficients.name)
+    at_F0 = _EpsAtF0(profile, F0, P)
+    n_cols = (F0 + 1) * 3
     prev_worst = np.inf
     for npass in range(FIT_PASSES + 1):
+        last = npass == FIT_PASSES or not inside.any()
         sw = np.sqrt(profile.weight * band_w[profile.band])
+        residual = None if last else at_F0.fixed.copy()
         for q in range(P + 1):
-            A = 2.0 * np.pi * fo[q : P + 1, q, :].T * sw[:, None]  # (K, P+1−q), well conditioned
+            basis = 2.0 * np.pi * fo[q : P + 1, q, :].T  # (K, P+1−q)
+            A = basis * sw[:, None]  # well conditioned
             # weighted least squares through the pseudo-inverse of the small matrix: one product
             # with all (l, channel) right-hand sides
             sol = (np.linalg.pinv(A) * sw[None, :]) @ profile.T_by_q[q]
             out[:, q : P + 1, q, :] = sol.reshape(P + 1 - q, -1, 3)[:, : F0 + 1].transpose(1, 0, 2)
-        if npass == FIT_PASSES or not inside.any():
+            if residual is not None:  # Σ_l (T_lq − T̂_lq)² per node and channel, l <= F0
+                diff = profile.T_by_q[q][:, :n_cols] - basis @ sol[:, :n_cols]
+                residual += (1.0 if q == 0 else 2.0) / (2.0 * np.pi) * (diff * diff).reshape(-1, F0 + 1, 3).sum(axis=1)
+        if residual is None:
             break
-        eps = _band_eps_all(profile, fitted, p_list=[P])[:, F0, 0]
+        eps = at_F0.eps(residual)  # = _band_eps_all(profile, fitted, p_list=[P])[:, F0, 0]
         worst = eps[inside].max()
         if worst <= 0.0 or worst > 0.995 * prev_worst:  # nothing to gain (a view-independent lobe)
             break
         prev_worst = worst
         band_w = band_w * np.where(inside, np.sqrt(np.clip(eps / worst, 1e-3, 1.0)), 1.0)
     return fitted
+
+
+class _EpsAtF0:
+    """ε_b(F0, P) of :func:`_band_eps_all` from a per-node residual, for the reweighting passes
+    of :func:`fit_view_coefficients`: the parts that do not depend on the fit are computed once.
+
+    ``fixed`` (K, 3): Σ_{l<=F0, P<q<=P0} mult T²/(2π), the view orders the fit leaves out."""
+
+    def __init__(self, profile: ViewProfile, F0: int, P: int) -> None:
+        self.profile = profile
+        full = profile.band_full  # (nb, F0p+1, 3)
+        beyond = profile.band_beyond + full[:, F0 + 1 :].sum(axis=1)
+        full = full[:, : F0 + 1]
+        self.total = full.sum(axis=1) + beyond  # (nb, 3)
+        live = _live(self.total.sum(axis=0))[None, :] & (
+            self.total >= CHANNEL_FLOOR * self.total.max(axis=1, keepdims=True))
+        self.live = live & (self.total > 0)
+        self.after = beyond  # energy at l > F0
+        T = profile.T[: F0 + 1, :, P + 1 :, :]
+        self.fixed = np.tensordot(T**2, _mult(profile.P0 + 1)[P + 1 :], axes=(2, 0)).sum(axis=0) / (2.0 * np.pi)
+
+    def eps(self, residual: np.ndarray) -> np.ndarray:
+        """(n_bands,): worst live channel of (band sum of ``residual`` + energy beyond F0) / total."""
+        err = self.profile.band_sum(residual) + self.after
+        eps = np.where(self.live, err / np.where(self.total > 0, self.total, 1.0), 0.0)
+        return np.clip(eps, 0.0, None).max(axis=-1)
 
 
 def band_eps_table(

@@ -134,10 +134,10 @@ def _safe_pow(base: np.ndarray, exponent: np.ndarray) -> np.ndarray:
 def _half_vector_cos(L: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(cos θ_h, cos θ_d) of the half vector H = normalize(L + V)."""
     H = L + V
-    norm = np.linalg.norm(H, axis=-1)
+    norm = np.sqrt(np.einsum("...k,...k->...", H, H))
     norm = np.where(norm > 0, norm, 1.0)
     cos_h = np.clip(H[..., 2] / norm, -1.0, 1.0)
-    cos_d = np.clip(np.sum(L * H, axis=-1) / norm, -1.0, 1.0)
+    cos_d = np.clip(np.einsum("...k,...k->...", L, H) / norm, -1.0, 1.0)
     return cos_h, cos_d
 
 

@@ -127,20 +127,28 @@ def reparam_directions(
     vectors are expressed in the surface frame whose normal N = normalize(R + V') is +z
     (rotate by −φ' about z, then by −θ_o'/2 about y).
     """
-    ci, co, ph = np.broadcast_arrays(
-        np.asarray(cos_theta_i, float), np.asarray(cos_theta_o, float), np.asarray(phi, float)
-    )
+    ci = np.asarray(cos_theta_i, float)
+    co = np.asarray(cos_theta_o, float)
+    ph = np.asarray(phi, float)
+    shape = np.broadcast_shapes(ci.shape, co.shape, ph.shape)
+    # each factor on its own (small) shape; only the products below are full size
     si = np.sqrt(np.clip(1.0 - ci * ci, 0.0, None))
     # half-angle of θ_o' from cos θ_o' (stable on (0, π)): cos(θ/2), sin(θ/2)
     ch = np.sqrt(np.clip((1.0 + co) / 2.0, 0.0, None))
     sh = np.sqrt(np.clip((1.0 - co) / 2.0, 0.0, None))
     cp, sp = np.cos(ph), np.sin(ph)
     # L' = (si, 0, ci); rotate by -φ' about z: (si cp, -si sp, ci)
-    lx, ly, lz = si * cp, -si * sp, ci
+    lx = si * cp
     # then by -θ_o'/2 about y: x' = x cos(t) - z sin(t), z' = x sin(t) + z cos(t)
-    L = np.stack([lx * ch - lz * sh, ly, lx * sh + lz * ch], axis=-1)
+    L = np.empty((*shape, 3))
+    np.subtract(lx * ch, ci * sh, out=L[..., 0])
+    np.multiply(-si, sp, out=L[..., 1])
+    np.add(lx * sh, ci * ch, out=L[..., 2])
     # V' is at polar angle θ_o' and azimuth φ'; in the normal frame it sits at θ_o'/2, azimuth 0
-    V = np.stack([sh, np.zeros_like(sh), ch], axis=-1)
+    V = np.empty((*shape, 3))
+    V[..., 0] = sh
+    V[..., 1] = 0.0
+    V[..., 2] = ch
     return L, V
 
 

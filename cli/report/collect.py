@@ -41,7 +41,7 @@ from ..._version import __version__
 from ...analysis.compare import band_pairs, band_relative_rms, beside_measured, relative_rms, sample_pairs
 from ...analysis.fit import fit_brdf
 from ...analysis.lighting import lighting_coefficients
-from ...analysis.orders import choose_orders
+from ...analysis.orders import OrderChoice, choose_orders_many
 from ...analysis.reference import reference_radiance
 from ...analysis.shrm import prefilter
 from ...analysis.view_bands import DEFAULT_BAND_EDGES_DEG, worst_inside
@@ -181,12 +181,12 @@ def _slices(brdf: BRDF, fitted: list[Any], models: tuple[str, ...]) -> dict[str,
 # ------------------------------------------------------------------------------ orders
 
 
-def _orders(brdf: BRDF, options: ReportOptions) -> tuple[list[dict[str, Any]], dict[str, Any], Any]:
-    rows, choices = [], []
-    for tol in options.all_tolerances:
-        choice = choose_orders(brdf, eps=tol, max_F=options.max_F, max_P=options.max_P,
-                               criterion=options.criterion, max_view_deg=options.max_view_deg)
-        choices.append(choice)
+def _orders(brdf: BRDF, options: ReportOptions) -> tuple[list[dict[str, Any]], dict[str, Any], list[OrderChoice]]:
+    rows = []
+    # one search per tolerance on shared quadrature grids; prefilter reuses each choice
+    choices = choose_orders_many(brdf, options.all_tolerances, max_F=options.max_F, max_P=options.max_P,
+                                 criterion=options.criterion, max_view_deg=options.max_view_deg)
+    for tol, choice in zip(options.all_tolerances, choices, strict=True):
         rows.append({
             "tolerance": tol,
             "F": choice.F,
@@ -207,8 +207,7 @@ def _orders(brdf: BRDF, options: ReportOptions) -> tuple[list[dict[str, Any]], d
     F_keep = int(min(finest.F0, max(2 * max(c.F for c in choices) + 8, 32)))
     table = finest.table[: F_keep + 1]
     eps_table = {"tolerance": finest.tolerance, "F0": finest.F0, "P0": finest.P0, "eps": table}
-    main = next(c for c in choices if c.tolerance == options.eps)
-    return rows, eps_table, main
+    return rows, eps_table, choices
 
 
 # --------------------------------------------------------------------------- prefilter
@@ -226,7 +225,8 @@ def unique_names(names: list[str]) -> list[str]:
     return out
 
 
-def _environments(brdf: BRDF, options: ReportOptions, progress: Progress | None, nthreads: int = 0):
+def _environments(brdf: BRDF, options: ReportOptions, choices: list[OrderChoice], progress: Progress | None,
+                  nthreads: int = 0):
     # the headline measured error: pairs inside the view limit (the sampler of `shrm compare`)
     R, V, _ = sample_pairs(options.n_pairs, seed=options.seed, max_view_deg=options.max_view_deg)
     env_entries, speed_rows, main_shrms = [], [], []
@@ -253,10 +253,11 @@ def _environments(brdf: BRDF, options: ReportOptions, progress: Progress | None,
             "eps_L_curve": lighting.eps(),
             "reference_seconds": ref_seconds,
         }
-        for tol in options.all_tolerances:
+        for tol, choice in zip(options.all_tolerances, choices, strict=True):
             _stage(progress, f"prefilter {env.name} eps={tol:g}")
             shrm = prefilter(env, brdf, eps=tol, max_F=options.max_F, max_P=options.max_P, window=options.window,
-                             criterion=options.criterion, max_view_deg=options.max_view_deg, nthreads=nthreads)
+                             criterion=options.criterion, max_view_deg=options.max_view_deg, nthreads=nthreads,
+                             orders=choice)
             err = relative_rms(shrm.radiance(R, V), reference)  # clamped at 0, as rendered
             bands = beside_measured(band_relative_rms(shrm.radiance(Rb, Vb), reference_b, theta_b, BAND_EDGES,
                                                       weight_b), shrm.meta["view_bands"])
@@ -434,8 +435,9 @@ def collect_report(
     explorer, explorer_images = explore(brdf, fit_results, options.models, albedo_nodes=options.albedo_nodes)
     analysed, analysis_of, analysis_note = _analysis_brdf(brdf, fit_entries, fit_results)
     _stage(progress, "orders")
-    order_rows, eps_table, main_choice = _orders(analysed, options)
-    env_entries, speed_rows, main_shrms = _environments(analysed, options, progress, nthreads)
+    order_rows, eps_table, choices = _orders(analysed, options)
+    main_choice = next(c for c in choices if c.tolerance == options.eps)
+    env_entries, speed_rows, main_shrms = _environments(analysed, options, choices, progress, nthreads)
     _stage(progress, "checks")
     checks = data_checks(brdf, analysed, seed=options.seed, albedo_nodes=options.albedo_nodes)
     _stage(progress, "preview")

@@ -7,6 +7,7 @@ import pytest
 
 import shrmkit
 from shrmkit.analysis.brdf_coeffs import rho_lpq, rho_lpq_direct
+from shrmkit.analysis.orders import choose_orders
 from shrmkit.analysis.sh import legendre_f
 from shrmkit.brdf_io.errors import BadInputError
 from shrmkit.brdf_io.reparam import ReparamBRDF, ReparamGrid, reparameterize
@@ -146,3 +147,41 @@ def test_lobe_sharper_than_the_first_grid_is_not_called_zero():
     o = shrmkit.choose_orders(shrmkit.load_brdf("phong:s=1e6"), eps=0.03)
     assert o.capped and o.F == 512
     assert o.eps == pytest.approx(np.exp(-(512**2) / 1e6), abs=0.15)
+
+
+@pytest.mark.parametrize("spec", ["microfacet:sigma=0.3", "cook-torrance:kd=0.2,alpha=0.2,dist=ggx", "phong:s=64"])
+def test_orders_for_several_tolerances_equal_separate_searches(spec):
+    """choose_orders_many shares quadrature grids between tolerances: each result equals an
+    independent choose_orders (orders, errors, flags and the whole table)."""
+    from shrmkit.analysis.orders import choose_orders_many
+
+    brdf = shrmkit.load_brdf(spec)
+    tolerances = (0.1, 0.03, 0.01)
+    shared = choose_orders_many(brdf, tolerances, max_F=96)
+    for tol, got in zip(tolerances, shared, strict=True):
+        alone = choose_orders(brdf, eps=tol, max_F=96)
+        assert (got.F, got.P, got.capped, got.converged, got.tolerance) == (
+            alone.F, alone.P, alone.capped, alone.converged, alone.tolerance)
+        assert got.eps == alone.eps and got.message == alone.message
+        assert got.grid == alone.grid
+        np.testing.assert_array_equal(got.table, alone.table)
+        assert got.eps_at(got.F, got.P) == got.table[got.F, got.P]
+    with pytest.raises(BadInputError):
+        choose_orders_many(brdf, ())
+
+
+def test_prefilter_reuses_given_orders_and_refuses_mismatched_ones():
+    """prefilter(orders=) gives the map prefilter chooses by itself; a choice made at another
+    tolerance or rule is refused."""
+    brdf = shrmkit.load_brdf("microfacet:sigma=0.3")
+    env = "builtin:sky,height=32"
+    choice = choose_orders(brdf, eps=0.03)
+    own = shrmkit.prefilter(env, brdf, eps=0.03)
+    given = shrmkit.prefilter(env, brdf, eps=0.03, orders=choice)
+    assert (given.F, given.P) == (own.F, own.P) and given.meta["timings"]["orders"] < 0.01
+    np.testing.assert_array_equal(given.coeffs, own.coeffs)
+    assert given.eps == own.eps
+    with pytest.raises(BadInputError, match="eps=0.03"):
+        shrmkit.prefilter(env, brdf, eps=0.1, orders=choice)
+    with pytest.raises(BadInputError, match="criterion"):
+        shrmkit.prefilter(env, brdf, eps=0.03, criterion="rh02", orders=choice)

@@ -213,3 +213,24 @@ def test_one_validator_for_the_window_name():
         with pytest.raises(BadInputError, match="window"):
             CompareOptions(window=bad)
     assert CompareOptions().window == "auto"
+
+
+def test_map_at_partial_strength_is_the_synthesis_at_that_strength():
+    """The auto window's map at strength 0 < t < 1 (formed from the unwindowed and fully
+    windowed maps, linear in σ) equals a fresh synthesis with the σ-factors at strength t."""
+    from shrmkit.analysis.shrm import global_shrm_latlong
+
+    env = shrmkit.load_env("builtin:sun,height=64")
+    brdf = shrmkit.load_brdf("phong:s=200")
+    auto = shrmkit.prefilter(env, brdf, eps=EPS, criterion="rh02")
+    t = auto.meta["window_strength"]
+    assert 0.0 < t < 1.0
+    rh02 = choose_orders(brdf, eps=EPS, criterion="rh02")
+    lighting, _ = scene_for(env, rh02)
+    sigma = lanczos_sigma(auto.F, auto.P, t)
+    damped = rh02.coefficients.coeffs.copy()
+    damped[: auto.F + 1, : auto.P + 1] *= sigma[:, :, None, None]
+    windowed = type(rh02.coefficients)(coeffs=damped, energy=rh02.coefficients.energy, name="windowed")
+    direct = global_shrm_latlong(lighting, windowed, auto.F, auto.P, auto.height, auto.width)
+    peak = np.abs(direct).max()
+    np.testing.assert_allclose(auto.coeffs, direct, rtol=0, atol=2e-6 * peak)
