@@ -63,7 +63,8 @@ class Shading:
     Attributes
     ----------
     texture
-        float32 (h, w, 3) image bound as sampler ``shrmTex``; texel (x, y) is ``texture[y, x]``.
+        float32 (h, w, 3) or (h, w, 4) image bound as sampler ``shrmTex`` (GL_RGB32F or
+        GL_RGBA32F); texel (x, y) is ``texture[y, x]``.
         A mode with a per-frame update rewrites it in place every frame.
     vertex, fragment
         (tag, replacement) pairs for VTK's vertex and fragment shaders.

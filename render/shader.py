@@ -7,10 +7,14 @@ doi:10.1145/566654.566611. Per fragment, after the shared prelude of ``render.gl
 - ``distant`` (RH02 eq. 12): radiance = M(R) with M = Σ B̃_pq Y^r_pq(Ṽ) one lat-long map per
   frame and object, Ṽ the direction from the object's bounding-sphere centre toward the eye,
   computed on the CPU (:func:`distant_update`) and uploaded as a float texture;
-- ``perpixel`` (RH02 eq. 8): radiance = Σ B̃_pq(R) Y^r_pq(V), the (P+1)² coefficient maps
-  tiled in one float texture (:func:`coefficient_atlas`: tile c at column (c mod cols)·W,
-  row (c div cols)·H) and Y^r_pq(V) evaluated in the shader; ``kautz-mccool`` draws the
-  azimuth-free (q = 0) SHRM the same way;
+- ``perpixel`` (RH02 eq. 8): radiance = Σ B̃_pq(R) Y^r_pq(V), the 3·(P+1)² scalar maps
+  (coefficient c, channel k) packed four to an RGBA texel in one float texture
+  (:func:`packed_coefficient_atlas`: scalar map j = 3c + k is component j mod 4 of tile
+  t = j div 4, tile t at column (t mod cols)·W, row (t div cols)·H) and Y^r_pq(V) evaluated
+  in the shader; ``kautz-mccool`` draws the azimuth-free (q = 0) SHRM the same way. Packing
+  four channels a texel takes ⌈3(P+1)²/4⌉ fetches per bilinear corner instead of (P+1)² RGB
+  ones (48 instead of 64 at P = 3): texel fetches are most of the per-pixel cost of this mode
+  on a CPU rasterizer (``benchmarks/render_speed.py``);
 - ``rsibr`` (Cabral et al. 1999): the distant shader fed, per frame, the spherical-barycentric
   blend of the twelve maps of ``analysis.baselines.rsibr`` (:func:`rsibr_update`).
 
@@ -43,6 +47,8 @@ from .mesh import Mesh
 __all__ = [
     "atlas_layout",
     "coefficient_atlas",
+    "packed_tiles",
+    "packed_coefficient_atlas",
     "shrm_fragment_replacements",
     "distant_shading",
     "distant_update",
@@ -80,33 +86,79 @@ def coefficient_atlas(coeffs: np.ndarray) -> np.ndarray:
     return out
 
 
+def packed_tiles(n_coeffs: int) -> int:
+    """Number of RGBA tiles holding the 3·``n_coeffs`` scalar maps of :func:`packed_coefficient_atlas`."""
+    return -(-3 * int(n_coeffs) // 4)
+
+
+def packed_coefficient_atlas(coeffs: np.ndarray) -> np.ndarray:
+    """Pack the (n, H, W, 3) coefficient maps four scalar maps to a texel: float32 (rows·H, cols·W, 4).
+
+    Scalar map j = 3c + k (coefficient c, colour channel k) is component j mod 4 of tile
+    t = j div 4; tile t sits at rows [r·H, (r+1)·H), columns [q·W, (q+1)·W) with q = t mod cols,
+    r = t div cols (:func:`atlas_layout` of :func:`packed_tiles` (n) tiles). Components past
+    3n are 0. Values are copied exactly (no arithmetic).
+    """
+    n, h, w, _ = coeffs.shape
+    n_tiles = packed_tiles(n)
+    cols, rows = atlas_layout(n_tiles)
+    # (n, H, W, 3) -> scalar maps (3n, H, W) in the order j = 3c + k, padded to 4·n_tiles
+    scalar = np.zeros((4 * n_tiles, h, w), dtype=np.float32)
+    scalar[:3 * n] = np.moveaxis(np.asarray(coeffs, dtype=np.float32), 3, 1).reshape(3 * n, h, w)
+    out = np.zeros((rows * h, cols * w, 4), dtype=np.float32)
+    for t in range(n_tiles):
+        r, q = divmod(t, cols)
+        out[r * h:(r + 1) * h, q * w:(q + 1) * w] = np.moveaxis(scalar[4 * t:4 * t + 4], 0, 2)
+    return out
+
+
+_FETCH4 = """
+// bilinear fetch of the four channels of shrmTex at tile offset o (texel units)
+vec4 shrm_fetch4(ivec2 o, ivec4 idx, vec2 f) {
+  vec4 t00 = texelFetch(shrmTex, o + ivec2(idx.x, idx.z), 0);
+  vec4 t01 = texelFetch(shrmTex, o + ivec2(idx.y, idx.z), 0);
+  vec4 t10 = texelFetch(shrmTex, o + ivec2(idx.x, idx.w), 0);
+  vec4 t11 = texelFetch(shrmTex, o + ivec2(idx.y, idx.w), 0);
+  vec4 top = t00 * (1.0 - f.x) + t01 * f.x;
+  vec4 bottom = t10 * (1.0 - f.x) + t11 * f.x;
+  return top * (1.0 - f.y) + bottom * f.y;
+}
+"""
+
+
+def _packed_sum_glsl(n: int, height: int, width: int) -> list[str]:
+    """Straight-line GLSL summing Σ_c Y^r_c(V) map_c(R) over the tiles of the packed atlas."""
+    cols, _ = atlas_layout(packed_tiles(n))
+    lines = ["  vec3 shrmRad = vec3(0.0);"]
+    for t in range(packed_tiles(n)):
+        r, q = divmod(t, cols)
+        lines.append(f"  vec4 shrmT{t} = shrm_fetch4(ivec2({q * int(width)}, {r * int(height)}), shrmIdx, shrmF);")
+        for i in range(4):
+            c, k = divmod(4 * t + i, 3)
+            if c < n:  # components past 3n are padding
+                lines.append(f"  shrmRad[{k}] += shrmY[{c}] * shrmT{t}[{i}];")
+    return lines
+
+
 def shrm_fragment_replacements(lmax: int, height: int, width: int, *, per_pixel: bool) -> list[tuple[str, str]]:
     """Fragment shader replacements of one SHRM actor.
 
     ``per_pixel=False``: ``shrmTex`` is one H × W map looked up by R (distant, rsibr);
-    ``per_pixel=True``: ``shrmTex`` is the coefficient atlas and Σ_c Y^r_c(V) tile_c(R) is summed.
+    ``per_pixel=True``: ``shrmTex`` is the packed coefficient atlas (:func:`packed_coefficient_atlas`)
+    and Σ_c Y^r_c(V) map_c(R) is summed, channel by channel, in the same order as a sum over
+    RGB tiles (bilinear per scalar map, then the SH weight).
     """
     n = (lmax + 1) ** 2
-    cols, _ = atlas_layout(n)
     dec = [
         f"#define SHRM_H {int(height)}",
         f"#define SHRM_W {int(width)}",
-        f"#define SHRM_COLS {cols}",
         f"#define SHRM_NC {n}",
         _LOOKUP,
     ]
     body = ["  ivec4 shrmIdx; vec2 shrmF;", "  shrm_setup(shrmR, shrmIdx, shrmF);"]
     if per_pixel:
-        dec.append(sh_glsl(lmax))
-        body += [
-            "  float shrmY[SHRM_NC];",
-            "  shrm_sh(shrmV, shrmY);",
-            "  vec3 shrmRad = vec3(0.0);",
-            "  for (int c = 0; c < SHRM_NC; ++c) {",
-            "    ivec2 o = ivec2((c % SHRM_COLS) * SHRM_W, (c / SHRM_COLS) * SHRM_H);",
-            "    shrmRad += shrmY[c] * shrm_fetch(o, shrmIdx, shrmF);",
-            "  }",
-        ]
+        dec += [_FETCH4, sh_glsl(lmax)]
+        body += ["  float shrmY[SHRM_NC];", "  shrm_sh(shrmV, shrmY);", *_packed_sum_glsl(n, height, width)]
     else:
         body.append("  vec3 shrmRad = shrm_fetch(ivec2(0, 0), shrmIdx, shrmF);")
     # the Gibbs undershoot the prefilter's window left (SHRM.meta "negative_after") ends here
@@ -135,18 +187,22 @@ def distant_update(state: tuple[int, np.ndarray], view: np.ndarray, out: np.ndar
     """Write Σ B̃_pq Y^r_pq(``view``) into the texture buffer ``out`` (no allocation of the map)."""
     P, flat = state
     basis = real_sph_harm(P, view).astype(np.float32)
-    np.matmul(basis, flat, out=out.reshape(-1))
+    # einsum's single-threaded loop, not a BLAS call: a threaded BLAS GEMV of this size waits
+    # for a second core that the rasterizer's threads (llvmpipe) or other work hold, costing a
+    # scheduler time slice (milliseconds) instead of ~0.2 ms
+    np.einsum("k,kn->n", basis, flat, out=out.reshape(-1))
     np.maximum(out, 0.0, out=out)  # as SHRM.view_map: no negative radiance (the window's leftover undershoot)
 
 
 def perpixel_shading(shrm: SHRM, mesh: Mesh) -> Shading:
-    """Per-pixel view (RH02 eq. 8): the (P+1)² coefficient maps in one atlas, the SH of V in the shader."""
+    """Per-pixel view (RH02 eq. 8): the (P+1)² coefficient maps in one packed RGBA atlas
+    (:func:`packed_coefficient_atlas`), the SH of V in the shader."""
     n, h, w, _ = shrm.coeffs.shape
-    cols, rows = atlas_layout(n)
+    cols, rows = atlas_layout(packed_tiles(n))
     hint = "use mode='distant' or a coarser SHRM"
     check_texture_size((rows * h, cols * w), f"SHRM with P={shrm.P} on {h}x{w}", hint)
     return Shading(
-        coefficient_atlas(shrm.coeffs),
+        packed_coefficient_atlas(shrm.coeffs),
         vertex_replacements(),
         shrm_fragment_replacements(shrm.P, h, w, per_pixel=True),
     )

@@ -10,6 +10,13 @@ read back as float32, never clamped or quantized.
 
 Frame: VTK world coordinates are the z-up math frame (``camera`` module docstring); meshes
 are uploaded in world coordinates with an identity actor matrix.
+
+Per frame, ``draw`` only sets the camera, three uniforms and each object's back-face culling,
+runs the modes' texture updates and calls VTK's Render; shader replacements, textures and
+geometry are set up once in ``add_object``. Back faces are culled for an object whose mesh is
+closed and outward oriented (:func:`closed_outward`) while its bounding sphere lies wholly
+beyond the near plane: then they are all hidden, and culling them saves their rasterization
+and shading (on a CPU rasterizer, most of a frame) without changing a pixel.
 """
 
 from __future__ import annotations
@@ -26,7 +33,7 @@ from .mesh import Mesh
 from .modes import DEFAULT_MODE, RenderMode, get_mode
 from .offscreen import make_render_window, read_rgba_float
 
-__all__ = ["SHRMRenderer", "RenderResult"]
+__all__ = ["SHRMRenderer", "RenderResult", "closed_outward"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -49,12 +56,13 @@ class RenderResult:
 
 
 def _float_texture(image: np.ndarray):  # -> (vtkTexture, vtkImageData, numpy buffer)
+    """A float texture of the (h, w, 3) or (h, w, 4) image: GL_RGB32F or GL_RGBA32F, texels exact."""
     from vtkmodules.util.numpy_support import numpy_to_vtk  # lazy: VTK is loaded only when rendering
     from vtkmodules.vtkCommonDataModel import vtkImageData  # lazy: VTK
     from vtkmodules.vtkRenderingCore import vtkTexture  # lazy: VTK
 
-    h, w, _ = image.shape
-    buf = np.ascontiguousarray(image, dtype=np.float32).reshape(h * w, 3)
+    h, w, channels = image.shape
+    buf = np.ascontiguousarray(image, dtype=np.float32).reshape(h * w, channels)
     data = vtkImageData()
     data.SetDimensions(w, h, 1)  # x (columns) fastest, then rows: texel (x, y) = image[y, x]
     arr = numpy_to_vtk(buf, deep=0)
@@ -100,6 +108,33 @@ def _polydata(mesh: Mesh, attributes: dict[str, np.ndarray]):
     return poly
 
 
+def closed_outward(mesh: Mesh) -> bool:
+    """Whether ``mesh`` is a closed surface whose faces all wind counter-clockwise seen from outside.
+
+    True when every directed edge (a → b) of the faces occurs exactly once and its reverse
+    (b → a) exactly once (closed and consistently oriented: each edge is shared by two faces
+    that traverse it in opposite directions), and every connected piece encloses a positive
+    signed volume Σ a·(b × c)/6 (outward orientation). For such a mesh, seen from outside its
+    bounding sphere, every back face lies behind a front face of the same piece, so culling
+    back faces changes no pixel. Meshes with open borders, non-manifold or inconsistently
+    wound edges, split seam vertices, or a cavity (a piece with inward orientation) give False.
+    """
+    from scipy.sparse import coo_matrix  # lazy: only when adding an object
+    from scipy.sparse.csgraph import connected_components  # lazy
+
+    faces = np.asarray(mesh.faces, dtype=np.int64)
+    n = len(mesh.vertices)
+    a = faces.reshape(-1)
+    b = faces[:, [1, 2, 0]].reshape(-1)
+    directed = np.sort(a * n + b)
+    if np.any(directed[1:] == directed[:-1]) or not np.array_equal(directed, np.sort(b * n + a)):
+        return False
+    _, label = connected_components(coo_matrix((np.ones(a.size), (a, b)), shape=(n, n)), directed=False)
+    v = mesh.vertices
+    volume6 = np.einsum("ij,ij->i", v[faces[:, 0]], np.cross(v[faces[:, 1]], v[faces[:, 2]]))
+    return bool(np.all(np.bincount(label[faces[:, 0]], weights=volume6) > 0.0))
+
+
 @dataclass(eq=False)
 class _Object:
     mesh: Mesh
@@ -112,6 +147,7 @@ class _Object:
     state: Any  # what the mode's update reads
     center: np.ndarray
     radius: float
+    closed: bool  # closed, consistently and outward oriented: back faces never visible from outside
 
 
 class SHRMRenderer:
@@ -137,6 +173,11 @@ class SHRMRenderer:
         self._renderer.SetBackgroundAlpha(0.0)
         self._renderer.AutomaticLightCreationOff()
         self._objects: list[_Object] = []
+
+    @property
+    def render_window(self):  # -> vtkRenderWindow
+        """The offscreen vtkRenderWindow (for timing with its Start/End events; do not resize it)."""
+        return self._window
 
     @property
     def backend(self) -> str:
@@ -169,7 +210,8 @@ class SHRMRenderer:
         lo, hi = mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)
         center = 0.5 * (lo + hi)
         radius = float(np.max(np.linalg.norm(mesh.vertices - center, axis=1)))
-        self._objects.append(_Object(mesh, model, record, actor, tex, data, buf, shading.state, center, radius))
+        self._objects.append(_Object(mesh, model, record, actor, tex, data, buf, shading.state, center, radius,
+                                     closed_outward(mesh)))
         return len(self._objects) - 1
 
     @staticmethod
@@ -226,6 +268,12 @@ class SHRMRenderer:
         camera.apply_to(self._renderer.GetActiveCamera(), (near, far))
         ortho = 1 if camera.projection == "ortho" else 0
         for obj in self._objects:
+            # Back faces of a closed, outward-oriented surface are hidden behind its front faces
+            # whenever the view rays start outside the solid; with its bounding sphere wholly
+            # beyond the near plane they do (and the near plane cuts nothing open), so culling
+            # them skips their rasterization and shading and changes no pixel.
+            depth = float(np.dot(obj.center - camera.eye, camera.forward))
+            obj.actor.GetProperty().SetBackfaceCulling(bool(obj.closed and depth - obj.radius >= near))
             uni = obj.actor.GetShaderProperty().GetFragmentCustomUniforms()
             uni.SetUniform3f("shrmEye", camera.eye.tolist())
             uni.SetUniform3f("shrmViewDir", (-camera.forward).tolist())

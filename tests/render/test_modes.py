@@ -36,7 +36,7 @@ from shrmkit.render.modes import (
     mode_names,
     self_shadow_modes,
 )
-from shrmkit.render.shader import atlas_layout
+from shrmkit.render.shader import atlas_layout, packed_tiles
 from shrmkit.render.vtk_renderer import SHRMRenderer
 
 ENV = "builtin:studio,height=16"
@@ -171,13 +171,19 @@ def test_distant_and_rsibr_updates_equal_the_models_view_maps(small_sphere, rand
 
 
 def test_perpixel_atlas_tiles_hold_the_coefficient_maps(small_sphere, random_shrm) -> None:
+    """The packed RGBA atlas: scalar map 3c + k (coefficient c, channel k) is component
+    (3c + k) mod 4 of tile (3c + k) div 4, copied exactly; the 27 maps of P = 2 fill 7 tiles."""
     for name in ("perpixel", "kautz-mccool"):
         texture = get_mode(name).prepare(random_shrm, small_sphere).texture
-        cols, rows = atlas_layout(9)
-        assert texture.shape == (rows * 8, cols * 16, 3)
+        assert packed_tiles(9) == 7
+        cols, rows = atlas_layout(7)
+        assert texture.shape == (rows * 8, cols * 16, 4) and texture.dtype == np.float32
         for c in range(9):
-            r, k = divmod(c, cols)
-            np.testing.assert_array_equal(texture[r * 8:(r + 1) * 8, k * 16:(k + 1) * 16], random_shrm.coeffs[c])
+            for k in range(3):
+                r, q = divmod((3 * c + k) // 4, cols)
+                tile = texture[r * 8:(r + 1) * 8, q * 16:(q + 1) * 16, (3 * c + k) % 4]
+                np.testing.assert_array_equal(tile, random_shrm.coeffs[c, ..., k])
+        assert np.all(texture[2 * 8:3 * 8, 0:16, 3] == 0.0)  # tile 6 (row 2, column 0), component 3: padding
 
 
 def test_gaussian_visibility_travels_as_seven_vec4_attributes(small_sphere, lobe_model) -> None:
