@@ -93,13 +93,13 @@ def pixel_index(dirs: np.ndarray, height: int, width: int) -> tuple[np.ndarray, 
     return row, col
 
 
-def bilinear_lookup(image: np.ndarray, dirs: np.ndarray) -> np.ndarray:
-    """Bilinear interpolation of a lat-long ``image`` (H, W, ...) at unit vectors ``dirs`` (..., 3).
-
-    φ wraps around; θ is clamped to the first and last row centres (no pole artefacts
-    beyond half a pixel). Returns ``dirs.shape[:-1] + image.shape[2:]``.
-    """
-    height, width = image.shape[:2]
+def bilinear_corners(
+    dirs: np.ndarray, height: int, width: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The rule of :func:`bilinear_lookup` for an H × W lat-long map at unit vectors ``dirs``
+    (..., 3): rows (y0, y1), columns (x0, x1) (int64, φ wrapped) and fractions (fy, fx) in
+    [0, 1], each of shape ``dirs.shape[:-1]``; the value is
+    (1−fy)((1−fx) I[y0,x0] + fx I[y0,x1]) + fy((1−fx) I[y1,x0] + fx I[y1,x1])."""
     theta, phi = direction_angles(dirs)
     y = np.clip(theta * height / np.pi - 0.5, 0.0, height - 1.0)
     x = phi * width / (2.0 * np.pi) - 0.5
@@ -110,6 +110,16 @@ def bilinear_lookup(image: np.ndarray, dirs: np.ndarray) -> np.ndarray:
     fx = x - x0f
     x0 = np.mod(x0f.astype(np.int64), width)
     x1 = np.mod(x0 + 1, width)
+    return y0, y1, x0, x1, fy, fx
+
+
+def bilinear_lookup(image: np.ndarray, dirs: np.ndarray) -> np.ndarray:
+    """Bilinear interpolation of a lat-long ``image`` (H, W, ...) at unit vectors ``dirs`` (..., 3).
+
+    φ wraps around; θ is clamped to the first and last row centres (no pole artefacts
+    beyond half a pixel). Returns ``dirs.shape[:-1] + image.shape[2:]``.
+    """
+    y0, y1, x0, x1, fy, fx = bilinear_corners(dirs, *image.shape[:2])
     trailing = (1,) * (image.ndim - 2)
     fy = fy.reshape(fy.shape + trailing)
     fx = fx.reshape(fx.shape + trailing)

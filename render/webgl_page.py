@@ -52,7 +52,7 @@ from ..analysis.shrm import SHRM
 from ..brdf_io.atomic import atomic_path
 from ..brdf_io.envmap import EnvironmentMap
 from ..brdf_io.errors import BadInputError
-from ..brdf_io.latlong import bilinear_lookup, row_edges_cos
+from ..brdf_io.latlong import bilinear_corners, bilinear_lookup, row_edges_cos
 from .camera import Camera, orthonormal_frame
 from .cpu_reference import shade, sphere_geometry
 from .mesh import Mesh, load_mesh, make_mesh
@@ -264,11 +264,12 @@ def _area_resample(maps: np.ndarray, h: int, w: int, chunk: int = 16) -> np.ndar
     """(n, H, W, 3) lat-long maps → (n, h, w, 3): each new pixel the solid-angle-weighted mean of
     the old pixels it overlaps (rows weighted in 1 − cos θ, columns in φ)."""
     n, H, W, _ = maps.shape
-    rows = _overlap(1.0 - row_edges_cos(H), 1.0 - row_edges_cos(h))  # (h, H)
-    cols = _overlap(np.linspace(0.0, 1.0, W + 1), np.linspace(0.0, 1.0, w + 1))  # (w, W)
+    # in float32, the maps' type (means of a few texels): half the memory traffic of float64
+    rows = _overlap(1.0 - row_edges_cos(H), 1.0 - row_edges_cos(h)).astype(np.float32)  # (h, H)
+    cols = _overlap(np.linspace(0.0, 1.0, W + 1), np.linspace(0.0, 1.0, w + 1)).astype(np.float32)  # (w, W)
     out = np.empty((n, h, w, 3), np.float32)
     for s in range(0, n, chunk):
-        block = np.asarray(maps[s:s + chunk], np.float64)
+        block = np.asarray(maps[s:s + chunk], np.float32)
         k = block.shape[0]
         by_row = rows @ np.moveaxis(block, 1, 0).reshape(H, -1)  # (h, k·W·3)
         by_row = np.moveaxis(by_row.reshape(h, k, W, 3), 2, 0).reshape(W, -1)  # (W, h·k·3)
@@ -286,11 +287,25 @@ def _sphere_samples(n: int) -> np.ndarray:
     return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=-1)
 
 
+def _lookup_matrix(dirs: np.ndarray, height: int, width: int) -> sparse.csr_matrix:
+    """(N, H·W) sparse matrix of the bilinear lookup (``brdf_io.latlong.bilinear_lookup``) of an
+    H × W lat-long map at unit vectors (N, 3): four weights per row, summing to 1."""
+    y0, y1, x0, x1, fy, fx = bilinear_corners(dirs, height, width)
+    cols = np.stack([y0 * width + x0, y0 * width + x1, y1 * width + x0, y1 * width + x1], axis=1)
+    weights = np.stack([(1 - fy) * (1 - fx), (1 - fy) * fx, fy * (1 - fx), fy * fx], axis=1)
+    rows = np.repeat(np.arange(len(dirs)), 4)
+    return sparse.csr_matrix((weights.ravel(), (rows, cols.ravel())), shape=(len(dirs), height * width))
+
+
 def _lookup(maps: np.ndarray, dirs: np.ndarray, chunk: int = 16) -> np.ndarray:
-    """Bilinear lookups (N, n, 3) float32 of (n, h, w, 3) maps at unit vectors (N, 3)."""
-    out = np.empty((len(dirs), maps.shape[0], 3), np.float32)
-    for s in range(0, maps.shape[0], chunk):
-        out[:, s:s + chunk] = bilinear_lookup(np.moveaxis(maps[s:s + chunk], 0, 2), dirs)
+    """Bilinear lookups (N, n, 3) float32 of (n, h, w, 3) maps at unit vectors (N, 3): one sparse
+    product per chunk of maps laid out (h·w, k·3)."""
+    n, h, w, _ = maps.shape
+    matrix = _lookup_matrix(dirs, h, w)
+    out = np.empty((len(dirs), n, 3), np.float32)
+    for s in range(0, n, chunk):
+        block = np.ascontiguousarray(np.moveaxis(maps[s:s + chunk], 0, 2)).reshape(h * w, -1)
+        out[:, s:s + chunk] = (matrix @ block).reshape(len(dirs), -1, 3)
     return out
 
 
@@ -317,8 +332,10 @@ def fit_coefficients(
     means. Each candidate's error energy (:class:`CoefficientFit`) is estimated on ``samples``
     equal-area directions R (a Fibonacci lattice): the squared difference of the bilinear
     lookups of the resampled and the given maps, plus the energy of the dropped maps (the real
-    SH are orthonormal in V); the least wins, ties to the larger P'. Nothing is computed beyond
-    a size check when the maps fit as they are.
+    SH are orthonormal in V); the least wins, ties to the larger P'. Candidates are tried from
+    P' = P down and the search stops at the first whose dropped energy alone is no less than the
+    best error found (it and every smaller P' lose). Nothing is computed beyond a size check
+    when the maps fit as they are.
 
     Raises
     ------
@@ -353,12 +370,15 @@ def fit_coefficients(
         if h < min_rows:
             continue
         m = (p + 1) ** 2
+        dropped = float(energy[m:].sum())  # a lower bound of this candidate's error, growing as p falls
+        if best is not None and dropped >= best[0]:
+            break  # neither this P' nor any smaller one can win (ties go to the larger P')
         if h >= H:
-            maps, err = np.asarray(coeffs[:m], np.float32), float(energy[m:].sum())
+            maps, err = np.asarray(coeffs[:m], np.float32), dropped
         else:
             maps = _area_resample(coeffs[:m], h, width(h))
             diff = _lookup(maps, dirs) - given[:, :m]
-            err = float(weight * np.einsum("snc,snc->", diff, diff, dtype=np.float64) + energy[m:].sum())
+            err = float(weight * np.einsum("snc,snc->", diff, diff, dtype=np.float64)) + dropped
         if best is None or err < best[0]:
             best = (err, p, maps)
         if h >= H:
