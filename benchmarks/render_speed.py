@@ -2,7 +2,10 @@
 
 Measures, on whatever OpenGL the machine offers (Mesa llvmpipe on a CPU-only machine), for
 the ``distant`` and ``perpixel`` modes at 512² (and 1024²), for a ~100k- (and a
-1M-) triangle torus knot:
+1M-) triangle torus knot; ``perpixel`` twice in the same run: deferred (the renderer's
+default: a geometry pass writing R, then each covered pixel shaded once, ``vtk_renderer``
+module docstring) and ``pp-fwd``, the forward path (``SHRMRenderer(deferred=False)``: every
+rasterized fragment shaded):
 
 - **fps**: frames per second while orbiting the camera (draw only, no readback, one
   glFinish at the end; every frame moves the camera, so distant-mode maps are recomputed
@@ -10,16 +13,16 @@ the ``distant`` and ``perpixel`` modes at 512² (and 1024²), for a ~100k- (and 
   time per frame over all its threads in that run (insensitive to other load: on an idle
   2-core machine fps ≤ 2000 / cpu);
 - **what each frame spends** (milliseconds, each frame synchronized with glFinish, the
-  minimum over rounds): ``py`` the Python/VTK work of ``draw`` before VTK's Render starts
+  minimum over rounds): ``py`` the Python/VTK work of ``draw`` before VTK's first Render starts
   (camera, uniforms, culling decision), without the map; ``map`` the distant-mode map
   Σ B̃_pq Y^r_pq(Ṽ) evaluated on the CPU (RH02 eq. 12; RH02 = Ramamoorthi & Hanrahan 2002,
   doi:10.1145/566654.566611); ``upload`` its texture upload (GL time of frames with the map
-  updated minus frames without); ``gl`` Render() through glFinish with nothing updated (the
-  GL draw itself);
+  updated minus frames without); ``gl`` the first Render() through glFinish with nothing
+  updated (the GL draw itself; both passes when deferred);
 - **floors** measured in the same run: ``empty`` an empty frame (clear, VTK's traversal,
   framebuffer blit); ``geom`` the same mesh drawn with a constant-colour shader, back faces
   culled (vertex work, triangle set-up and rasterization: what no shader change can
-  remove); ``shade1`` the mode's shader on a full-screen quad minus ``empty``, i.e. shading
+  remove); ``shade1`` the mode's forward shader on a full-screen quad minus ``empty``, i.e. shading
   every pixel exactly once, scaled to the mesh's coverage ``cov`` (the shading a frame would
   cost if each covered pixel were shaded once);
 - **ratios**: ``over`` = (gl − geom) / shade1, how many times the shader runs per covered
@@ -60,7 +63,8 @@ MESHES = {
     "100k": "builtin:torus-knot:segments=1024,sides=49",
     "1M": "builtin:torus-knot:segments=4000,sides=125",
 }
-MODES = ("distant", "perpixel")
+#: (label, mode, deferred)
+MODES = (("distant", "distant", True), ("perpixel", "perpixel", True), ("pp-fwd", "perpixel", False))
 TARGET_FPS = 30.0
 
 
@@ -93,14 +97,19 @@ def gl_info() -> str:
 
 
 class _RenderClock:
-    """Times of VTK's Render start (StartEvent) for the frames of one renderer."""
+    """Time of the first VTK Render start (StartEvent) of a frame (a deferred frame renders twice)."""
 
     def __init__(self, window) -> None:
-        self.start = 0.0
+        self.start: float | None = None
         window.AddObserver("StartEvent", self._on_start)
 
+    def reset(self) -> None:
+        """Forget the last frame's start."""
+        self.start = None
+
     def _on_start(self, *_: object) -> None:
-        self.start = time.perf_counter()
+        if self.start is None:
+            self.start = time.perf_counter()
 
 
 def frame_costs(r: SHRMRenderer, cameras: list[Camera], rounds: int) -> dict[str, float]:
@@ -113,6 +122,7 @@ def frame_costs(r: SHRMRenderer, cameras: list[Camera], rounds: int) -> dict[str
             py = gl = 0.0
             for cam in cameras:
                 r.finish()
+                clock.reset()
                 t0 = time.perf_counter()
                 r.draw(cam, update_maps=update)
                 r.finish()
@@ -188,9 +198,9 @@ def geometry_floor_ms(mesh: Mesh, camera: Camera, size: int, n: int, rounds: int
 
 
 def quad_ms(shrm: SHRM, mode: str, size: int, n: int, rounds: int) -> float:
-    """The mode's shader on every pixel once (full-screen quad), with glFinish."""
+    """The mode's forward shader on every pixel once (full-screen quad), with glFinish."""
     quad, cam = full_screen_quad()
-    with SHRMRenderer(size, size) as r:
+    with SHRMRenderer(size, size, deferred=False) as r:
         r.add_object(quad, shrm, mode=mode)
         best = np.inf
         for _ in range(rounds):
@@ -254,8 +264,8 @@ def main(argv: list[str] | None = None) -> int:
         for size in sizes:
             empty = empty_frame_ms(size, args.frames, args.rounds)
             geom = geometry_floor_ms(mesh, base, size, args.frames // 2, args.rounds)
-            for mode in MODES:
-                with SHRMRenderer(size, size) as r:
+            for name, mode, deferred in MODES:
+                with SHRMRenderer(size, size, deferred=deferred) as r:
                     r.add_object(mesh, shrm, mode=mode)
                     cov = float(r.render(base).alpha.mean())
                     fps, cpu = 0.0, np.inf
@@ -269,8 +279,8 @@ def main(argv: list[str] | None = None) -> int:
                     cost["map"] = cost["upload"] = 0.0  # no per-frame map in this mode
                 shade1 = max(quad_ms(shrm, mode, size, args.frames // 2, args.rounds) - empty, 0.0) * cov
                 over = (cost["gl"] - geom) / shade1 if shade1 > 0 else float("nan")
-                rows.append((label, size, mode, fps, cpu, cost, geom, shade1, over))
-                print(f"{label:>4} {size:>4} {mode:>8} {fps:>6.1f} {fps / TARGET_FPS:>6.2f} {cpu:>5.1f} | "
+                rows.append((label, size, name, fps, cpu, cost, geom, shade1, over))
+                print(f"{label:>4} {size:>4} {name:>8} {fps:>6.1f} {fps / TARGET_FPS:>6.2f} {cpu:>5.1f} | "
                       f"{cost['py']:>5.2f} {cost['map']:>5.2f} {cost['upload']:>6.2f} {cost['gl']:>6.1f} | "
                       f"{empty:>5.1f} {geom:>5.1f} {shade1:>6.1f} {cov:>5.2f} {over:>5.1f}", flush=True)
     print("ratios (this run):")

@@ -13,6 +13,14 @@ attributes, and the state its per-frame update reads. The replacements are made 
   V = normalize(eye − P) (perspective) or the constant direction toward the camera (ortho),
   R = 2 (N·V) N − V; the mode's body then sets ``vec3 shrmRad``, written out as the colour.
 
+Deferred shading (the per-pixel modes; ``vtk_renderer`` module docstring): the geometry pass
+(:func:`gbuffer_fragment_replacements`) writes R scaled by the object's tag ``shrmGScale``
+(2^(k+1) for object k: an exact scaling) to the float colour buffer; the screen pass
+(:func:`screen_fragment_replacements`) draws a quad filling the view, reads R back at its
+pixel (``texelFetch(shrmGbuf, ivec2(gl_FragCoord.xy))``), keeps the pixels of its own tag,
+computes V as the prelude does (the quad's point lies on the same pixel ray as the surface
+point, so eye − P has the same direction) and runs the same body.
+
 Uniforms (set per frame by the renderer): ``shrmEye`` (vec3), ``shrmOrtho`` (int),
 ``shrmViewDir`` (vec3, toward the camera, used when ortho).
 
@@ -44,6 +52,8 @@ __all__ = [
     "check_texture_size",
     "vertex_replacements",
     "fragment_replacements",
+    "gbuffer_fragment_replacements",
+    "screen_fragment_replacements",
     "varying",
     "glsl_float",
     "sh_glsl",
@@ -72,6 +82,10 @@ class Shading:
         Per-vertex ``vec4`` attributes: GLSL name -> float32 (n_vertices, 4).
     state
         What the mode's per-frame update reads (``RenderMode.update``), or None.
+    deferred
+        Fragment replacements of the same shading as a screen pass
+        (:func:`screen_fragment_replacements`: R read from the geometry pass, V per pixel), or
+        None when the mode cannot be deferred (it needs N, vertex attributes or a per-frame map).
     """
 
     texture: np.ndarray
@@ -79,6 +93,7 @@ class Shading:
     fragment: Replacements
     attributes: dict[str, np.ndarray] = field(default_factory=dict)
     state: Any = None
+    deferred: Replacements | None = None
 
 
 def check_texture_size(shape: tuple[int, ...], what: str, hint: str = "") -> None:
@@ -109,6 +124,10 @@ def vertex_replacements(attributes: Sequence[str] = ()) -> Replacements:
     return [("//VTK::Normal::Dec", "\n".join(dec) + "\n"), ("//VTK::Normal::Impl", "\n".join(impl) + "\n")]
 
 
+#: V: toward the eye (perspective) or the constant direction toward the camera (ortho)
+_VIEW_LINE = "  vec3 shrmV = (shrmOrtho != 0) ? normalize(shrmViewDir) : normalize(shrmEye - shrmPosWC);"
+
+
 def fragment_replacements(
     declarations: Sequence[str], body: Sequence[str], attributes: Sequence[str] = ()
 ) -> Replacements:
@@ -124,13 +143,41 @@ def fragment_replacements(
     impl = [
         "  vec3 shrmN = normalize(shrmNormWC);",
         "  if (!gl_FrontFacing) shrmN = -shrmN;",
-        "  vec3 shrmV = (shrmOrtho != 0) ? normalize(shrmViewDir) : normalize(shrmEye - shrmPosWC);",
+        _VIEW_LINE,
         "  vec3 shrmR = normalize(2.0 * dot(shrmN, shrmV) * shrmN - shrmV);",
         *body,
         "  gl_FragData[0] = vec4(shrmRad, 1.0);",
     ]
     # declarations go at the last declaration tag before main(), after VTK has declared the
     # texture samplers (//VTK::TMap::Dec); the tag is kept so VTK's own code still lands there
+    return [("//VTK::Edges::Dec", "\n".join(dec) + "\n"), ("//VTK::Light::Impl", "\n".join(impl) + "\n")]
+
+
+def gbuffer_fragment_replacements() -> Replacements:
+    """(tag, replacement) pairs of the deferred geometry pass: the prelude's R (unit, z-up
+    world frame) times the object's tag, the uniform ``shrmGScale`` (2^(k+1), exact), as the
+    colour; alpha 1. The screen pass (:func:`screen_fragment_replacements`) divides it out."""
+    return fragment_replacements([], ["  vec3 shrmRad = shrmR * shrmGScale;"])
+
+
+def screen_fragment_replacements(declarations: Sequence[str], body: Sequence[str]) -> Replacements:
+    """(tag, replacement) pairs of the deferred screen pass of one object, for a quad filling the view.
+
+    Reads the geometry pass at the fragment's pixel (sampler ``shrmGbuf``, texel = pixel), keeps
+    the pixels whose |R·scale| is the object's tag ``shrmGScale`` (discards the others), sets
+    R = texel / shrmGScale (exact) and V as :func:`fragment_replacements` does from the quad's
+    world position (on the pixel's ray, like the surface point), then runs ``body`` (which
+    must not read ``shrmN``) and writes ``vec4(shrmRad, 1)``.
+    """
+    dec = ["//VTK::Edges::Dec", "in vec3 shrmPosWC;", "in vec3 shrmNormWC;", *declarations]
+    impl = [
+        "  vec4 shrmG = texelFetch(shrmGbuf, ivec2(gl_FragCoord.xy), 0);",
+        "  if (abs(length(shrmG.xyz) - shrmGScale) > 0.25 * shrmGScale) discard;",
+        "  vec3 shrmR = shrmG.xyz / shrmGScale;",
+        _VIEW_LINE,
+        *body,
+        "  gl_FragData[0] = vec4(shrmRad, 1.0);",
+    ]
     return [("//VTK::Edges::Dec", "\n".join(dec) + "\n"), ("//VTK::Light::Impl", "\n".join(impl) + "\n")]
 
 

@@ -39,6 +39,7 @@ from .glsl import (
     Shading,
     check_texture_size,
     fragment_replacements,
+    screen_fragment_replacements,
     sh_glsl,
     vertex_replacements,
 )
@@ -140,13 +141,17 @@ def _packed_sum_glsl(n: int, height: int, width: int) -> list[str]:
     return lines
 
 
-def shrm_fragment_replacements(lmax: int, height: int, width: int, *, per_pixel: bool) -> list[tuple[str, str]]:
+def shrm_fragment_replacements(
+    lmax: int, height: int, width: int, *, per_pixel: bool, screen: bool = False
+) -> list[tuple[str, str]]:
     """Fragment shader replacements of one SHRM actor.
 
     ``per_pixel=False``: ``shrmTex`` is one H × W map looked up by R (distant, rsibr);
     ``per_pixel=True``: ``shrmTex`` is the packed coefficient atlas (:func:`packed_coefficient_atlas`)
     and Σ_c Y^r_c(V) map_c(R) is summed, channel by channel, in the same order as a sum over
-    RGB tiles (bilinear per scalar map, then the SH weight).
+    RGB tiles (bilinear per scalar map, then the SH weight). ``screen=True``: the same body
+    in the deferred screen pass (``glsl.screen_fragment_replacements``: R read back from the
+    geometry pass), once per covered pixel.
     """
     n = (lmax + 1) ** 2
     dec = [
@@ -163,7 +168,7 @@ def shrm_fragment_replacements(lmax: int, height: int, width: int, *, per_pixel:
         body.append("  vec3 shrmRad = shrm_fetch(ivec2(0, 0), shrmIdx, shrmF);")
     # the Gibbs undershoot the prefilter's window left (SHRM.meta "negative_after") ends here
     body.append("  shrmRad = max(shrmRad, vec3(0.0));")
-    return fragment_replacements(dec, body)
+    return screen_fragment_replacements(dec, body) if screen else fragment_replacements(dec, body)
 
 
 def _view_map_shading(height: int, width: int, state: Any) -> Shading:
@@ -196,7 +201,8 @@ def distant_update(state: tuple[int, np.ndarray], view: np.ndarray, out: np.ndar
 
 def perpixel_shading(shrm: SHRM, mesh: Mesh) -> Shading:
     """Per-pixel view (RH02 eq. 8): the (P+1)² coefficient maps in one packed RGBA atlas
-    (:func:`packed_coefficient_atlas`), the SH of V in the shader."""
+    (:func:`packed_coefficient_atlas`), the SH of V in the shader; with its deferred screen
+    pass (``Shading.deferred``: the sum once per covered pixel, ``vtk_renderer``)."""
     n, h, w, _ = shrm.coeffs.shape
     cols, rows = atlas_layout(packed_tiles(n))
     hint = "use mode='distant' or a coarser SHRM"
@@ -205,6 +211,7 @@ def perpixel_shading(shrm: SHRM, mesh: Mesh) -> Shading:
         packed_coefficient_atlas(shrm.coeffs),
         vertex_replacements(),
         shrm_fragment_replacements(shrm.P, h, w, per_pixel=True),
+        deferred=shrm_fragment_replacements(shrm.P, h, w, per_pixel=True, screen=True),
     )
 
 

@@ -17,6 +17,23 @@ geometry are set up once in ``add_object``. Back faces are culled for an object 
 closed and outward oriented (:func:`closed_outward`) while its bounding sphere lies wholly
 beyond the near plane: then they are all hidden, and culling them saves their rasterization
 and shading (on a CPU rasterizer, most of a frame) without changing a pixel.
+
+Deferred shading (``perpixel``, ``kautz-mccool``: the modes whose ``Shading.deferred`` is set):
+when every object of the scene has it, a frame is two VTK renders. (1) The geometry pass draws
+each object k with a trivial shader writing its R (the prelude's reflected direction, unit, z-up
+world frame) times the tag 2^(k+1) (exact in float32) to the float colour buffer, with depth.
+(2) The screen pass keeps that depth buffer (``PreserveDepthBuffer``) and draws, per object, one
+quad filling the view just inside the far plane with depth test GL_GREATER and depth writes
+off: only covered pixels pass the depth test, before their shader runs (background blocks are
+skipped whole), and each is shaded once. Its fragment shader reads R back from the geometry
+pass's colour texture (the display framebuffer's GL_RGBA32F attachment, which VTK's blit at
+the end of pass 1 filled; no readback to the CPU), discards the pixels of other objects' tags,
+computes V from the quad's point (on the same pixel ray as the surface point) and evaluates
+the mode's sum (RH02 eq. 8) once. The forward path shades each fragment of each small
+triangle: a CPU rasterizer (llvmpipe) shades whole 2×2 quads / 4×4 blocks of every one- or
+two-pixel triangle, plus overdraw. Images equal the forward path's to float rounding (R is
+passed exactly; V differs by the rounding of the interpolated point); coverage is identical.
+Scenes with an object of another mode, or built with ``deferred=False``, use the forward path.
 """
 
 from __future__ import annotations
@@ -28,8 +45,8 @@ from typing import Any
 import numpy as np
 
 from .camera import Camera, orbit_camera
-from .glsl import Shading
-from .mesh import Mesh
+from .glsl import Shading, gbuffer_fragment_replacements, vertex_replacements
+from .mesh import Mesh, make_mesh
 from .modes import DEFAULT_MODE, RenderMode, get_mode
 from .offscreen import make_render_window, read_rgba_float
 
@@ -135,6 +152,21 @@ def closed_outward(mesh: Mesh) -> bool:
     return bool(np.all(np.bincount(label[faces[:, 0]], weights=volume6) > 0.0))
 
 
+#: GL_LEQUAL (VTK's depth function), GL_GREATER (the deferred screen pass's)
+GL_LEQUAL, GL_GREATER = 0x0203, 0x0204
+#: Most objects tagged in one deferred frame (tags 2^1 … 2^64 stay far from float32 overflow)
+MAX_DEFERRED_OBJECTS = 64
+
+
+@dataclass(eq=False)
+class _Deferred:
+    """The two extra actors of a deferred object and the quad's vertex buffer."""
+
+    gbuffer: Any  # vtkActor: the mesh writing R · 2^(k+1)
+    screen: Any  # vtkActor: the quad filling the view, shading each covered pixel once
+    quad_points: np.ndarray  # float32 (4, 3), shared with the quad's vtkPoints
+
+
 @dataclass(eq=False)
 class _Object:
     mesh: Mesh
@@ -148,6 +180,7 @@ class _Object:
     center: np.ndarray
     radius: float
     closed: bool  # closed, consistently and outward oriented: back faces never visible from outside
+    deferred: _Deferred | None = None  # the deferred passes' actors, when the mode has them
 
 
 class SHRMRenderer:
@@ -157,6 +190,9 @@ class SHRMRenderer:
     ----------
     width, height
         Image size in pixels.
+    deferred
+        Shade per-pixel objects once per covered pixel (module docstring) when every object of
+        the scene can be; False always draws forward (the reference for the deferred path).
 
     Examples
     --------
@@ -165,7 +201,7 @@ class SHRMRenderer:
     >>> frame = r.render(Camera.looking_at(view=(1, 0, 0)))        # doctest: +SKIP
     """
 
-    def __init__(self, width: int, height: int) -> None:
+    def __init__(self, width: int, height: int, *, deferred: bool = True) -> None:
         self.width, self.height = int(width), int(height)
         self._window = make_render_window(self.width, self.height)
         self._renderer = self._window.GetRenderers().GetFirstRenderer()
@@ -173,6 +209,40 @@ class SHRMRenderer:
         self._renderer.SetBackgroundAlpha(0.0)
         self._renderer.AutomaticLightCreationOff()
         self._objects: list[_Object] = []
+        self._gbuffer = self._gbuffer_texture() if deferred else None
+        self._deferred_frame = False
+        if self._gbuffer is not None:
+            # VTK resets the depth function only when it clears; the screen pass sets GL_GREATER
+            self._renderer.AddObserver("EndEvent", self._restore_depth_state)
+
+    def _gbuffer_texture(self):  # -> vtkOpenGLTexture or None
+        """The display framebuffer's colour texture (what pass 1 leaves), wrapped for a sampler."""
+        from vtkmodules.vtkRenderingOpenGL2 import vtkOpenGLTexture  # lazy: VTK
+
+        fbo = self._window.GetDisplayFramebuffer()
+        colour = None if fbo is None else fbo.GetColorAttachmentAsTextureObject(0)
+        if colour is None or (colour.GetWidth(), colour.GetHeight()) != (self.width, self.height):
+            return None
+        tex = vtkOpenGLTexture()
+        tex.SetTextureObject(colour)
+        return tex
+
+    def _restore_depth_state(self, *_: object) -> None:
+        state = self._window.GetState()
+        state.vtkglDepthFunc(GL_LEQUAL)
+        state.vtkglDepthMask(True)
+
+    def _screen_pass_state(self, *_: object) -> None:
+        # the quad mapper's StartEvent, before it draws: pass only where pass 1 left a surface
+        state = self._window.GetState()
+        state.vtkglDepthFunc(GL_GREATER)
+        state.vtkglDepthMask(False)
+
+    @property
+    def deferred(self) -> bool:
+        """Whether the next frame is drawn deferred (every object has a deferred pass)."""
+        return (self._gbuffer is not None and 0 < len(self._objects) <= MAX_DEFERRED_OBJECTS
+                and all(o.deferred is not None for o in self._objects))
 
     @property
     def render_window(self):  # -> vtkRenderWindow
@@ -210,9 +280,71 @@ class SHRMRenderer:
         lo, hi = mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)
         center = 0.5 * (lo + hi)
         radius = float(np.max(np.linalg.norm(mesh.vertices - center, axis=1)))
-        self._objects.append(_Object(mesh, model, record, actor, tex, data, buf, shading.state, center, radius,
-                                     closed_outward(mesh)))
+        obj = _Object(mesh, model, record, actor, tex, data, buf, shading.state, center, radius, closed_outward(mesh))
+        if self._gbuffer is not None and shading.deferred is not None:
+            obj.deferred = self._deferred_actors(actor, tex, shading, len(self._objects))
+        self._objects.append(obj)
         return len(self._objects) - 1
+
+    def _deferred_actors(self, actor, tex, shading: Shading, index: int) -> _Deferred:
+        """The geometry-pass actor (same polydata as ``actor``) and the screen quad of object ``index``."""
+        from vtkmodules.util.numpy_support import numpy_to_vtk  # lazy: VTK
+        from vtkmodules.vtkRenderingCore import vtkActor  # lazy: VTK
+        from vtkmodules.vtkRenderingOpenGL2 import vtkOpenGLPolyDataMapper  # lazy: VTK
+
+        scale = float(2.0 ** (index + 1))
+        mapper = vtkOpenGLPolyDataMapper()  # its own mapper: its own shader program
+        mapper.SetInputData(actor.GetMapper().GetInput())
+        mapper.SetVBOShiftScaleMethod(0)
+        mapper.ScalarVisibilityOff()
+        gbuffer = vtkActor()
+        gbuffer.SetMapper(mapper)
+        self._shader(gbuffer, vertex_replacements(), gbuffer_fragment_replacements(), scale)
+        self._renderer.AddActor(gbuffer)
+
+        # a unit square for the mesh checks; its corners are rewritten every frame (_quad_corners)
+        square = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]])
+        quad = make_mesh(square, np.array([[0, 1, 2], [0, 2, 3]]), np.tile([0.0, 0.0, 1.0], (4, 1)),
+                         normalize=False)
+        poly = _polydata(quad, {})
+        points = np.zeros((4, 3), dtype=np.float32)
+        poly.GetPoints().SetData(numpy_to_vtk(points, deep=0))  # shares ``points``
+        qmapper = vtkOpenGLPolyDataMapper()
+        qmapper.SetInputData(poly)
+        qmapper.SetVBOShiftScaleMethod(0)
+        qmapper.ScalarVisibilityOff()
+        qmapper.AddObserver("StartEvent", self._screen_pass_state)
+        screen = vtkActor()
+        screen.SetMapper(qmapper)
+        screen.GetProperty().SetTexture("shrmTex", tex)
+        screen.GetProperty().SetTexture("shrmGbuf", self._gbuffer)
+        self._shader(screen, shading.vertex, shading.deferred, scale)
+        self._renderer.AddActor(screen)
+        gbuffer.SetVisibility(False)
+        screen.SetVisibility(False)
+        return _Deferred(gbuffer, screen, points)
+
+    @staticmethod
+    def _shader(actor, vertex: list[tuple[str, str]], fragment: list[tuple[str, str]], scale: float) -> None:
+        sp = actor.GetShaderProperty()
+        for tag, text in vertex:
+            sp.AddVertexShaderReplacement(tag, True, text, False)
+        for tag, text in fragment:
+            sp.AddFragmentShaderReplacement(tag, True, text, False)
+        uni = sp.GetFragmentCustomUniforms()
+        uni.SetUniform3f("shrmEye", [0.0, 0.0, 0.0])
+        uni.SetUniform3f("shrmViewDir", [1.0, 0.0, 0.0])
+        uni.SetUniformi("shrmOrtho", 0)
+        uni.SetUniformf("shrmGScale", scale)
+
+    def _quad_corners(self, camera: Camera, far: float) -> np.ndarray:
+        """(4, 3) world corners of a quad filling the view (with a margin) at depth far / 1.004."""
+        d = far / 1.004  # beyond every surface (all within far / 1.01), inside the far plane
+        half_h = camera.parallel_scale if camera.projection == "ortho" else d * np.tan(0.5 * camera.fov_y)
+        half_w = half_h * self.width / self.height
+        c = camera.eye + d * camera.forward
+        x, y = 1.25 * half_w * camera.right, 1.25 * half_h * camera.up
+        return np.array([c - x - y, c + x - y, c + x + y, c - x + y])
 
     @staticmethod
     def _actor(mesh: Mesh, shading: Shading):  # -> (vtkActor, vtkTexture, vtkImageData, buffer)
@@ -267,28 +399,60 @@ class SHRMRenderer:
         far = float(np.max(dist + radii)) * 1.01
         camera.apply_to(self._renderer.GetActiveCamera(), (near, far))
         ortho = 1 if camera.projection == "ortho" else 0
+        self._deferred_frame = self.deferred
+        corners = self._quad_corners(camera, far) if self._deferred_frame else None
         for obj in self._objects:
             # Back faces of a closed, outward-oriented surface are hidden behind its front faces
             # whenever the view rays start outside the solid; with its bounding sphere wholly
             # beyond the near plane they do (and the near plane cuts nothing open), so culling
             # them skips their rasterization and shading and changes no pixel.
             depth = float(np.dot(obj.center - camera.eye, camera.forward))
-            obj.actor.GetProperty().SetBackfaceCulling(bool(obj.closed and depth - obj.radius >= near))
-            uni = obj.actor.GetShaderProperty().GetFragmentCustomUniforms()
-            uni.SetUniform3f("shrmEye", camera.eye.tolist())
-            uni.SetUniform3f("shrmViewDir", (-camera.forward).tolist())
-            uni.SetUniformi("shrmOrtho", ortho)
+            cull = bool(obj.closed and depth - obj.radius >= near)
+            if self._deferred_frame:  # the mesh drawn in pass 1, the quad (never culled) in pass 2
+                obj.deferred.gbuffer.GetProperty().SetBackfaceCulling(cull)
+                obj.deferred.quad_points[...] = corners
+                obj.deferred.screen.GetMapper().GetInput().GetPoints().Modified()
+                actors = (obj.deferred.gbuffer, obj.deferred.screen)
+            else:
+                obj.actor.GetProperty().SetBackfaceCulling(cull)
+                actors = (obj.actor,)
+            for actor in actors:
+                uni = actor.GetShaderProperty().GetFragmentCustomUniforms()
+                uni.SetUniform3f("shrmEye", camera.eye.tolist())
+                uni.SetUniform3f("shrmViewDir", (-camera.forward).tolist())
+                uni.SetUniformi("shrmOrtho", ortho)
         if update_maps:
             self.update_view_maps(camera)
 
     def draw(self, camera: Camera, *, update_maps: bool = True) -> None:
         """Render one frame into the offscreen framebuffer (no readback; for timing).
 
+        A deferred frame (:attr:`deferred`) is two VTK renders: the geometry pass, then the
+        screen pass (module docstring).
+
         ``update_maps=False`` keeps the distant-mode maps of the previous frame (only for
         measuring the cost of the per-frame map update).
         """
         self._setup(camera, update_maps)
-        self._window.Render()
+        if not self._deferred_frame:
+            self._show(forward=True, gbuffer=False, screen=False)
+            self._window.Render()
+            return
+        self._show(forward=False, gbuffer=True, screen=False)
+        self._window.Render()  # pass 1: R · tag and depth; VTK's blit leaves it in the G-buffer texture
+        self._show(forward=False, gbuffer=False, screen=True)
+        self._renderer.PreserveDepthBufferOn()
+        try:
+            self._window.Render()  # pass 2: each covered pixel shaded once
+        finally:
+            self._renderer.PreserveDepthBufferOff()
+
+    def _show(self, *, forward: bool, gbuffer: bool, screen: bool) -> None:
+        for obj in self._objects:
+            obj.actor.SetVisibility(forward)
+            if obj.deferred is not None:
+                obj.deferred.gbuffer.SetVisibility(gbuffer)
+                obj.deferred.screen.SetVisibility(screen)
 
     def finish(self) -> None:
         """Block until the OpenGL commands issued so far have completed (glFinish)."""
