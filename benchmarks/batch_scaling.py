@@ -19,11 +19,13 @@ Prints
 1. **stages**: per BRDF, the seconds of each stage of the serial (1-worker) run, timed from
    the report's progress events: load, fits (and the fit slices), orders (``choose_orders``
    at each tolerance), reference (angular reference on the pairs, lighting SHT), prefilter
-   (every tolerance; in brackets the part ``prefilter`` spends choosing the orders again,
-   from ``report.json``), checks, preview (``preview_seconds`` of ``report.json``) and
+   (every tolerance, reusing the orders; in brackets the part spent on the window against
+   Gibbs ringing, ``window_seconds`` of ``report.json``), checks, preview
+   (``preview_seconds`` of ``report.json``, and the live view) and
    writing (plots, HTML, Markdown, the folder); the batch's cost estimate
    (``batch.estimate_cost``) beside the measured total, and the rank correlation of the two;
 2. **worker start-up**: one spawned worker process: start, imports and thread limits;
+   the peak resident memory of the serial run's process and of the largest worker;
 3. **scaling**: for each engine and worker count, the wall time of the whole batch (minimum
    over ``--repeats``), the speed-up over the serial run, the efficiency, the best speed-up
    possible with whole BRDFs as tasks (serial time / max(sum/N, longest BRDF)), the load
@@ -70,12 +72,15 @@ ANALYTIC = [
     *(f"cook-torrance:kd=0.2,alpha={a}" for a in (0.1, 0.2, 0.3, 0.5)),
     *(f"cook-torrance:kd=0.2,alpha={a},dist=ggx" for a in (0.2, 0.4)),
 ]
+#: Models of the MERL-size tables: reciprocal and finite at grazing, as a measurement is (RH02's
+#: Phong and simplified microfacet define ρ̂ = ρ cos θ_i, so their ρ grows like 1/cos θ_i toward
+#: the horizon: tabulated, a Phong s = 64 holds 2e15 sr⁻¹ at grazing and no order captures it).
 TABLE_MODELS = [
     "lafortune:kd=0.2,n=30,ks=2",
-    "microfacet:sigma=0.3",
+    "cook-torrance:kd=0.2,alpha=0.3,dist=ggx",
     "cook-torrance:kd=0.3,alpha=0.25",
-    "phong:s=64",
-    "microfacet:sigma=0.2",
+    "lafortune:kd=0.3,n=10,ks=1",
+    "cook-torrance:kd=0.1,alpha=0.4",
     "lafortune:kd=0.1,n=80,ks=3",
 ]
 
@@ -126,7 +131,7 @@ def serial_run(sources: list[str], out: Path, options) -> tuple[float, dict[str,
         if doc.get("status") == "ok":
             d["preview_only"] = doc["preview"]["preview_seconds"]
             d["writing"] = d.get("preview", 0.0) - d["preview_only"]
-            d["prefilter_orders"] = sum(r["orders_seconds"] for r in doc["speed_vs_error"])
+            d["prefilter_window"] = sum(r["window_seconds"] for r in doc["speed_vs_error"])
         stages[name] = d
     if result.n_failed:
         console.print(f"[red]{result.n_failed} reports failed in the serial run[/red]")
@@ -136,10 +141,10 @@ def serial_run(sources: list[str], out: Path, options) -> tuple[float, dict[str,
 def stage_table(sources: list[str], names: list[str], stages: dict[str, dict[str, float]]) -> np.ndarray:
     cols = ("load", "fits", "orders", "reference", "prefilter", "checks", "preview_only", "writing")
     table = Table(title="1. where the time of one report goes (serial run, seconds)", box=None)
-    for c in ("BRDF", "load", "fits", "orders", "reference", "prefilter (orders again)", "checks", "preview",
+    for c in ("BRDF", "load", "fits", "orders", "reference", "prefilter (window)", "checks", "preview",
               "writing", "total", "est. cost"):
         table.add_column(c, justify="left" if c == "BRDF" else "right")
-    sums = dict.fromkeys((*cols, "prefilter_orders", "total"), 0.0)
+    sums = dict.fromkeys((*cols, "prefilter_window", "total"), 0.0)
     totals, costs = [], []
     for source, name in zip(sources, names, strict=True):
         d = stages.get(name, {})
@@ -150,14 +155,14 @@ def stage_table(sources: list[str], names: list[str], stages: dict[str, dict[str
         costs.append(cost)
         label = Path(source).name if source.endswith(".binary") else source
         table.add_row(label[:44], *(f"{d.get(c, 0.0):.2f}" for c in cols[:4]),
-                      f"{d.get('prefilter', 0.0):.2f} ({d.get('prefilter_orders', 0.0):.2f})",
+                      f"{d.get('prefilter', 0.0):.2f} ({d.get('prefilter_window', 0.0):.2f})",
                       *(f"{d.get(c, 0.0):.2f}" for c in cols[5:]), f"{d.get('total', 0.0):.2f}", f"{cost:.1f}")
     total = max(sums["total"], 1e-9)
     table.add_row("[bold]sum[/bold]", *(f"{sums[c]:.1f}" for c in cols[:4]),
-                  f"{sums['prefilter']:.1f} ({sums['prefilter_orders']:.1f})",
+                  f"{sums['prefilter']:.1f} ({sums['prefilter_window']:.1f})",
                   *(f"{sums[c]:.1f}" for c in cols[5:]), f"{sums['total']:.1f}", "")
     table.add_row("[bold]share[/bold]", *(f"{sums[c] / total:.0%}" for c in cols[:4]),
-                  f"{sums['prefilter'] / total:.0%} ({sums['prefilter_orders'] / total:.0%})",
+                  f"{sums['prefilter'] / total:.0%} ({sums['prefilter_window'] / total:.0%})",
                   *(f"{sums[c] / total:.0%}" for c in cols[5:]), "100%", "")
     console.print(table)
     ranks = [np.argsort(np.argsort(v)) for v in (np.array(totals), np.array(costs))]
@@ -255,6 +260,8 @@ def main() -> None:
             if wall < best_serial:
                 best_serial, stages = wall, st
         totals = stage_table(sources, names, stages)
+        console.print(f"peak resident memory of the serial run's process: "
+                      f"{resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MiB")
         reference = load_reports(root / "serial")
         worker_startup()
 
@@ -291,6 +298,8 @@ def main() -> None:
                           f"{serial_wall / wall / n:.0%}", f"{bound:.2f}x", f"{cpu:.0f}", f"{others:.2f}",
                           "yes" if same else "[red]NO[/red]")
         console.print(table)
+        console.print(f"peak resident memory of the largest worker process (all runs): "
+                      f"{resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024:.0f} MiB")
         console.print("best possible: the serial time over max(serial time / N, the longest BRDF): whole BRDFs are "
                       "the tasks, so no engine beats the longest report. Other users' cores: the machine's busy "
                       "CPU minus ours, over the run (the Dask runs: over the cluster's life).")
