@@ -70,8 +70,14 @@ def rho_lpq(reparam: ReparamBRDF, F0: int, P0: int) -> BRDFCoefficients:
         raise ValueError(f"grid {grid} too coarse for orders F0={F0}, P0={P0}")
     xi, wi = grid.theta_i()
     xo, wo = grid.theta_o()
-    # pass 1: Σ_φ ρ̂ cos(qφ_k) Δφ = Re FFT (φ_k = 2πk/n)
-    g = np.fft.rfft(reparam.values, axis=2).real[:, :, : P0 + 1] * (2.0 * np.pi / grid.n_phi)
+    # pass 1: Σ_φ ρ̂ cos(qφ_k) Δφ = Re FFT (φ_k = 2πk/n), in blocks of θ_i' rows (the complex
+    # transform of a whole fine grid would double its memory)
+    values = reparam.values
+    g = np.empty((values.shape[0], values.shape[1], P0 + 1, 3))
+    rows = max(1, (1 << 20) // max(values.shape[1] * values.shape[2], 1))
+    for r0 in range(0, values.shape[0], rows):
+        block = np.fft.rfft(values[r0 : r0 + rows], axis=2).real[:, :, : P0 + 1]
+        g[r0 : r0 + rows] = block * (2.0 * np.pi / grid.n_phi)
     # pass 2: θ_o' sum with f_pq(θ_o') → h[i, p, q, c]; pass 3: θ_i' sum with f_lq(θ_i')
     # and the 2π of eq. 13 — one matrix product per q
     fo = legendre_f(P0, P0, xo) * wo  # (P0+1, P0+1, n_o), weights folded in

@@ -114,8 +114,14 @@ class ReparamBRDF:
         _, wi = self.grid.theta_i()
         _, wo = self.grid.theta_o()
         dphi = 2.0 * np.pi / self.grid.n_phi
-        # 2π from the integral over φ_i' (ρ̂ depends on φ_o' − φ_i' only)
-        return 2.0 * np.pi * dphi * np.einsum("i,o,iopk->k", wi, wo, self.values**2)
+        # 2π from the integral over φ_i' (ρ̂ depends on φ_o' − φ_i' only); blocks of θ_i' rows
+        # keep the squares' temporary small
+        rows = max(1, SAMPLE_BLOCK // max(self.values.shape[1] * self.values.shape[2], 1))
+        total = np.zeros(3)
+        for r0 in range(0, self.values.shape[0], rows):
+            block = self.values[r0 : r0 + rows]
+            total += np.einsum("i,o,iopk->k", wi[r0 : r0 + rows], wo, block * block)
+        return 2.0 * np.pi * dphi * total
 
 
 def reparam_directions(
@@ -174,6 +180,11 @@ def reparameterize(brdf: BRDF, grid: ReparamGrid) -> ReparamBRDF:
     return ReparamBRDF(values=values, grid=grid, name=brdf.name, n_without_data=missing)
 
 
+#: Points per block of :func:`sample_rho_hat` (its peak memory beyond the result: a few hundred
+#: bytes a point).
+SAMPLE_BLOCK = 1 << 20
+
+
 def sample_rho_hat(
     brdf: BRDF, cos_theta_i: np.ndarray, cos_theta_o: np.ndarray, phi: np.ndarray
 ) -> tuple[np.ndarray, int]:
@@ -185,11 +196,18 @@ def sample_rho_hat(
     BadInputError
         If the BRDF evaluates to NaN or infinity anywhere on the nodes.
     """
-    L, V = reparam_directions(
-        np.asarray(cos_theta_i, float)[:, None, None], np.asarray(cos_theta_o, float)[None, :, None],
-        np.asarray(phi, float)[None, None, :],
-    )
-    values, missing = _rho_hat_counted(brdf, L, V)
+    ci = np.asarray(cos_theta_i, float)
+    co = np.asarray(cos_theta_o, float)
+    ph = np.asarray(phi, float)
+    values = np.empty((ci.size, co.size, ph.size, 3))
+    missing = 0
+    # blocks of θ_i' rows: the directions and the model's temporaries stay near SAMPLE_BLOCK
+    # points (a fine grid of 2·10⁷ samples would otherwise hold several GB of them at once)
+    rows = max(1, SAMPLE_BLOCK // max(co.size * ph.size, 1))
+    for r0 in range(0, ci.size, rows):
+        L, V = reparam_directions(ci[r0 : r0 + rows, None, None], co[None, :, None], ph[None, None, :])
+        values[r0 : r0 + rows], n = _rho_hat_counted(brdf, L, V)
+        missing += n
     if not np.all(np.isfinite(values)):
         bad = int(np.count_nonzero(~np.isfinite(values)))
         raise BadInputError(brdf.name, f"BRDF evaluates to {bad} non-finite values on the reparameterized grid")

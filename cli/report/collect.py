@@ -253,7 +253,12 @@ def _environments(brdf: BRDF, options: ReportOptions, choices: list[OrderChoice]
             "eps_L_curve": lighting.eps(),
             "reference_seconds": ref_seconds,
         }
-        for tol, choice in zip(options.all_tolerances, choices, strict=True):
+        # the main tolerance last: its SHRM is kept (previews), so no other map is made beside it
+        by_tol = dict(zip(options.all_tolerances, choices, strict=True))
+        order = [t for t in options.all_tolerances if t != options.eps] + [options.eps]
+        rows_before = len(speed_rows)
+        for tol in order:
+            choice = by_tol[tol]
             _stage(progress, f"prefilter {env.name} eps={tol:g}")
             shrm = prefilter(env, brdf, eps=tol, max_F=options.max_F, max_P=options.max_P, window=options.window,
                              criterion=options.criterion, max_view_deg=options.max_view_deg, nthreads=nthreads,
@@ -318,6 +323,9 @@ def _environments(brdf: BRDF, options: ReportOptions, choices: list[OrderChoice]
                     "max_view_deg": options.max_view_deg,
                 })
                 main_shrms.append((env, shrm))
+            del shrm
+        speed_rows[rows_before:] = sorted(speed_rows[rows_before:],
+                                          key=lambda r: options.all_tolerances.index(r["tolerance"]))
         env_entries.append(entry)
     return env_entries, speed_rows, main_shrms
 

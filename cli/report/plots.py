@@ -34,6 +34,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.cm import ScalarMappable
 from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
+from matplotlib.ticker import NullLocator
 
 from .shared_state import MATPLOTLIB_LOCK
 
@@ -154,6 +155,10 @@ def fit_slices_plot(doc: dict[str, Any]) -> bytes:
     views = slices["views"]
     fig = _figure(2.4 * max(len(views), 1), 2.8)
     theta = np.asarray(slices["theta_deg"], dtype=float)
+    # one log range for all panels, _DECADES below the largest value (as the explorer's plots),
+    # decades only: a log axis over many decades with minor ticks costs most of a report's plotting
+    lo, hi = _log_range([_luma(view["measured_rgb"]) for view in views]
+                        + [_luma(rgb) for view in views for rgb in view["fitted_rgb"].values() if rgb is not None])
     for k, view in enumerate(views):
         ax = fig.add_subplot(1, max(len(views), 1), k + 1)
         measured = _luma(view["measured_rgb"])
@@ -165,6 +170,8 @@ def fit_slices_plot(doc: dict[str, Any]) -> bytes:
                 ax.plot(theta, np.maximum(_luma(rgb), 1e-6), lw=1, label=model)
         ax.axvline(-view["view_deg"], color="grey", lw=0.5, ls=":")
         ax.set_yscale("log")
+        ax.set_ylim(10.0**lo, 10.0**hi)
+        ax.yaxis.set_minor_locator(NullLocator())
         ax.set_title(f"θ_o = {view['view_deg']:g}°", fontsize=8)
         ax.set_xlabel("signed θ_i (°)", fontsize=7)
         ax.tick_params(labelsize=6)
