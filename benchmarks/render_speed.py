@@ -2,10 +2,11 @@
 
 Measures, on whatever OpenGL the machine offers (Mesa llvmpipe on a CPU-only machine), for
 the ``distant`` and ``perpixel`` modes at 512² (and 1024²), for a ~100k- (and a
-1M-) triangle torus knot; ``perpixel`` twice in the same run: deferred (the renderer's
-default: a geometry pass writing R, then each covered pixel shaded once, ``vtk_renderer``
-module docstring) and ``pp-fwd``, the forward path (``SHRMRenderer(deferred=False)``: every
-rasterized fragment shaded):
+1M-) triangle torus knot; ``perpixel`` twice in the same run: as the renderer draws it by
+default — deferred on a CPU rasterizer (a geometry pass writing R, then each covered pixel
+shaded once, ``vtk_renderer`` module docstring), forward on a GPU — and by the other path:
+``pp-fwd`` (``SHRMRenderer(deferred=False)``: every rasterized fragment shaded) or ``pp-def``
+(``deferred=True``). The OpenGL renderer string is printed first.
 
 - **fps**: frames per second while orbiting the camera (draw only, no readback, one
   glFinish at the end; every frame moves the camera, so distant-mode maps are recomputed
@@ -56,15 +57,16 @@ from shrmkit.analysis.shrm import SHRM
 from shrmkit.brdf_io.latlong import pixel_directions
 from shrmkit.render.camera import Camera, orbit_camera
 from shrmkit.render.mesh import Mesh, load_mesh, make_mesh
-from shrmkit.render.offscreen import make_render_window
+from shrmkit.render.offscreen import gl_renderer, is_software_rasterizer, make_render_window
 from shrmkit.render.vtk_renderer import SHRMRenderer
 
 MESHES = {
     "100k": "builtin:torus-knot:segments=1024,sides=49",
     "1M": "builtin:torus-knot:segments=4000,sides=125",
 }
-#: (label, mode, deferred)
-MODES = (("distant", "distant", True), ("perpixel", "perpixel", True), ("pp-fwd", "perpixel", False))
+#: (label, mode, deferred): each mode as the renderer draws it by default (deferred on a CPU
+#: rasterizer, forward on a GPU), then the other per-pixel path (``pp-fwd`` or ``pp-def``)
+MODES = (("distant", "distant", None), ("perpixel", "perpixel", None))
 TARGET_FPS = 30.0
 
 
@@ -259,12 +261,17 @@ def main(argv: list[str] | None = None) -> int:
     print("per-frame ms (each frame glFinish-synchronized, min over rounds); floors measured in this run")
     print(head)
     rows = []
+    with SHRMRenderer(8, 8) as probe:
+        software = is_software_rasterizer(probe.render_window)
+        print(f"OpenGL renderer: {gl_renderer(probe.render_window)} (per-pixel modes drawn "
+              f"{'deferred' if software else 'forward'} by default)")
+    modes = (*MODES, ("pp-fwd", "perpixel", False) if software else ("pp-def", "perpixel", True))
     for label, spec in meshes.items():
         mesh = load_mesh(spec)
         for size in sizes:
             empty = empty_frame_ms(size, args.frames, args.rounds)
             geom = geometry_floor_ms(mesh, base, size, args.frames // 2, args.rounds)
-            for name, mode, deferred in MODES:
+            for name, mode, deferred in modes:
                 with SHRMRenderer(size, size, deferred=deferred) as r:
                     r.add_object(mesh, shrm, mode=mode)
                     cov = float(r.render(base).alpha.mean())

@@ -26,7 +26,14 @@ import numpy as np
 
 from ..brdf_io.errors import ShrmError
 
-__all__ = ["OffscreenError", "make_render_window", "read_rgba_float", "probe_offscreen", "window_classes"]
+__all__ = [
+    "OffscreenError", "make_render_window", "read_rgba_float", "probe_offscreen", "window_classes", "gl_renderer",
+    "is_software_rasterizer", "SOFTWARE_RASTERIZERS",
+]
+
+#: Substrings of ``GL_RENDERER`` that name a rasterizer running on the CPU (Mesa's llvmpipe,
+#: softpipe and swrast, Google's SwiftShader, Microsoft's WARP/GDI).
+SOFTWARE_RASTERIZERS = ("llvmpipe", "softpipe", "swrast", "swiftshader", "software rasterizer", "gdi generic")
 
 #: GL_RGBA32F, the internal format of a float32 RGBA colour attachment.
 GL_RGBA32F = 0x8814
@@ -106,6 +113,22 @@ def make_render_window(width: int, height: int):  # -> vtkRenderWindow
             continue
         return window
     raise OffscreenError("no offscreen OpenGL context: " + "; ".join(problems))
+
+
+def gl_renderer(window) -> str:
+    """The ``GL_RENDERER`` string of an initialized VTK render window (``""`` when VTK does not
+    report it), e.g. ``"llvmpipe (LLVM 15.0.6, 256 bits)"``."""
+    for line in (window.ReportCapabilities() or "").splitlines():
+        key, _, value = line.partition(":")
+        if key.strip().lower() == "opengl renderer string":
+            return value.strip()
+    return ""
+
+
+def is_software_rasterizer(window) -> bool:
+    """Whether the window's OpenGL runs on the CPU (:data:`SOFTWARE_RASTERIZERS`)."""
+    name = gl_renderer(window).lower()
+    return any(s in name for s in SOFTWARE_RASTERIZERS)
 
 
 def read_rgba_float(window) -> np.ndarray:

@@ -33,7 +33,8 @@ the mode's sum (RH02 eq. 8) once. The forward path shades each fragment of each 
 triangle: a CPU rasterizer (llvmpipe) shades whole 2×2 quads / 4×4 blocks of every one- or
 two-pixel triangle, plus overdraw. Images equal the forward path's to float rounding (R is
 passed exactly; V differs by the rounding of the interpolated point); coverage is identical.
-Scenes with an object of another mode, or built with ``deferred=False``, use the forward path.
+Scenes with an object of another mode, or built with ``deferred=False``, use the forward path;
+by default (``deferred=None``) the deferred path is used on CPU rasterizers only.
 """
 
 from __future__ import annotations
@@ -48,7 +49,7 @@ from .camera import Camera, orbit_camera
 from .glsl import Shading, gbuffer_fragment_replacements, vertex_replacements
 from .mesh import Mesh, make_mesh
 from .modes import DEFAULT_MODE, RenderMode, get_mode
-from .offscreen import make_render_window, read_rgba_float
+from .offscreen import is_software_rasterizer, make_render_window, read_rgba_float
 
 __all__ = ["SHRMRenderer", "RenderResult", "closed_outward"]
 
@@ -193,6 +194,11 @@ class SHRMRenderer:
     deferred
         Shade per-pixel objects once per covered pixel (module docstring) when every object of
         the scene can be; False always draws forward (the reference for the deferred path).
+        None (default): deferred where the OpenGL renderer is a CPU rasterizer
+        (:func:`~shrmkit.render.offscreen.is_software_rasterizer`: llvmpipe, SwiftShader, …),
+        whose fragment shading of small triangles it cuts 2–3× (``benchmarks/render_speed.py``);
+        forward on a GPU, where quads of small triangles cost little and the second render's
+        fixed cost would not pay (the deferred path is not measured on a GPU).
 
     Examples
     --------
@@ -201,7 +207,7 @@ class SHRMRenderer:
     >>> frame = r.render(Camera.looking_at(view=(1, 0, 0)))        # doctest: +SKIP
     """
 
-    def __init__(self, width: int, height: int, *, deferred: bool = True) -> None:
+    def __init__(self, width: int, height: int, *, deferred: bool | None = None) -> None:
         self.width, self.height = int(width), int(height)
         self._window = make_render_window(self.width, self.height)
         self._renderer = self._window.GetRenderers().GetFirstRenderer()
@@ -209,6 +215,8 @@ class SHRMRenderer:
         self._renderer.SetBackgroundAlpha(0.0)
         self._renderer.AutomaticLightCreationOff()
         self._objects: list[_Object] = []
+        if deferred is None:
+            deferred = is_software_rasterizer(self._window)
         self._gbuffer = self._gbuffer_texture() if deferred else None
         self._deferred_frame = False
         if self._gbuffer is not None:

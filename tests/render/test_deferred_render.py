@@ -149,9 +149,24 @@ def test_deferred_overlapping_objects_against_forward_and_cpu(offscreen) -> None
 def test_mixed_modes_draw_forward(offscreen) -> None:
     """A scene with a distant-mode object is drawn forward (its shading needs no deferral)."""
     sphere = load_mesh("builtin:sphere:subdivisions=2")
-    with SHRMRenderer(16, 16) as r:
+    with SHRMRenderer(16, 16, deferred=True) as r:
         r.add_object(sphere.transformed(scale=0.4, translate=(-0.5, 0, 0)), _smooth_shrm(1, 4), mode="perpixel")
         assert r.deferred
         r.add_object(sphere.transformed(scale=0.4, translate=(0.5, 0, 0)), _smooth_shrm(1, 5), mode="distant")
         assert not r.deferred
         assert r.render(Camera.looking_at(view=(0, -1, 0))).alpha.sum() > 20
+
+
+def test_default_defers_on_cpu_rasterizers_only(offscreen) -> None:
+    """deferred=None (the default) follows the OpenGL renderer: deferred on a CPU rasterizer
+    (llvmpipe here, SwiftShader…), forward on a GPU; the renderer string is read from VTK."""
+    from shrmkit.render.offscreen import SOFTWARE_RASTERIZERS, gl_renderer, is_software_rasterizer
+
+    sphere = load_mesh("builtin:sphere:subdivisions=2")
+    with SHRMRenderer(16, 16) as r:
+        name = gl_renderer(r.render_window)
+        assert name  # VTK reports a renderer string
+        software = any(s in name.lower() for s in SOFTWARE_RASTERIZERS)
+        assert is_software_rasterizer(r.render_window) == software
+        r.add_object(sphere.transformed(scale=0.4), _smooth_shrm(1, 4), mode="perpixel")
+        assert r.deferred == software
