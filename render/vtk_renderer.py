@@ -44,6 +44,8 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
 
 from .camera import Camera, orbit_camera
 from .glsl import Shading, gbuffer_fragment_replacements, vertex_replacements
@@ -137,9 +139,6 @@ def closed_outward(mesh: Mesh) -> bool:
     back faces changes no pixel. Meshes with open borders, non-manifold or inconsistently
     wound edges, split seam vertices, or a cavity (a piece with inward orientation) give False.
     """
-    from scipy.sparse import coo_matrix  # lazy: only when adding an object
-    from scipy.sparse.csgraph import connected_components  # lazy
-
     faces = np.asarray(mesh.faces, dtype=np.int64)
     n = len(mesh.vertices)
     a = faces.reshape(-1)
