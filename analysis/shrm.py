@@ -664,6 +664,16 @@ def default_size(F: int, P: int = 0, budget_bytes: int = DEFAULT_MAP_BUDGET_BYTE
     return max(8, min(rule, fits))
 
 
+def _check_finite(coeffs: np.ndarray, env: Any) -> np.ndarray:
+    """``coeffs`` when every value is finite, else :class:`BadInputError` naming the map."""
+    if not np.all(np.isfinite(coeffs)):
+        raise BadInputError(
+            getattr(env, "source", None) or env.name,
+            "the prefiltered radiance overflows float32 maps (radiance values near 1e38?): rescale the map",
+        )
+    return coeffs
+
+
 def _check_given_orders(orders: OrderChoice, brdf: Any, eps: float, criterion: str, max_view_deg: float) -> None:
     """Refuse an :class:`OrderChoice` made for another tolerance, rule or view limit."""
     given = (orders.tolerance, orders.criterion, orders.max_view_deg)
@@ -827,12 +837,7 @@ def prefilter(
             coeffs = global_shrm_latlong(
                 lighting, coefficients, F_B, P_B, S, 2 * S, nthreads=nthreads, azimuth_free=azimuth_free
             )
-        if not np.all(np.isfinite(coeffs)):
-            raise BadInputError(
-                getattr(env, "source", None) or env.name,
-                "the prefiltered radiance overflows float32 maps (radiance values near 1e38?): rescale the map",
-            )
-        return coeffs
+        return _check_finite(coeffs, env)
 
     q_max = 0 if azimuth_free else None
     stage("synthesis")
@@ -889,10 +894,14 @@ def prefilter(
         else:
             sigma = lanczos_sigma(F_B, P_B, strength) if strength > 0.0 else None
             coefficients = _windowed(base, sigma, F_B, P_B)
-            if unwindowed is not None:  # t·full + (1 − t)·unwindowed, in place (float32 rounding)
-                coeffs -= unwindowed
-                coeffs *= np.float32(strength)
-                coeffs += unwindowed
+            if unwindowed is not None and strength == 0.0:
+                coeffs = unwindowed
+            elif unwindowed is not None:  # t·full + (1 − t)·unwindowed, in place (float32 rounding)
+                with np.errstate(over="ignore", invalid="ignore"):
+                    coeffs -= unwindowed
+                    coeffs *= np.float32(strength)
+                    coeffs += unwindowed
+                _check_finite(coeffs, env)
             else:
                 del coeffs
                 coeffs = synthesize(coefficients)

@@ -164,16 +164,17 @@ def screen_fragment_replacements(declarations: Sequence[str], body: Sequence[str
     """(tag, replacement) pairs of the deferred screen pass of one object, for a quad filling the view.
 
     Reads the geometry pass at the fragment's pixel (sampler ``shrmGbuf``, texel = pixel), keeps
-    the pixels whose |R·scale| is the object's tag ``shrmGScale`` (discards the others), sets
-    R = texel / shrmGScale (exact) and V as :func:`fragment_replacements` does from the quad's
+    the pixels whose |texel / shrmGScale| is 1 (the object's tag; discards the others), with
+    R = texel / shrmGScale (exact: a power of two), and V as :func:`fragment_replacements` does from the quad's
     world position (on the pixel's ray, like the surface point), then runs ``body`` (which
     must not read ``shrmN``) and writes ``vec4(shrmRad, 1)``.
     """
     dec = ["//VTK::Edges::Dec", "in vec3 shrmPosWC;", "in vec3 shrmNormWC;", *declarations]
     impl = [
         "  vec4 shrmG = texelFetch(shrmGbuf, ivec2(gl_FragCoord.xy), 0);",
-        "  if (abs(length(shrmG.xyz) - shrmGScale) > 0.25 * shrmGScale) discard;",
+        # divide first (exact: a power of two), then measure: |R·2^64|² would overflow float32
         "  vec3 shrmR = shrmG.xyz / shrmGScale;",
+        "  if (abs(length(shrmR) - 1.0) > 0.25) discard;",
         _VIEW_LINE,
         *body,
         "  gl_FragData[0] = vec4(shrmRad, 1.0);",

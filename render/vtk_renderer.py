@@ -154,7 +154,8 @@ def closed_outward(mesh: Mesh) -> bool:
 
 #: GL_LEQUAL (VTK's depth function), GL_GREATER (the deferred screen pass's)
 GL_LEQUAL, GL_GREATER = 0x0203, 0x0204
-#: Most objects tagged in one deferred frame (tags 2^1 … 2^64 stay far from float32 overflow)
+#: Most objects tagged in one deferred frame: tags 2^1 … 2^64 times a unit R stay finite in
+#: float32, and the screen pass divides by the tag before it measures |R|
 MAX_DEFERRED_OBJECTS = 64
 
 

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy import ndimage
 
 from shrmkit.analysis.sh import real_sph_harm
 from shrmkit.analysis.shrm import SHRM
@@ -170,3 +171,24 @@ def test_default_defers_on_cpu_rasterizers_only(offscreen) -> None:
         assert is_software_rasterizer(r.render_window) == software
         r.add_object(sphere.transformed(scale=0.4), _smooth_shrm(1, 4), mode="perpixel")
         assert r.deferred == software
+
+
+def test_the_most_objects_a_deferred_frame_tags_are_all_drawn(offscreen) -> None:
+    """MAX_DEFERRED_OBJECTS spheres (tags up to 2^64): every one is drawn deferred, with the
+    forward path's coverage (|R·2^64|² would overflow float32 if the tag were measured first)."""
+    from shrmkit.render.vtk_renderer import MAX_DEFERRED_OBJECTS
+
+    sphere = load_mesh("builtin:sphere:subdivisions=1")
+    side = int(np.ceil(np.sqrt(MAX_DEFERRED_OBJECTS)))
+    shrm = _smooth_shrm(1, 7, H=8, W=16)
+    objects = []
+    for k in range(MAX_DEFERRED_OBJECTS):
+        row, col = divmod(k, side)
+        centre = (2.2 * (col - (side - 1) / 2) / side, 0.0, 2.2 * (row - (side - 1) / 2) / side)
+        objects.append((sphere.transformed(scale=0.9 / side, translate=centre), shrm, "perpixel"))
+    camera = Camera.looking_at(view=(0, -1, 0), radius=1.15, projection="ortho")
+    images = _render_both(objects, [camera], size=(160, 160))
+    _assert_same(images[False][0], images[True][0])
+    # every sphere is drawn, the last one (tag 2^64) included: 64 separate blobs
+    _, blobs = ndimage.label(images[True][0].alpha > 0)
+    assert blobs == MAX_DEFERRED_OBJECTS
