@@ -144,12 +144,13 @@ def frame_costs(r: SHRMRenderer, cameras: list[Camera], rounds: int) -> dict[str
     return ms
 
 
-def empty_frame_ms(size: int, n: int, rounds: int) -> float:
-    """An empty frame: clear, VTK's traversal and the framebuffer blit, with glFinish."""
-    window = make_render_window(size, size)
+def _window_frame_ms(window, n: int, rounds: int) -> float:
+    """Milliseconds of one Render + glFinish of ``window`` (best of ``rounds`` runs of ``n``, after
+    one warm-up frame); the window is finalized."""
+    window.Render()
+    window.WaitForCompletion()
     best = np.inf
     for _ in range(rounds):
-        window.WaitForCompletion()
         t0 = time.perf_counter()
         for _ in range(n):
             window.Render()
@@ -157,6 +158,11 @@ def empty_frame_ms(size: int, n: int, rounds: int) -> float:
         best = min(best, (time.perf_counter() - t0) / n)
     window.Finalize()
     return 1e3 * best
+
+
+def empty_frame_ms(size: int, n: int, rounds: int) -> float:
+    """An empty frame: clear, VTK's traversal and the framebuffer blit, with glFinish."""
+    return _window_frame_ms(make_render_window(size, size), n, rounds)
 
 
 def geometry_floor_ms(mesh: Mesh, camera: Camera, size: int, n: int, rounds: int) -> float:
@@ -186,17 +192,7 @@ def geometry_floor_ms(mesh: Mesh, camera: Camera, size: int, n: int, rounds: int
     renderer = window.GetRenderers().GetFirstRenderer()
     renderer.AddActor(actor)
     camera.apply_to(renderer.GetActiveCamera(), (0.5, 10.0))
-    best = np.inf
-    for _ in range(rounds):
-        window.Render()
-        window.WaitForCompletion()
-        t0 = time.perf_counter()
-        for _ in range(n):
-            window.Render()
-            window.WaitForCompletion()
-        best = min(best, (time.perf_counter() - t0) / n)
-    window.Finalize()
-    return 1e3 * best
+    return _window_frame_ms(window, n, rounds)
 
 
 def quad_ms(shrm: SHRM, mode: str, size: int, n: int, rounds: int) -> float:
