@@ -1,10 +1,29 @@
-"""Shared fixtures: the real data in ../shared/data (skipped with a clear message if absent)."""
+"""Shared fixtures: the real data in ../shared/data (skipped with a clear message if absent), the
+offscreen OpenGL probe, and headless chromium for the WebGL2 pages.
+
+The browser driver: Debian's ``chromium`` (headless, SwiftShader WebGL2 through ANGLE),
+commands on a pipe (``--remote-debugging-pipe``, fds 3 and 4, NUL-separated JSON), no extra
+Python package; the ``chromium`` fixture skips with a message where it is absent (CI installs
+it: ``.ci/apt-packages.txt``). Test modules cannot import a conftest: they get the
+:class:`Browser` class from the ``browser_class`` fixture.
+"""
 
 from __future__ import annotations
 
+import base64
+import fcntl
+import io
+import json
+import os
+import select
+import shutil
+import subprocess
+import time
 from pathlib import Path
 
+import numpy as np
 import pytest
+from PIL import Image
 
 from shrmkit.render.offscreen import probe_offscreen
 
@@ -32,3 +51,146 @@ def offscreen() -> str:
     if not ok:
         pytest.skip(message)
     return message
+
+
+# ------------------------------------------------------------------------------------------
+# headless chromium over the DevTools protocol
+# ------------------------------------------------------------------------------------------
+
+CHROMIUM_FLAGS = ("--headless=new", "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
+                  "--hide-scrollbars", "--mute-audio", "--no-first-run")
+
+
+def chromium_path() -> str | None:
+    for name in ("chromium", "chromium-browser"):
+        path = shutil.which(name)
+        if path:
+            return path
+    return None
+
+
+class Browser:
+    """One headless chromium driven over the DevTools pipe (``FLAGS``: its command-line flags)."""
+
+    FLAGS = CHROMIUM_FLAGS
+
+    def __init__(self, exe: str, width: int, height: int, timeout: float = 60.0, flags: tuple[str, ...] = ()) -> None:
+        to_browser_r, to_browser_w = os.pipe()
+        from_browser_r, from_browser_w = os.pipe()
+        # move the child's ends above fd 4 so that dup2 onto 3 and 4 never closes them first
+        child_r, child_w = (fcntl.fcntl(fd, fcntl.F_DUPFD_CLOEXEC, 10) for fd in (to_browser_r, from_browser_w))
+        os.close(to_browser_r)
+        os.close(from_browser_w)
+
+        def wire() -> None:
+            os.dup2(child_r, 3)
+            os.dup2(child_w, 4)
+
+        self.proc = subprocess.Popen(
+            [exe, *CHROMIUM_FLAGS, *flags, "--remote-debugging-pipe", f"--window-size={width},{height}",
+             "about:blank"],
+            close_fds=False, preexec_fn=wire, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+        )
+        os.close(child_r)
+        os.close(child_w)
+        self.out = os.fdopen(to_browser_w, "wb", buffering=0)
+        self.inp = from_browser_r
+        self.timeout = timeout
+        self.buffer = b""
+        self.last_id = 0
+        page = next(t for t in self.call("Target.getTargets")["targetInfos"] if t["type"] == "page")
+        self.session = self.call("Target.attachToTarget", targetId=page["targetId"], flatten=True)["sessionId"]
+        self.call("Page.enable", session=True)
+        self.call("Emulation.setDeviceMetricsOverride", session=True, width=width, height=height,
+                  deviceScaleFactor=1, mobile=False)
+
+    def _message(self) -> dict:
+        deadline = time.monotonic() + self.timeout
+        while b"\0" not in self.buffer:
+            left = deadline - time.monotonic()
+            if left <= 0 or not select.select([self.inp], [], [], left)[0]:
+                raise TimeoutError("chromium did not answer")
+            chunk = os.read(self.inp, 1 << 20)
+            if not chunk:
+                raise RuntimeError("chromium closed the DevTools pipe")
+            self.buffer += chunk
+        text, self.buffer = self.buffer.split(b"\0", 1)
+        return json.loads(text)
+
+    def call(self, method: str, session: bool = False, **params) -> dict:
+        self.last_id += 1
+        message = {"id": self.last_id, "method": method, "params": params}
+        if session:
+            message["sessionId"] = self.session
+        self.out.write(json.dumps(message).encode() + b"\0")
+        while True:
+            reply = self._message()
+            if reply.get("id") == self.last_id:
+                if "error" in reply:
+                    raise RuntimeError(f"{method}: {reply['error']}")
+                return reply["result"]
+
+    def evaluate(self, expression: str, await_promise: bool = False):
+        result = self.call("Runtime.evaluate", session=True, expression=expression, returnByValue=True,
+                           awaitPromise=await_promise)
+        if "exceptionDetails" in result:
+            raise RuntimeError(f"{expression}: {result['exceptionDetails']}")
+        return result["result"].get("value")
+
+    def wait(self, expression: str, what: str) -> None:
+        deadline = time.monotonic() + self.timeout
+        while not self.evaluate(expression):
+            if time.monotonic() > deadline:
+                raise TimeoutError(f"page never got {what}")
+            time.sleep(0.05)
+
+    def open(self, url: str, element_ids: list[str]) -> dict[str, str]:
+        """Navigate to ``url``, wait until every viewer ``element_ids`` is ready or shows its
+        fallback; their states."""
+        self.call("Page.navigate", session=True, url=url)
+        ids = json.dumps(element_ids)
+        self.wait(f"{ids}.every(id => {{ const r = document.getElementById(id);"
+                  " return !!r && ['ready', 'fallback'].includes(r.dataset.state); })", "every viewer state")
+        return self.evaluate(f"Object.fromEntries({ids}.map(id => [id, document.getElementById(id).dataset.state]))")
+
+    def screenshot(self, selector: str) -> np.ndarray:
+        """The element scrolled into view, two frames later, as a screenshot (H, W, 3) uint8 of its box."""
+        sel = json.dumps(selector)
+        self.evaluate(f"document.querySelector({sel}).scrollIntoView({{block: 'center'}})")
+        self.evaluate("new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))", await_promise=True)
+        box = self.evaluate(f"(() => {{ const b = document.querySelector({sel}).getBoundingClientRect();"
+                            " return [b.x + window.scrollX, b.y + window.scrollY, b.width, b.height]; })()")
+        x, y, w, h = box
+        png = base64.b64decode(self.call("Page.captureScreenshot", session=True, format="png",
+                                         clip={"x": x, "y": y, "width": w, "height": h, "scale": 1},
+                                         captureBeyondViewport=False)["data"])
+        return np.asarray(Image.open(io.BytesIO(png)).convert("RGB"))
+
+    def close(self) -> None:
+        try:
+            self.call("Browser.close")
+        except (RuntimeError, TimeoutError, OSError):
+            pass
+        try:
+            self.proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            self.proc.wait()
+        self.out.close()
+        os.close(self.inp)
+
+
+@pytest.fixture(scope="session")
+def browser_class() -> type[Browser]:
+    """The :class:`Browser` driver (test modules cannot import a conftest)."""
+    return Browser
+
+
+@pytest.fixture(scope="session")
+def chromium() -> str:
+    """Path of the chromium executable; skips the test where it is not installed."""
+    exe = chromium_path()
+    if exe is None:
+        pytest.skip("chromium not installed (Debian package 'chromium', listed in .ci/apt-packages.txt): "
+                    "the WebGL2 pages are not checked in a browser")
+    return exe

@@ -15,15 +15,10 @@ Tests). The browser tests are marked slow and skip with a message where chromium
 from __future__ import annotations
 
 import base64
-import fcntl
 import io
 import json
-import os
 import re
-import select
-import shutil
 import subprocess
-import time
 from pathlib import Path
 
 import numpy as np
@@ -62,136 +57,28 @@ OTHER_MODE = {"distant": "perpixel", "perpixel": "distant"}
 
 
 # ------------------------------------------------------------------------------------------
-# headless chromium over the DevTools protocol (pipe transport, no extra Python package)
+# the view page in headless chromium (the driver: ``Browser`` of tests/conftest.py)
 # ------------------------------------------------------------------------------------------
 
 
-def _chromium() -> str | None:
-    for name in ("chromium", "chromium-browser"):
-        path = shutil.which(name)
-        if path:
-            return path
-    return None
+def _open(browser, url: str) -> str:
+    """Navigate to ``url`` and wait until the viewer is ready or shows the fallback; its state."""
+    return browser.open(url, ["shrm-view"])["shrm-view"]
 
 
-CHROMIUM_FLAGS = ("--headless=new", "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
-                  "--hide-scrollbars", "--mute-audio", "--no-first-run")
-
-
-class Browser:
-    """One headless chromium, commands over fds 3 (to the browser) and 4 (from it), NUL-separated JSON."""
-
-    def __init__(self, exe: str, width: int, height: int, timeout: float = 30.0) -> None:
-        to_browser_r, to_browser_w = os.pipe()
-        from_browser_r, from_browser_w = os.pipe()
-        # move the child's ends above fd 4 so that dup2 onto 3 and 4 never closes them first
-        child_r, child_w = (fcntl.fcntl(fd, fcntl.F_DUPFD_CLOEXEC, 10) for fd in (to_browser_r, from_browser_w))
-        os.close(to_browser_r)
-        os.close(from_browser_w)
-
-        def wire() -> None:
-            os.dup2(child_r, 3)
-            os.dup2(child_w, 4)
-
-        self.proc = subprocess.Popen(
-            [exe, *CHROMIUM_FLAGS, "--remote-debugging-pipe", f"--window-size={width},{height}", "about:blank"],
-            close_fds=False, preexec_fn=wire, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-        )
-        os.close(child_r)
-        os.close(child_w)
-        self.out = os.fdopen(to_browser_w, "wb", buffering=0)
-        self.inp = from_browser_r
-        self.timeout = timeout
-        self.buffer = b""
-        self.last_id = 0
-        page = next(t for t in self.call("Target.getTargets")["targetInfos"] if t["type"] == "page")
-        self.session = self.call("Target.attachToTarget", targetId=page["targetId"], flatten=True)["sessionId"]
-        self.call("Page.enable", session=True)
-        self.call("Emulation.setDeviceMetricsOverride", session=True, width=width, height=height,
-                  deviceScaleFactor=1, mobile=False)
-
-    def _message(self) -> dict:
-        deadline = time.monotonic() + self.timeout
-        while b"\0" not in self.buffer:
-            left = deadline - time.monotonic()
-            if left <= 0 or not select.select([self.inp], [], [], left)[0]:
-                raise TimeoutError("chromium did not answer")
-            chunk = os.read(self.inp, 1 << 20)
-            if not chunk:
-                raise RuntimeError("chromium closed the DevTools pipe")
-            self.buffer += chunk
-        text, self.buffer = self.buffer.split(b"\0", 1)
-        return json.loads(text)
-
-    def call(self, method: str, session: bool = False, **params) -> dict:
-        self.last_id += 1
-        message = {"id": self.last_id, "method": method, "params": params}
-        if session:
-            message["sessionId"] = self.session
-        self.out.write(json.dumps(message).encode() + b"\0")
-        while True:
-            reply = self._message()
-            if reply.get("id") == self.last_id:
-                if "error" in reply:
-                    raise RuntimeError(f"{method}: {reply['error']}")
-                return reply["result"]
-
-    def evaluate(self, expression: str, await_promise: bool = False):
-        result = self.call("Runtime.evaluate", session=True, expression=expression, returnByValue=True,
-                           awaitPromise=await_promise)
-        if "exceptionDetails" in result:
-            raise RuntimeError(f"{expression}: {result['exceptionDetails']}")
-        return result["result"].get("value")
-
-    def _wait(self, expression: str, what: str) -> None:
-        deadline = time.monotonic() + self.timeout
-        while not self.evaluate(expression):
-            if time.monotonic() > deadline:
-                raise TimeoutError(f"page never got {what}")
-            time.sleep(0.02)
-
-    def open(self, url: str) -> str:
-        """Navigate to ``url`` and wait until the viewer is ready or shows the fallback; its state."""
-        self.call("Page.navigate", session=True, url=url)
-        self._wait("(() => { const r = document.getElementById('shrm-view');"
-                   " return !!r && ['ready', 'fallback'].includes(r.dataset.state); })()", "a viewer state")
-        return self.evaluate("document.getElementById('shrm-view').dataset.state")
-
-    def screenshot(self, hash_params: str) -> np.ndarray:
-        """Set the URL hash, wait for the frame drawn for it, return the screenshot (H, W, 3) uint8."""
-        frames = self.evaluate("document.getElementById('shrm-view').dataset.frames")
-        self.evaluate(f"location.hash = {json.dumps(hash_params)}")
-        self._wait(f"document.getElementById('shrm-view').dataset.frames !== {json.dumps(frames)}", "a new frame")
-        self.evaluate("new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))", await_promise=True)
-        png = base64.b64decode(self.call("Page.captureScreenshot", session=True, format="png")["data"])
-        return np.asarray(Image.open(io.BytesIO(png)).convert("RGB"))
-
-    def close(self) -> None:
-        try:
-            self.call("Browser.close")
-        except (RuntimeError, TimeoutError, OSError):
-            pass
-        try:
-            self.proc.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
-            self.proc.wait()
-        self.out.close()
-        os.close(self.inp)
+def _screenshot(browser, hash_params: str) -> np.ndarray:
+    """Set the URL hash, wait for the frame drawn for it, return the screenshot (H, W, 3) uint8."""
+    frames = browser.evaluate("document.getElementById('shrm-view').dataset.frames")
+    browser.evaluate(f"location.hash = {json.dumps(hash_params)}")
+    browser.wait(f"document.getElementById('shrm-view').dataset.frames !== {json.dumps(frames)}", "a new frame")
+    browser.evaluate("new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))", await_promise=True)
+    png = base64.b64decode(browser.call("Page.captureScreenshot", session=True, format="png")["data"])
+    return np.asarray(Image.open(io.BytesIO(png)).convert("RGB"))
 
 
 @pytest.fixture(scope="module")
-def chromium() -> str:
-    exe = _chromium()
-    if exe is None:
-        pytest.skip("chromium not installed (Debian package 'chromium', listed in .ci/apt-packages.txt): "
-                    "the WebGL2 page is not checked in a browser")
-    return exe
-
-
-@pytest.fixture(scope="module")
-def browser(chromium):
-    b = Browser(chromium, SIZE, SIZE)
+def browser(chromium, browser_class):
+    b = browser_class(chromium, SIZE, SIZE, timeout=30.0)
     yield b
     b.close()
 
@@ -254,12 +141,12 @@ def test_screenshots_match_cpu_reference(browser, material_pages, material, mode
     (the page draws an icosphere of 5120 triangles, the reference the analytic sphere); and
     the object is at least twice as far from the other mode's reference."""
     shrm, page, url = material_pages[material]
-    assert browser.open(url + "#ui=0") == "ready"
+    assert _open(browser, url + "#ui=0") == "ready"
     base = page.data["view"]["exposure"]
     errors = []
     for az, el, zoom, dexp in VIEWS:
         exposure = base + dexp
-        shot = browser.screenshot(f"azimuth={az}&elevation={el}&zoom={zoom}&exposure={exposure}&mode={mode}&ui=0")
+        shot = _screenshot(browser, f"azimuth={az}&elevation={el}&zoom={zoom}&exposure={exposure}&mode={mode}&ui=0")
         ref, hit = reference_image(shrm, page, mode, az, el, zoom, exposure)
         other, _ = reference_image(shrm, page, OTHER_MODE[mode], az, el, zoom, exposure)
         band = binary_dilation(hit) & ~binary_erosion(hit)
@@ -281,8 +168,8 @@ def test_spot_on_plus_x_lights_the_right_half_seen_from_minus_y(browser, tmp_pat
     shrm = shrmkit.prefilter(env, "microfacet:sigma=0.2", eps=0.05, size=32)
     page = build_view(shrm, env, still="none", exposure=0.0)
     url = write_view(tmp_path / "spot.html", page_html(page)).resolve().as_uri()
-    assert browser.open(url + "#ui=0") == "ready"
-    shot = browser.screenshot(f"azimuth=-90&elevation=0&mode={mode}&background=0&ui=0")
+    assert _open(browser, url + "#ui=0") == "ready"
+    shot = _screenshot(browser, f"azimuth=-90&elevation=0&mode={mode}&background=0&ui=0")
     lum = shot.astype(np.float64).sum(axis=-1)
     half = SIZE // 2
     assert lum[:, half:].sum() > 5.0 * lum[:, :half].sum()
@@ -294,7 +181,7 @@ def test_spot_on_plus_x_lights_the_right_half_seen_from_minus_y(browser, tmp_pat
 def test_javascript_sh_match_analysis_sh(browser, material_pages) -> None:
     """ShrmView.realSH (the recurrence the shaders use) equals analysis.sh.real_sph_harm to 1e-12 up to P = 20."""
     _, _, url = material_pages[MATERIALS[0]]
-    browser.open(url + "#ui=0")
+    _open(browser, url + "#ui=0")
     rng = np.random.default_rng(3)
     v = rng.normal(size=(6, 3))
     v /= np.linalg.norm(v, axis=1, keepdims=True)
@@ -304,12 +191,12 @@ def test_javascript_sh_match_analysis_sh(browser, material_pages) -> None:
 
 
 @pytest.mark.slow
-def test_without_webgl2_the_page_shows_the_still_image(chromium, sky, tmp_path) -> None:
+def test_without_webgl2_the_page_shows_the_still_image(chromium, browser_class, sky, tmp_path) -> None:
     """With the 3D APIs disabled the viewer falls back to the embedded PNG (DOM after the scripts ran)."""
     shrm = shrmkit.prefilter(sky, "phong:s=32", eps=0.05, size=32)
     page = build_view(shrm, sky, still="cpu")
     url = write_view(tmp_path / "still.html", page_html(page)).resolve().as_uri()
-    dom = subprocess.run([chromium, *CHROMIUM_FLAGS, "--disable-3d-apis", "--disable-webgl", "--dump-dom", url],
+    dom = subprocess.run([chromium, *browser_class.FLAGS, "--disable-3d-apis", "--disable-webgl", "--dump-dom", url],
                          capture_output=True, text=True, timeout=60).stdout
     root = re.search(r'<div class="shrm-view"[^>]*>', dom)
     assert root is not None, dom[:500]
@@ -450,7 +337,7 @@ def test_first_frame_fills_the_canvas_without_interaction(browser, material_page
     """A page opened as is (no hash change, no resize, no input) draws at the canvas's laid-out
     size: the first frame used to be drawn while the canvas was hidden, leaving it 1 × 1."""
     _, _, url = material_pages[MATERIALS[0]]
-    assert browser.open(url) == "ready"
+    assert _open(browser, url) == "ready"
     browser.evaluate("new Promise(r => setTimeout(() => requestAnimationFrame(r), 300))", await_promise=True)
     width, height = browser.evaluate(
         "(() => { const c = document.querySelector('#shrm-view canvas'); return [c.width, c.height]; })()")

@@ -1,7 +1,7 @@
 """The live WebGL2 previews in report.html (``explorer.live_views``, ``html.report_html``).
 
 A quick report under two environments is written with the report writer and opened from
-``file://`` in headless chromium (SwiftShader WebGL2; ``conftest.Browser``). References: the
+``file://`` in headless chromium (SwiftShader WebGL2; ``Browser`` of tests/conftest.py). References: the
 CPU reference renderer (``render.cpu_reference``: analytic sphere, the bilinear lookup of
 ``SHRM.view_map`` for the page's ``distant`` mode) of the coefficients and environment *as the
 page stores them* (decoded from its JSON document: half floats, reduced to the budget), for the
