@@ -42,6 +42,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from importlib import resources
 from typing import Any
 
 import numpy as np
@@ -213,37 +214,13 @@ def sh_glsl(lmax: int) -> str:
     return "\n".join(lines) + "\n"
 
 
-LATLONG_GLSL = """
-// bilinear lat-long lookup set-up (brdf_io.latlong.bilinear_lookup) on an H x W tile:
-// texel columns x0, x1 (phi wraps), rows y0, y1 (theta clamped to the first/last row centre),
-// weights f = (fx, fy)
-void latlong_setup(vec3 d, int H, int W, out ivec4 idx, out vec2 f) {
-  const float PI = 3.14159265358979;
-  float rxy = length(d.xy);
-  float theta = atan(rxy, d.z);
-  float phi = (rxy > 0.0) ? atan(d.y, d.x) : 0.0;
-  if (phi < 0.0) phi += 2.0 * PI;
-  float yy = clamp(theta * float(H) / PI - 0.5, 0.0, float(H) - 1.0);
-  float xx = phi * float(W) / (2.0 * PI) - 0.5;
-  float y0f = min(floor(yy), float(max(H - 2, 0)));
-  float x0f = floor(xx);
-  int x0 = int(x0f);
-  x0 = x0 - W * int(floor(float(x0) / float(W)));
-  int x1 = x0 + 1;
-  if (x1 >= W) x1 -= W;
-  int y0 = int(y0f);
-  int y1 = min(y0 + 1, H - 1);
-  idx = ivec4(x0, x1, y0, y1);
-  f = vec2(xx - x0f, yy - y0f);
-}
+#: The bilinear lat-long lookup of ``brdf_io.latlong.bilinear_lookup`` in GLSL: ``latlong_setup``
+#: and ``latlong_fetch`` of the WebGL viewer's ``render/webgl/latlong.glsl`` (one source for both
+#: renderers), and ``shrm_fetch``, the fetch from the sampler ``shrmTex``.
+LATLONG_GLSL = resources.files(__package__).joinpath("webgl").joinpath("latlong.glsl").read_text(
+    encoding="utf-8") + """
 // bilinear fetch from shrmTex at tile offset o (texel units)
 vec3 shrm_fetch(ivec2 o, ivec4 idx, vec2 f) {
-  vec3 t00 = texelFetch(shrmTex, o + ivec2(idx.x, idx.z), 0).rgb;
-  vec3 t01 = texelFetch(shrmTex, o + ivec2(idx.y, idx.z), 0).rgb;
-  vec3 t10 = texelFetch(shrmTex, o + ivec2(idx.x, idx.w), 0).rgb;
-  vec3 t11 = texelFetch(shrmTex, o + ivec2(idx.y, idx.w), 0).rgb;
-  vec3 top = t00 * (1.0 - f.x) + t01 * f.x;
-  vec3 bottom = t10 * (1.0 - f.x) + t11 * f.x;
-  return top * (1.0 - f.y) + bottom * f.y;
+  return latlong_fetch(shrmTex, o, idx, f);
 }
 """

@@ -1,7 +1,7 @@
-// Lat-long bilinear lookup: the rule of brdf_io.latlong.bilinear_lookup, as render/glsl.py
-// (LATLONG_GLSL) does it for the VTK shader. Four exact texels by texelFetch, weights in
-// float32: phi wraps with no seam, theta is clamped to the first and last row centres,
-// theta = atan(|d_xy|, d_z) stays accurate at the poles. No hardware filtering, no mipmaps.
+// Lat-long bilinear lookup: the rule of brdf_io.latlong.bilinear_lookup, for the WebGL viewer
+// and, read by render/glsl.py (LATLONG_GLSL), for the VTK shader. Four exact texels by
+// texelFetch, weights in float32: phi wraps with no seam, theta is clamped to the first and
+// last row centres, theta = atan(|d_xy|, d_z) stays accurate at the poles. No hardware filtering, no mipmaps.
 // Direction d is in the z-up frame; row i of an H x W map is at theta = (i + 1/2) pi / H,
 // column j at phi = 2 pi (j + 1/2) / W; texel (x, y) is row y, column x.
 void latlong_setup(vec3 d, int H, int W, out ivec4 idx, out vec2 f) {
