@@ -18,7 +18,9 @@ import os
 import select
 import shutil
 import subprocess
+import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -51,6 +53,31 @@ def offscreen() -> str:
     if not ok:
         pytest.skip(message)
     return message
+
+
+def _finishes(call: Callable[[], object], seconds: float = 10.0) -> tuple[bool, BaseException | None]:
+    """Run ``call()`` in a daemon thread for at most ``seconds``: (finished, the exception it raised
+    or None). A reader that blocks (a FIFO) or never ends (/dev/zero) shows as not finished."""
+    result: list[BaseException | None] = []
+
+    def target() -> None:
+        try:
+            call()
+            result.append(None)
+        except BaseException as err:  # noqa: BLE001 - reported to the test
+            result.append(err)
+
+    thread = threading.Thread(target=target, daemon=True)
+    thread.start()
+    thread.join(seconds)
+    return bool(result), (result[0] if result else None)
+
+
+@pytest.fixture(scope="session")
+def finishes() -> Callable[..., tuple[bool, BaseException | None]]:
+    """``finishes(call, seconds=10)``: run ``call`` in a thread with a time limit, (finished,
+    exception or None) — for readers that must refuse special files at once."""
+    return _finishes
 
 
 # ------------------------------------------------------------------------------------------

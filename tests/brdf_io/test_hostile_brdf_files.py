@@ -14,7 +14,6 @@ import json
 import math
 import os
 import struct
-import threading
 import tracemalloc
 import zipfile
 from collections.abc import Callable
@@ -118,24 +117,6 @@ def _small_peak(load: Callable[[], object], limit_bytes: int = 64 * 2**20) -> No
     finally:
         tracemalloc.stop()
     assert peak < limit_bytes, f"peak {peak / 2**20:.0f} MiB"
-
-
-def _in_thread(load: Callable[[], object], timeout: float = 10.0) -> BaseException | None:
-    """Run ``load`` in a daemon thread; the exception it raised (fails the test on a hang)."""
-    outcome: list[BaseException | None] = []
-
-    def target() -> None:
-        try:
-            load()
-            outcome.append(None)
-        except BaseException as err:  # noqa: BLE001 - returned to the test
-            outcome.append(err)
-
-    thread = threading.Thread(target=target, daemon=True)
-    thread.start()
-    thread.join(timeout)
-    assert not thread.is_alive(), f"still reading after {timeout} s"
-    return outcome[0]
 
 
 # ------------------------------------------------------------------ 1. npz declared sizes
@@ -527,7 +508,7 @@ def _loader(suffix: str) -> Callable[[Path], object]:
 
 @pytest.mark.parametrize("suffix", _SUFFIXES)
 @pytest.mark.parametrize("kind", ["fifo", "devzero", "folder", "empty"])
-def test_special_and_empty_files_are_refused_quickly(tmp_path, suffix, kind):
+def test_special_and_empty_files_are_refused_quickly(tmp_path, suffix, kind, finishes):
     path = tmp_path / f"x{suffix}"
     if kind == "fifo":
         os.mkfifo(path)
@@ -539,7 +520,8 @@ def test_special_and_empty_files_are_refused_quickly(tmp_path, suffix, kind):
         path.mkdir()
     else:
         path.write_bytes(b"")
-    err = _in_thread(lambda: _loader(suffix)(path))
+    finished, err = finishes(lambda: _loader(suffix)(path))
+    assert finished, f"still reading {path.name} after 10 s"
     assert isinstance(err, BadInputError), repr(err)
     assert str(path) in str(err) and "\n" not in str(err)
 

@@ -12,7 +12,6 @@ from __future__ import annotations
 import os
 import re
 import signal
-import threading
 import time
 import tracemalloc
 from contextlib import contextmanager
@@ -441,31 +440,16 @@ def test_bad_pfm(tmp_path, content, message):
 
 
 # ------------------------------------------------------------------------------------- special files
-def _finishes(call, seconds: float = 10.0):
-    """Run call() in a thread; return (finished, exception)."""
-    result: list[BaseException | None] = []
-
-    def target():
-        try:
-            call()
-            result.append(None)
-        except BaseException as err:  # noqa: BLE001 - reported to the test
-            result.append(err)
-
-    thread = threading.Thread(target=target, daemon=True)
-    thread.start()
-    thread.join(seconds)
-    return bool(result), (result[0] if result else None)
 
 
-def test_fifo_and_device_are_refused_at_once(tmp_path):
+def test_fifo_and_device_are_refused_at_once(tmp_path, finishes):
     """limits.read_bytes: only regular files; a FIFO would block, /dev/zero never ends."""
     fifo = tmp_path / "x.hdr"
     os.mkfifo(fifo)
     zero = tmp_path / "x.pfm"
     zero.symlink_to("/dev/zero")
     for path, reader, message in ((fifo, read_hdr, "FIFO"), (zero, read_pfm, "device")):
-        finished, error = _finishes(lambda p=path, r=reader: r(p))
+        finished, error = finishes(lambda p=path, r=reader: r(p))
         if not finished:  # unblock the reader before failing
             with open(path, "wb"):
                 pass
