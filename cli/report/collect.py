@@ -225,7 +225,7 @@ def unique_names(names: list[str]) -> list[str]:
     return out
 
 
-def _environments(brdf: BRDF, options: ReportOptions, choices: list[OrderChoice], progress: Progress | None,
+def _environments(brdf: BRDF, options: ReportOptions, choices: dict[float, OrderChoice], progress: Progress | None,
                   nthreads: int = 0):
     # the headline measured error: pairs inside the view limit (the sampler of `shrm compare`)
     R, V, _ = sample_pairs(options.n_pairs, seed=options.seed, max_view_deg=options.max_view_deg)
@@ -254,15 +254,13 @@ def _environments(brdf: BRDF, options: ReportOptions, choices: list[OrderChoice]
             "reference_seconds": ref_seconds,
         }
         # the main tolerance last: its SHRM is kept (previews), so no other map is made beside it
-        by_tol = dict(zip(options.all_tolerances, choices, strict=True))
         order = [t for t in options.all_tolerances if t != options.eps] + [options.eps]
         rows_before = len(speed_rows)
         for tol in order:
-            choice = by_tol[tol]
             _stage(progress, f"prefilter {env.name} eps={tol:g}")
             shrm = prefilter(env, brdf, eps=tol, max_F=options.max_F, max_P=options.max_P, window=options.window,
                              criterion=options.criterion, max_view_deg=options.max_view_deg, nthreads=nthreads,
-                             orders=choice)
+                             orders=choices[tol])
             err = relative_rms(shrm.radiance(R, V), reference)  # clamped at 0, as rendered
             bands = beside_measured(band_relative_rms(shrm.radiance(Rb, Vb), reference_b, theta_b, BAND_EDGES,
                                                       weight_b), shrm.meta["view_bands"])
@@ -444,8 +442,9 @@ def collect_report(
     analysed, analysis_of, analysis_note = _analysis_brdf(brdf, fit_entries, fit_results)
     _stage(progress, "orders")
     order_rows, eps_table, choices = _orders(analysed, options)
-    main_choice = next(c for c in choices if c.tolerance == options.eps)
-    env_entries, speed_rows, main_shrms = _environments(analysed, options, choices, progress, nthreads)
+    by_tolerance = dict(zip(options.all_tolerances, choices, strict=True))
+    main_choice = by_tolerance[options.eps]
+    env_entries, speed_rows, main_shrms = _environments(analysed, options, by_tolerance, progress, nthreads)
     _stage(progress, "checks")
     checks = data_checks(brdf, analysed, seed=options.seed, albedo_nodes=options.albedo_nodes)
     _stage(progress, "preview")
