@@ -297,16 +297,10 @@ class SHRMRenderer:
     def _deferred_actors(self, actor, tex, shading: Shading, index: int) -> _Deferred:
         """The geometry-pass actor (same polydata as ``actor``) and the screen quad of object ``index``."""
         from vtkmodules.util.numpy_support import numpy_to_vtk  # lazy: VTK
-        from vtkmodules.vtkRenderingCore import vtkActor  # lazy: VTK
-        from vtkmodules.vtkRenderingOpenGL2 import vtkOpenGLPolyDataMapper  # lazy: VTK
 
         scale = float(2.0 ** (index + 1))
-        mapper = vtkOpenGLPolyDataMapper()  # its own mapper: its own shader program
-        mapper.SetInputData(actor.GetMapper().GetInput())
-        mapper.SetVBOShiftScaleMethod(0)
-        mapper.ScalarVisibilityOff()
-        gbuffer = vtkActor()
-        gbuffer.SetMapper(mapper)
+        # its own mapper (its own shader program) on the same polydata
+        gbuffer = self._new_actor(actor.GetMapper().GetInput())
         self._shader(gbuffer, vertex_replacements(), gbuffer_fragment_replacements(), scale)
         self._renderer.AddActor(gbuffer)
 
@@ -317,13 +311,8 @@ class SHRMRenderer:
         poly = _polydata(quad, {})
         points = np.zeros((4, 3), dtype=np.float32)
         poly.GetPoints().SetData(numpy_to_vtk(points, deep=0))  # shares ``points``
-        qmapper = vtkOpenGLPolyDataMapper()
-        qmapper.SetInputData(poly)
-        qmapper.SetVBOShiftScaleMethod(0)
-        qmapper.ScalarVisibilityOff()
-        qmapper.AddObserver("StartEvent", self._screen_pass_state)
-        screen = vtkActor()
-        screen.SetMapper(qmapper)
+        screen = self._new_actor(poly)
+        screen.GetMapper().AddObserver("StartEvent", self._screen_pass_state)
         screen.GetProperty().SetTexture("shrmTex", tex)
         screen.GetProperty().SetTexture("shrmGbuf", self._gbuffer)
         self._shader(screen, shading.vertex, shading.deferred, scale)
@@ -333,7 +322,23 @@ class SHRMRenderer:
         return _Deferred(gbuffer, screen, points)
 
     @staticmethod
-    def _shader(actor, vertex: list[tuple[str, str]], fragment: list[tuple[str, str]], scale: float) -> None:
+    def _new_actor(polydata):  # -> vtkActor
+        """An actor drawing ``polydata`` through its own mapper, world coordinates as given."""
+        from vtkmodules.vtkRenderingCore import vtkActor  # lazy: VTK
+        from vtkmodules.vtkRenderingOpenGL2 import vtkOpenGLPolyDataMapper  # lazy: VTK
+
+        mapper = vtkOpenGLPolyDataMapper()
+        mapper.SetInputData(polydata)
+        mapper.SetVBOShiftScaleMethod(0)  # DISABLE_SHIFT_SCALE: vertexMC must be world coordinates
+        mapper.ScalarVisibilityOff()
+        actor = vtkActor()
+        actor.SetMapper(mapper)
+        return actor
+
+    @staticmethod
+    def _shader(actor, vertex: list[tuple[str, str]], fragment: list[tuple[str, str]],
+                scale: float | None = None) -> None:
+        """Shader replacements and the uniforms every frame sets (``shrmGScale``: a deferred pass's tag)."""
         sp = actor.GetShaderProperty()
         for tag, text in vertex:
             sp.AddVertexShaderReplacement(tag, True, text, False)
@@ -343,7 +348,8 @@ class SHRMRenderer:
         uni.SetUniform3f("shrmEye", [0.0, 0.0, 0.0])
         uni.SetUniform3f("shrmViewDir", [1.0, 0.0, 0.0])
         uni.SetUniformi("shrmOrtho", 0)
-        uni.SetUniformf("shrmGScale", scale)
+        if scale is not None:
+            uni.SetUniformf("shrmGScale", scale)
 
     def _quad_corners(self, camera: Camera, far: float) -> np.ndarray:
         """(4, 3) world corners of a quad filling the view (with a margin) at depth far / 1.004."""
@@ -358,30 +364,15 @@ class SHRMRenderer:
     def _actor(mesh: Mesh, shading: Shading):  # -> (vtkActor, vtkTexture, vtkImageData, buffer)
         """The one VTK set-up of every mode: mapper, actor, texture, shader replacements, uniforms."""
         from vtkmodules.vtkCommonDataModel import vtkDataObject  # lazy: VTK is loaded only when rendering
-        from vtkmodules.vtkRenderingCore import vtkActor  # lazy: VTK
-        from vtkmodules.vtkRenderingOpenGL2 import vtkOpenGLPolyDataMapper  # lazy: VTK
 
         tex, data, buf = _float_texture(shading.texture)
-        mapper = vtkOpenGLPolyDataMapper()
-        mapper.SetInputData(_polydata(mesh, shading.attributes))
-        mapper.SetVBOShiftScaleMethod(0)  # DISABLE_SHIFT_SCALE: vertexMC must be world coordinates
-        mapper.ScalarVisibilityOff()
+        actor = SHRMRenderer._new_actor(_polydata(mesh, shading.attributes))
         for name in shading.attributes:
-            mapper.MapDataArrayToVertexAttribute(
+            actor.GetMapper().MapDataArrayToVertexAttribute(
                 name, _attribute_array(name), vtkDataObject.FIELD_ASSOCIATION_POINTS, -1
             )
-        actor = vtkActor()
-        actor.SetMapper(mapper)
         actor.GetProperty().SetTexture("shrmTex", tex)
-        sp = actor.GetShaderProperty()
-        for tag, text in shading.vertex:
-            sp.AddVertexShaderReplacement(tag, True, text, False)
-        for tag, text in shading.fragment:
-            sp.AddFragmentShaderReplacement(tag, True, text, False)
-        uni = sp.GetFragmentCustomUniforms()
-        uni.SetUniform3f("shrmEye", [0.0, 0.0, 0.0])
-        uni.SetUniform3f("shrmViewDir", [1.0, 0.0, 0.0])
-        uni.SetUniformi("shrmOrtho", 0)
+        SHRMRenderer._shader(actor, shading.vertex, shading.fragment)
         return actor, tex, data, buf
 
     def update_view_maps(self, camera: Camera) -> None:
