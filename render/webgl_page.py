@@ -60,6 +60,7 @@ from .offscreen import probe_offscreen
 from .output import TONE_MAPS, composite, environment_background, to_8bit
 from .pipeline import render_frames
 from .preview import png_bytes, preview_exposure, unit_mesh
+from .shader import atlas_layout, coefficient_atlas
 
 __all__ = [
     "VIEW_MODES",
@@ -309,14 +310,8 @@ def _lookup(maps: np.ndarray, dirs: np.ndarray, chunk: int = 16) -> np.ndarray:
     return out
 
 
-def _layout(n: int) -> tuple[int, int]:
-    """(columns, rows) of the tile grid of n maps (``render.shader.atlas_layout``)."""
-    cols = max(1, math.ceil(math.sqrt(n)))
-    return cols, math.ceil(n / cols)
-
-
 def _atlas_fits(P: int, h: int, w: int, max_bytes: int, max_edge: int) -> bool:
-    cols, rows = _layout((P + 1) ** 2)
+    cols, rows = atlas_layout((P + 1) ** 2)
     return rows * h * cols * w * 6 <= max_bytes and max(rows * h, cols * w) <= max_edge
 
 
@@ -326,7 +321,7 @@ def fit_coefficients(
     """The SHRM's coefficient maps at the (rows, P) of least estimated error within ``max_bytes``.
 
     The maps ((P+1)², H, W, 3) are stored as a half-float RGB atlas (6 bytes a texel, tiles as
-    ``render.shader.coefficient_atlas``) whose edges must not exceed ``max_edge``. Candidates:
+    (:func:`~shrmkit.render.shader.coefficient_atlas`) whose edges must not exceed ``max_edge``. Candidates:
     for each P' ≤ P, the largest number of rows h ≤ H (at least ``min_rows``, width in the
     same proportion) whose atlas fits, the maps resampled to it by solid-angle-weighted area
     means. Each candidate's error energy (:class:`CoefficientFit`) is estimated on ``samples``
@@ -351,7 +346,7 @@ def fit_coefficients(
         return max(1, round(h * W / H))
 
     def rows_for(p: int) -> int:
-        cols, rows = _layout((p + 1) ** 2)
+        cols, rows = atlas_layout((p + 1) ** 2)
         h = min(H, int(math.sqrt(max_bytes / (6.0 * cols * rows * W / H))) + 1, max_edge // rows)
         while h > 0 and not _atlas_fits(p, h, width(h), max_bytes, max_edge):
             h -= 1
@@ -411,17 +406,6 @@ def _half(values: np.ndarray) -> tuple[np.ndarray, float]:
     scale = 2.0 ** math.floor(math.log2(HALF_TARGET / peak)) if peak > 0 and math.isfinite(peak) else 1.0
     scaled = (np.asarray(values, np.float64) * scale).astype("<f2")
     return scaled, scale
-
-
-def _atlas(maps: np.ndarray) -> np.ndarray:
-    """Tile (n, h, w, 3) maps into the atlas (rows·h, cols·w, 3) of ``render.shader.coefficient_atlas``."""
-    n, h, w, _ = maps.shape
-    cols, rows = _layout(n)
-    out = np.zeros((rows * h, cols * w, 3), maps.dtype)
-    for c in range(n):
-        r, k = divmod(c, cols)
-        out[r * h:(r + 1) * h, k * w:(k + 1) * w] = maps[c]
-    return out
 
 
 def _page_mesh(mesh: Mesh, max_bytes: int) -> tuple[Mesh, str | None]:
@@ -703,9 +687,9 @@ def build_view(
             parts.append(f"view order P {shrm.P} -> {fit.P} ({(fit.P + 1) ** 2} of {(shrm.P + 1) ** 2} maps)")
         notes.append(f"reduced to fit the {budget.page_bytes / 2**20:.3g} MiB page budget: " + ", ".join(parts)
                      + f"; estimated added error {100 * fit.added_rel_rms:.2g} % relative RMS over all (R, V)")
-    atlas = _atlas(fit.coeffs)
+    atlas = coefficient_atlas(fit.coeffs)
     half, scale = _half(atlas)
-    cols, rows = _layout((fit.P + 1) ** 2)
+    cols, rows = atlas_layout((fit.P + 1) ** 2)
     h, w = fit.coeffs.shape[1:3]
     stored = (half.astype(np.float32) / np.float32(scale)).astype(np.float32)
     stored_maps = np.stack([stored[(c // cols) * h:(c // cols + 1) * h, (c % cols) * w:(c % cols + 1) * w]
