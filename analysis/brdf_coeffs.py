@@ -15,13 +15,25 @@ SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
-from ..brdf_io.reparam import ReparamBRDF
+from ..brdf_io.reparam import ReparamBRDF, ReparamGrid
 from .sh import legendre_f
 
-__all__ = ["BRDFCoefficients", "rho_lpq", "rho_lpq_direct"]
+__all__ = ["BRDFCoefficients", "rho_lpq", "rho_lpq_direct", "weighted_legendre"]
+
+
+@lru_cache(maxsize=16)
+def weighted_legendre(lmax: int, mmax: int, n_nodes: int) -> np.ndarray:
+    """f_lm(θ_j) w_j at the ``n_nodes`` Gauss–Legendre nodes of a :class:`ReparamGrid` axis
+    (θ ascending, weights folded in): (lmax+1, mmax+1, n_nodes), read-only, computed once per
+    size (the θ_i' pass of eq. 13 and of the view profile reuse it on every grid of a search)."""
+    x, w = ReparamGrid(n_nodes, 1, 1).theta_i()
+    out = legendre_f(lmax, mmax, x) * w
+    out.setflags(write=False)
+    return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -68,8 +80,6 @@ def rho_lpq(reparam: ReparamBRDF, F0: int, P0: int) -> BRDFCoefficients:
     grid = reparam.grid
     if grid.n_theta_i <= F0 or grid.n_theta_o <= P0 or grid.n_phi <= 2 * P0:
         raise ValueError(f"grid {grid} too coarse for orders F0={F0}, P0={P0}")
-    xi, wi = grid.theta_i()
-    xo, wo = grid.theta_o()
     # pass 1: Σ_φ ρ̂ cos(qφ_k) Δφ = Re FFT (φ_k = 2πk/n), in blocks of θ_i' rows (the complex
     # transform of a whole fine grid would double its memory)
     values = reparam.values
@@ -80,8 +90,8 @@ def rho_lpq(reparam: ReparamBRDF, F0: int, P0: int) -> BRDFCoefficients:
         g[r0 : r0 + rows] = block * (2.0 * np.pi / grid.n_phi)
     # pass 2: θ_o' sum with f_pq(θ_o') → h[i, p, q, c]; pass 3: θ_i' sum with f_lq(θ_i')
     # and the 2π of eq. 13 — one matrix product per q
-    fo = legendre_f(P0, P0, xo) * wo  # (P0+1, P0+1, n_o), weights folded in
-    fi = legendre_f(F0, P0, xi) * wi  # (F0+1, P0+1, n_i)
+    fo = weighted_legendre(P0, P0, grid.n_theta_o)  # (P0+1, P0+1, n_o), weights folded in
+    fi = weighted_legendre(F0, P0, grid.n_theta_i)  # (F0+1, P0+1, n_i)
     n_i = g.shape[0]
     coeffs = np.zeros((F0 + 1, P0 + 1, P0 + 1, 3))
     for q in range(P0 + 1):

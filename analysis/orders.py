@@ -49,11 +49,12 @@ from .view_bands import (
     DEFAULT_CRITERION,
     DEFAULT_MAX_VIEW_DEG,
     ViewProfile,
-    band_eps_table,
+    band_eps_column,
     brdf_view_bands,
     check_criterion,
     check_max_view,
     fit_view_coefficients,
+    resolution_tail,
     view_profile,
 )
 
@@ -86,27 +87,32 @@ class OrderChoice:
         Requested tolerance.
     table
         ε[F, P] for F <= F0, P <= P0 of the rule (``criterion``), worst channel. For
-        ``"bands"`` the columns the rule did not need (P beyond the first column that meets
-        the tolerance) are fitted when ``table`` is first read (:meth:`eps_at` reads one
-        entry without that).
+        ``"bands"`` the columns the rule did not need are fitted when ``table`` is first read
+        (:meth:`eps_at` reads one entry without that).
     searched_table
         ``table`` as the search left it: NaN in the columns it did not need.
     capped
         True when the tolerance could not be met within ``max_F``/``max_P``; (F, P) are
         then the caps and ``eps`` what they achieve.
     converged
-        True when a 1.5× finer quadrature grid gave the same choice (ΔF <= 1, same P).
+        True when the quadrature grid resolves the choice: under ``"bands"``, the energy just
+        above the chosen orders is at most :data:`RESOLVED_TAIL` × ε in every band inside the
+        view limit (:func:`~shrmkit.analysis.view_bands.resolution_tail`), or a 1.5× finer grid
+        agrees (same P, and F within 1 or ε at the choice within :data:`AGREE_FRACTION` × ε);
+        under ``"rh02"``, a 1.5× finer grid gives the same choice (ΔF <= 1, same P).
     message
         Human-readable notes (caps, convergence, missing data).
     coefficients
-        The projected ρ̂_lpq (RH02 eq. 13) on the final grid; :meth:`coefficients_for` gives
-        the ones a representation at view order P uses.
+        The projected ρ̂_lpq (RH02 eq. 13) on the final grid (computed on first use under
+        ``"bands"``, whose rule needs only the profile); :meth:`coefficients_for` gives the ones
+        a representation at view order P uses.
     criterion, max_view_deg
         The order rule and its view limit (degrees of θ_v).
     profile
         ρ̂ resolved by view band (:class:`~shrmkit.analysis.view_bands.ViewProfile`).
     rh02_table
-        RH02's unweighted ε[F, P] (the ``"rh02"`` table), whatever the criterion.
+        RH02's unweighted ε[F, P] (the ``"rh02"`` table), whatever the criterion (computed on
+        first use under ``"bands"``).
     """
 
     F: int
@@ -120,11 +126,9 @@ class OrderChoice:
     seconds: float
     grid: ReparamGrid
     n_without_data: int
-    coefficients: BRDFCoefficients = field(repr=False)
     criterion: str = DEFAULT_CRITERION
     max_view_deg: float = DEFAULT_MAX_VIEW_DEG
-    profile: ViewProfile | None = field(default=None, repr=False)
-    rh02_table: np.ndarray | None = field(default=None, repr=False)
+    source: _GridData | None = field(default=None, repr=False)
 
     @property
     def F0(self) -> int:
@@ -134,31 +138,51 @@ class OrderChoice:
     def P0(self) -> int:
         return self.searched_table.shape[1] - 1
 
+    @property
+    def coefficients(self) -> BRDFCoefficients:
+        return self.source.coefficients
+
+    @property
+    def profile(self) -> ViewProfile:
+        return self.source.profile
+
+    @property
+    def rh02_table(self) -> np.ndarray:
+        return self.source.rh02_table
+
     @cached_property
     def table(self) -> np.ndarray:
         """The whole ε[F, P] table, (F0+1, P0+1) (computed once, on first use)."""
-        if not np.isnan(self.searched_table).any() or self.profile is None:
+        if not np.isnan(self.searched_table).any():
             return self.searched_table
-        return band_eps_table(self.profile, self.coefficients, self.max_view_deg)
+        out = np.empty_like(self.searched_table)
+        for p in range(self.P0 + 1):
+            out[:, p] = self.source.column(p)
+        return out
 
     def eps_at(self, F: int, P: int) -> float:
         """ε[F, P] of the rule's table (F <= F0, P <= P0), without filling the whole table."""
         value = self.searched_table[F, P]
-        return float(self.table[F, P] if np.isnan(value) else value)
+        return float(self.source.column(P)[F] if np.isnan(value) else value)
 
     @property
     def eps_rh02(self) -> float:
         """RH02's unweighted ε at the chosen (F, P) (energy fraction over all views)."""
-        if self.rh02_table is None:
-            return self.eps_at(self.F, self.P)
         return float(self.rh02_table[self.F, self.P])
+
+    @cached_property
+    def _fitted(self) -> dict[int, BRDFCoefficients]:
+        return {}
 
     def coefficients_for(self, P: int) -> BRDFCoefficients:
         """ρ̂_lpq for a representation of view order ``P``: the projection (``"rh02"``) or the
-        fit to the views inside the limit (``"bands"``, depends on P)."""
-        if self.criterion == "rh02" or self.profile is None:
+        fit to the views inside the limit (``"bands"``, depends on P; computed once per P)."""
+        if self.criterion == "rh02":
             return self.coefficients
-        return fit_view_coefficients(self.profile, self.coefficients, int(P), self.max_view_deg)
+        P = int(P)
+        if P not in self._fitted:
+            self._fitted[P] = fit_view_coefficients(self.profile, None, P, self.max_view_deg)
+        return self._fitted[P]
 
     def view_bands(self, F: int | None = None, P: int | None = None) -> list[dict]:
         """Per θ_v band at (F, P) (default: the chosen orders) under a point light:
@@ -166,8 +190,6 @@ class OrderChoice:
         (:func:`~shrmkit.analysis.view_bands.brdf_view_bands`)."""
         F = self.F if F is None else int(F)
         P = self.P if P is None else int(P)
-        if self.profile is None:
-            return []
         return brdf_view_bands(self.profile, self.coefficients_for(P), F, P, self.max_view_deg)
 
 
@@ -222,30 +244,131 @@ def choose_from_table(table: np.ndarray, tolerance: float) -> tuple[int, int, bo
     return F, P, True
 
 
-@dataclass(frozen=True, eq=False)
-class _OnGrid:
-    """Everything one quadrature grid gives: coefficients, profile, both tables."""
+class _GridData:
+    """Everything one quadrature grid gives, each part computed when first needed: the view
+    profile (the ``"bands"`` rule's only input), its ε columns one view order P at a time, and
+    the 3-D reparameterization with RH02's projected ρ̂_lpq and unweighted table (the ``"rh02"``
+    rule, or a reader of :attr:`OrderChoice.coefficients`)."""
 
-    grid: ReparamGrid
-    coefficients: BRDFCoefficients
-    profile: ViewProfile
-    rh02_table: np.ndarray
-    table: np.ndarray
-    missing: int
+    def __init__(self, brdf: BRDF, grid: ReparamGrid, max_F: int, max_P: int, criterion: str,
+                 max_view_deg: float) -> None:
+        self.brdf, self.grid = brdf, grid
+        self.F0 = min(grid.n_theta_i - 1, max_F)
+        self.P0 = min(grid.n_theta_o - 1, (grid.n_phi - 1) // 2, max_P)
+        self.criterion, self.max_view_deg = criterion, max_view_deg
+        self._columns: dict[int, np.ndarray] = {}
+
+    @cached_property
+    def profile(self) -> ViewProfile:
+        return view_profile(self.brdf, self.grid, self.F0, self.P0)
+
+    @cached_property
+    def reparam(self) -> ReparamBRDF:
+        return reparameterize(self.brdf, self.grid)
+
+    @cached_property
+    def coefficients(self) -> BRDFCoefficients:
+        """RH02's projected ρ̂_lpq (eq. 13) on this grid."""
+        return rho_lpq(self.reparam, self.F0, self.P0)
+
+    @cached_property
+    def rh02_table(self) -> np.ndarray:
+        """RH02's unweighted ε[F, P] (raises for an all-zero BRDF)."""
+        return eps_table(self.coefficients)
+
+    @cached_property
+    def zero(self) -> bool:
+        """True when the samples of this grid hold no energy at all."""
+        if self.criterion == "rh02":
+            return not np.any(self.coefficients.energy > 0)
+        return not np.any(self.profile.energy() > 0)
+
+    def raise_zero(self) -> None:
+        """The error of an all-zero BRDF (:func:`eps_table`'s)."""
+        raise BadInputError(self.brdf.name, "the BRDF is zero everywhere: no orders to choose")
+
+    @property
+    def missing(self) -> int:
+        """Samples without a measurement: the view profile's (and the 3-D grid's under ``"rh02"``)."""
+        extra = self.reparam.n_without_data if self.criterion == "rh02" else 0
+        return extra + int(self.profile.missing.sum())
+
+    def column(self, p: int) -> np.ndarray:
+        """ε[:, p] of the rule's table (computed once)."""
+        if p not in self._columns:
+            if self.criterion == "rh02":
+                self._columns[p] = self.rh02_table[:, p]
+            else:
+                self._columns[p] = band_eps_column(self.profile, p, self.max_view_deg)
+        return self._columns[p]
+
+    def table(self) -> np.ndarray:
+        """ε[F, P] as far as computed: NaN in the columns no choice has needed."""
+        if self.criterion == "rh02":
+            return self.rh02_table
+        out = np.full((self.F0 + 1, self.P0 + 1), np.nan)
+        for p, col in self._columns.items():
+            out[:, p] = col
+        return out
+
+    def choose(self, tolerance: float, hint: int) -> tuple[int, int, bool]:
+        """(F, P, capped) by :func:`choose_from_table`'s rule, computing only the columns it needs.
+
+        The best error of a column falls as P grows (a larger view order can only fit the views
+        better: the fits nest; checked over the model families, measured files and P <= 20 of
+        ``tests/analysis/test_orders.py``), so the first column that meets the tolerance is
+        found from ``hint`` (the previous grid's P) by a galloping search and bisection."""
+        best = lambda p: float(self.column(p).min())  # noqa: E731
+        P = _first_true(lambda p: best(p) <= tolerance, self.P0, hint)
+        capped = P is None
+        reach = tolerance
+        if capped:
+            reach = best(self.P0) + CAPPED_SLACK * tolerance
+            P = _first_true(lambda p: best(p) <= reach, self.P0, hint)
+            P = self.P0 if P is None else P
+        F = int(np.nonzero(self.column(P) <= reach)[0][0])
+        return F, int(P), capped
 
 
-def _on_grid(brdf: BRDF, grid: ReparamGrid, max_F: int, max_P: int, criterion: str, max_view_deg: float,
-             stop_at: float | None = None) -> _OnGrid:
-    reparam: ReparamBRDF = reparameterize(brdf, grid)
-    F0 = min(grid.n_theta_i - 1, max_F)
-    P0 = min(grid.n_theta_o - 1, (grid.n_phi - 1) // 2, max_P)
-    coefficients = rho_lpq(reparam, F0, P0)
-    profile = view_profile(brdf, grid, F0, P0)
-    if not np.any(coefficients.energy > 0):
-        return _OnGrid(grid, coefficients, profile, np.zeros((0, 0)), np.zeros((0, 0)), reparam.n_without_data)
-    rh02 = eps_table(coefficients)
-    table = rh02 if criterion == "rh02" else band_eps_table(profile, coefficients, max_view_deg, stop_at=stop_at)
-    return _OnGrid(grid, coefficients, profile, rh02, table, reparam.n_without_data + int(profile.missing.sum()))
+def _first_true(pred: Callable[[int], bool], top: int, hint: int) -> int | None:
+    """Smallest x in [0, top] with ``pred(x)`` for a monotone ``pred`` (False … False True … True),
+    None when ``pred(top)`` is False: from ``hint`` one step at a time for two steps (a hint from
+    the previous grid is usually within one), then galloping, then bisection."""
+    def steps():
+        yield from (1, 1)
+        step = 2
+        while True:
+            yield step
+            step *= 2
+
+    x = min(max(int(hint), 0), top)
+    if pred(x):
+        good, bad = x, -1
+        for step in steps():
+            y = good - step
+            if y < 0:
+                break
+            if not pred(y):
+                bad = y
+                break
+            good = y
+    else:
+        bad = x
+        for step in steps():
+            y = min(bad + step, top)
+            if y == bad:
+                return None
+            if pred(y):
+                good = y
+                break
+            bad = y
+    while good - bad > 1:
+        mid = (good + bad) // 2
+        if pred(mid):
+            good = mid
+        else:
+            bad = mid
+    return good
 
 
 def _validate(tolerance: float, max_F: int, max_P: int, criterion: str = DEFAULT_CRITERION,
@@ -319,9 +442,8 @@ def choose_orders_many(
     """:func:`choose_orders` at each of ``tolerances`` (in that order), sharing the work.
 
     Every choice starts on the same quadrature grid and the searches of nearby tolerances
-    visit the same grids: each grid's reparameterization, coefficients, view profile and
-    table are computed once for all of them (the table's columns up to the first that meets
-    the smallest tolerance, which holds the first column meeting any larger one). Each
+    visit the same grids: each grid's view profile, table columns (and, when read, its 3-D
+    reparameterization and projected coefficients) are computed once for all of them. Each
     result equals the one :func:`choose_orders` gives alone; its ``seconds`` is the time of
     its own search given the grids already computed for the tolerances before it.
 
@@ -335,59 +457,85 @@ def choose_orders_many(
         raise BadInputError(None, "no tolerance to choose orders for")
     if isinstance(brdf, str | Path):
         brdf = load_brdf(brdf)
-    stop_at = min(tolerances)
-    cache: dict[tuple[int, int, int], _OnGrid] = {}
+    cache: dict[tuple[int, int, int], _GridData] = {}
 
-    def on_grid(grid: ReparamGrid) -> _OnGrid:
+    def data_for(grid: ReparamGrid) -> _GridData:
         key = (grid.n_theta_i, grid.n_theta_o, grid.n_phi)
         if key not in cache:
-            cache[key] = _on_grid(brdf, grid, max_F, max_P, criterion, max_view_deg, stop_at)
+            cache[key] = _GridData(brdf, grid, max_F, max_P, criterion, max_view_deg)
         return cache[key]
 
-    return [_search(on_grid, tol, max_F, max_P, start_F, start_P, criterion, max_view_deg) for tol in tolerances]
+    return [_search(data_for, tol, max_F, max_P, start_F, start_P, criterion, max_view_deg) for tol in tolerances]
 
 
-def _search(on_grid: Callable[[ReparamGrid], _OnGrid], eps: float, max_F: int, max_P: int, start_F: int,
+#: ``"bands"``: a grid resolves a choice when the energy just above the chosen orders is at most
+#: this fraction of ε in every band inside the view limit (:func:`~shrmkit.analysis.view_bands.resolution_tail`).
+RESOLVED_TAIL = 0.05
+#: ``"bands"``: otherwise a 1.5× finer grid agrees when it keeps P and moves F by at most 1, or keeps
+#: P and ε at its choice differs from the coarser grid's by at most this fraction of ε (a flat
+#: ε(F) near the tolerance moves the first F that meets it with every grid, not the error).
+AGREE_FRACTION = 0.05
+#: A choice is taken from a grid sized for orders up to (F_goal, P_goal) when F <= this × F_goal + 2
+#: (the grid's 2F_goal + 24 nodes still resolve it) and P <= P_goal.
+GRID_SLACK = 1.15
+
+
+def _finer(grid: ReparamGrid) -> ReparamGrid:
+    return ReparamGrid(int(grid.n_theta_i * 1.5), int(grid.n_theta_o * 1.5), int(grid.n_phi * 1.5) + (grid.n_phi % 2))
+
+
+def _search(data_for: Callable[[ReparamGrid], _GridData], eps: float, max_F: int, max_P: int, start_F: int,
             start_P: int, criterion: str, max_view_deg: float) -> OrderChoice:
-    """The order search of :func:`choose_orders` at one tolerance, grids from ``on_grid``."""
+    """The order search of :func:`choose_orders` at one tolerance, grids from ``data_for``.
+
+    Grids are sized for the choice they give (``ReparamGrid.for_orders``) until the choice fits
+    the grid; a choice pressed against the grid's capacity (F > 0.8 F0: the unresolved energy
+    counts as error there) sizes the next grid for 1.5× it. Then the resolution check
+    (:class:`OrderChoice` ``converged``)."""
     t0 = time.perf_counter()
     notes: list[str] = []
     F_goal, P_goal = min(start_F, max_F), min(start_P, max_P)
+    hint = P_goal
     for _ in range(24):
-        on = on_grid(ReparamGrid.for_orders(F_goal, P_goal))
-        at_caps = on.coefficients.F0 >= max_F and on.coefficients.P0 >= max_P
-        if not np.any(on.coefficients.energy > 0) and not at_caps:
-            # a lobe far sharper than this grid (Phong s = 1e6) can fall between its nodes
-            F_goal, P_goal = min(2 * F_goal, max_F), min(P_goal + 4, max_P)
-            continue
-        if not np.any(on.coefficients.energy > 0):
-            eps_table(on.coefficients)  # raises: the BRDF is zero everywhere
-        F, P, capped = choose_from_table(on.table, eps)
+        on = data_for(ReparamGrid.for_orders(F_goal, P_goal))
+        at_caps = on.F0 >= max_F and on.P0 >= max_P
+        if on.zero:
+            if not at_caps:
+                # a lobe far sharper than this grid (Phong s = 1e6) can fall between its nodes
+                F_goal, P_goal = min(2 * F_goal, max_F), min(P_goal + 4, max_P)
+                continue
+            on.raise_zero()
+        F, P, capped = _choose(on, eps, hint)
+        hint = P
         if capped and not at_caps:
             F_goal, P_goal = min(2 * F_goal, max_F), min(P_goal + 4, max_P)
-        elif F > F_goal or P > P_goal:
+        elif F > GRID_SLACK * F_goal + 2 or P > P_goal:
             # the grid holds orders up to ~2x what it resolves well: resize it for the choice
-            F_goal, P_goal = max(F_goal, F), max(P_goal, P)
+            grow = 1.5 if F > 0.8 * on.F0 else GRID_SLACK
+            F_goal, P_goal = min(max(F_goal, int(np.ceil(grow * F))), max_F), max(P_goal, P)
         else:
             break
-    # convergence check on a 1.5x finer grid
     converged = False
     for _ in range(3):
-        grid = on.grid
-        fine = ReparamGrid(
-            int(grid.n_theta_i * 1.5), int(grid.n_theta_o * 1.5), int(grid.n_phi * 1.5) + (grid.n_phi % 2)
-        )
-        on = on_grid(fine)
-        F2, P2, capped2 = choose_from_table(on.table, eps)
-        same = abs(F2 - F) <= 1 and P2 == P and capped2 == capped
-        F, P, capped = F2, P2, capped2
+        tail = None if criterion == "rh02" else resolution_tail(on.profile, F, P, max_view_deg, on.grid.n_phi)
+        if tail is not None and tail <= RESOLVED_TAIL * eps:
+            converged = True
+            break
+        fine = data_for(_finer(on.grid))
+        F2, P2, capped2 = _choose(fine, eps, P)
+        same = P2 == P and capped2 == capped and abs(F2 - F) <= 1
+        if criterion != "rh02" and not same and P2 == P and capped2 == capped and F2 <= on.F0:
+            same = abs(fine.column(P2)[F2] - on.column(P2)[F2]) <= AGREE_FRACTION * eps
+        on, F, P, capped = fine, F2, P2, capped2
         if same:
             converged = True
             break
+    if on.zero:
+        on.raise_zero()
     if capped:
         notes.append(
             f"tolerance {eps:g} not met within the caps F<={max_F}, P<={max_P}: "
-            f"ε({F}, {P}) = {on.table[F, P]:.3g}; raise --max-F/--max-P"
+            f"ε({F}, {P}) = {on.column(P)[F]:.3g}; raise --max-F/--max-P"
         )
     if not converged:
         notes.append("the order choice did not settle under quadrature refinement (table too coarse?)")
@@ -396,13 +544,18 @@ def _search(on_grid: Callable[[ReparamGrid], _OnGrid], eps: float, max_F: int, m
     return _choice(on, F, P, eps, capped, converged, notes, time.perf_counter() - t0, criterion, max_view_deg)
 
 
-def _choice(on: _OnGrid, F: int, P: int, eps: float, capped: bool, converged: bool, notes: list[str],
+def _choose(on: _GridData, eps: float, hint: int) -> tuple[int, int, bool]:
+    if on.criterion == "rh02":
+        return choose_from_table(on.rh02_table, eps)
+    return on.choose(eps, hint)
+
+
+def _choice(on: _GridData, F: int, P: int, eps: float, capped: bool, converged: bool, notes: list[str],
             seconds: float, criterion: str, max_view_deg: float) -> OrderChoice:
     return OrderChoice(
-        F=F, P=P, eps=float(on.table[F, P]), tolerance=float(eps), searched_table=on.table, capped=capped,
+        F=F, P=P, eps=float(on.column(P)[F]), tolerance=float(eps), searched_table=on.table(), capped=capped,
         converged=converged, message="; ".join(notes), seconds=seconds, grid=on.grid,
-        n_without_data=on.missing, coefficients=on.coefficients, criterion=criterion,
-        max_view_deg=float(max_view_deg), profile=on.profile, rh02_table=on.rh02_table,
+        n_without_data=on.missing, criterion=criterion, max_view_deg=float(max_view_deg), source=on,
     )
 
 
@@ -419,10 +572,10 @@ def orders_on_grid_for(
     eps = _validate(eps, max(F, 1), P, criterion, max_view_deg)
     t0 = time.perf_counter()
     grid = ReparamGrid.for_orders(F, P)
-    on = _on_grid(brdf, grid, grid.n_theta_i - 1, max(P, 1), criterion, max_view_deg)
-    if not np.any(on.coefficients.energy > 0):
-        eps_table(on.coefficients)  # raises: the BRDF is zero everywhere
-    F_rule, P_rule, capped = choose_from_table(on.table, eps)
+    on = _GridData(brdf, grid, grid.n_theta_i - 1, max(P, 1), criterion, max_view_deg)
+    if on.zero:
+        on.raise_zero()
+    F_rule, P_rule, capped = _choose(on, eps, P)
     notes = [f"orders given (F={F}, P={P}): the grid was sized for them and not refined"]
     if on.missing:
         notes.append(f"{on.missing} reparameterized samples had no measurement to interpolate (set to 0)")

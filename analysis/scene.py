@@ -209,7 +209,7 @@ def scene_orders(orders: OrderChoice, lighting: LightingCoefficients) -> SceneOr
     light_capped = ok.size == 0
     F_L = int(ok[0]) if ok.size else lighting.lmax
     P_B = orders.P
-    if orders.criterion == "rh02" or orders.profile is None:
+    if orders.criterion == "rh02":
         F_B = min(orders.F, F_L)
         return SceneOrders(
             F_rho=orders.F, P_rho=orders.P, F_L=F_L, F_B=F_B, P_B=P_B, eps_L=float(eps_L[F_L]),
@@ -241,8 +241,8 @@ def lighting_lmax(orders: OrderChoice, env_height: int, F: int | None = None) ->
     ``"bands"``: all of F0, so that F_B may exceed F_ρ where a sharp light needs it and the
     per-band statement knows the lighting wherever the BRDF has energy."""
     if orders.criterion != "rh02":
-        return int(min(env_height - 1, orders.coefficients.F0))
-    return int(min(max(2 * orders.F, orders.F + 16, F or 0), env_height - 1, orders.coefficients.F0))
+        return int(min(env_height - 1, orders.F0))
+    return int(min(max(2 * orders.F, orders.F + 16, F or 0), env_height - 1, orders.F0))
 
 
 def scene_for(
@@ -253,9 +253,9 @@ def scene_for(
     ``shrm report``."""
     lmax = lighting_lmax(orders, env.radiance.shape[0], F)
     lighting = lighting_coefficients(env.radiance, lmax, name=env.name, nthreads=nthreads)
-    if orders.criterion != "rh02" and orders.coefficients.F0 > lmax:
+    if orders.criterion != "rh02" and orders.F0 > lmax:
         # the per-band statement needs the lighting wherever the BRDF has energy: the pixels'
         # point-light spectrum beyond the map's Nyquist limit (what the angular reference sees)
-        beyond = point_band_energy(env.radiance, lmax + 1, orders.coefficients.F0, nthreads=max(nthreads, 1))
+        beyond = point_band_energy(env.radiance, lmax + 1, orders.F0, nthreads=max(nthreads, 1))
         lighting = dataclasses.replace(lighting, beyond=beyond)
     return lighting, scene_orders(orders, lighting)

@@ -823,7 +823,7 @@ def prefilter(
     lighting, scene = scene_for(env, orders, F=F, nthreads=nthreads)
     timings["lighting"] = time.perf_counter() - t0
     F_B = scene.F_B if F is None else int(min(F, lighting.lmax))
-    P_B = scene.P_B if P is None else int(min(P, orders.coefficients.P0))
+    P_B = scene.P_B if P is None else int(min(P, orders.P0))
     sigma = lanczos_sigma(F_B, P_B) if window == "lanczos" else None
     base = orders.coefficients_for(P_B)  # projected (rh02) or fitted to the views that matter (bands)
     band_energy = lighting.band_energy_all()
@@ -960,7 +960,6 @@ def prefilter(
         ).eps_predicted
     eps_info = {
         "brdf": orders.eps_at(min(F_B, orders.F0), P_B),
-        "brdf_rh02": float(orders.rh02_table[min(F_B, orders.F0), P_B]),
         "lighting": float(lighting.eps()[min(F_B, lighting.lmax)]),
         "reflected": reflected,
         "bound": bound,

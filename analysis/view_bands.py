@@ -59,15 +59,15 @@ from scipy.special import roots_legendre
 
 from ..brdf_io.brdf import BRDF
 from ..brdf_io.errors import BadInputError
-from ..brdf_io.reparam import ReparamGrid, sample_rho_hat
-from .brdf_coeffs import BRDFCoefficients
+from ..brdf_io.reparam import ReparamGrid, sample_rho_hat_grid
+from .brdf_coeffs import BRDFCoefficients, weighted_legendre
 from .sh import Lambda, legendre_f
 
 __all__ = [
     "DEFAULT_BAND_EDGES_DEG", "DEFAULT_MAX_VIEW_DEG", "CRITERIA", "DEFAULT_CRITERION", "ViewProfile",
     "view_profile", "fit_view_coefficients", "band_eps_table", "brdf_view_bands", "scene_error_curve",
     "shrm_view_bands", "check_max_view", "check_criterion", "bands_inside", "worst_inside", "BandStatement",
-    "window_matrix",
+    "window_matrix", "band_eps_column", "resolution_tail",
 ]
 
 #: Band edges of θ_v in degrees: 15° wide up to 60°, then 10° and 5° toward grazing.
@@ -141,6 +141,11 @@ class ViewProfile:
         not resolve (l > F0 or q > P0), >= 0.
     missing
         (n_bands,) int: samples per band where a measured table had no data (extrapolated).
+    q_energy
+        (K, n_phi//2 + 1, 3) or None: the energy density of each azimuthal order q of ρ̂ at
+        the node, all l together (mult_q Σ_i w_i g_q(θ_i')², g_q the cosine transform in φ'),
+        up to the grid's φ' Nyquist order — what the grid resolves beyond P0, for the
+        resolution check of the order choice (:func:`resolution_tail`).
     """
 
     edges_deg: np.ndarray
@@ -151,6 +156,7 @@ class ViewProfile:
     beyond: np.ndarray
     missing: np.ndarray
     name: str = ""
+    q_energy: np.ndarray | None = None
 
     @property
     def n_bands(self) -> int:
@@ -185,10 +191,21 @@ class ViewProfile:
         return np.tensordot(self._band_matrix, per_node, axes=(1, 0))
 
     @cached_property
-    def T_by_q(self) -> list[np.ndarray]:
-        """T_lq as one (K, (F0+1)·3) matrix per q (the right-hand sides of the view fit)."""
+    def T_stack(self) -> np.ndarray:
+        """T_lq as (P0+1, K, (F0+1)·3): for each q one (K, l·channel) matrix, the right-hand sides
+        of the view fit (read-only, computed once)."""
         K = self.theta_v.size
-        return [np.ascontiguousarray(self.T[:, :, q, :].transpose(1, 0, 2)).reshape(K, -1) for q in range(self.P0 + 1)]
+        out = np.ascontiguousarray(self.T.transpose(2, 1, 0, 3)).reshape(self.P0 + 1, K, -1)
+        out.setflags(write=False)
+        return out
+
+    def view_legendre(self, P: int) -> np.ndarray:
+        """f_pq(cos 2θ_v) at the nodes for p, q <= P: (P+1, P+1, K) (computed once at P0)."""
+        return self._view_legendre[: P + 1, : P + 1]
+
+    @cached_property
+    def _view_legendre(self) -> np.ndarray:
+        return legendre_f(self.P0, self.P0, np.cos(2.0 * self.theta_v))
 
     @cached_property
     def band_full(self) -> np.ndarray:
@@ -199,6 +216,13 @@ class ViewProfile:
     def band_beyond(self) -> np.ndarray:
         """Band sums of ``beyond``: (n_bands, 3)."""
         return self.band_sum(self.beyond)
+
+    def energy(self) -> np.ndarray:
+        """∫∫ ρ̂² dω_i dω_o per channel (3,) by the profile's own quadrature (sin θ_o' dθ_o' =
+        2 sin 2θ_v dθ_v over the band nodes): the energy of :meth:`ReparamBRDF.energy
+        <shrmkit.brdf_io.reparam.ReparamBRDF.energy>` without the θ_o' grid."""
+        density = self.full().sum(axis=0) + self.beyond  # (K, 3)
+        return (self.weight * 2.0 * np.sin(2.0 * self.theta_v)) @ density
 
 
 def view_profile(
@@ -221,29 +245,34 @@ def view_profile(
         raise ValueError(f"grid {grid} too coarse for orders F0={F0}, P0={P0}")
     theta_v, weight, band = _band_nodes(edges)
     xi, wi = grid.theta_i()
-    phi = grid.phi()
-    fi = legendre_f(F0, P0, xi) * wi  # (F0+1, P0+1, n_i)
+    fi = weighted_legendre(F0, P0, grid.n_theta_i)  # (F0+1, P0+1, n_i)
     K = theta_v.size
+    n_q = grid.n_phi // 2 + 1
     T = np.empty((F0 + 1, K, P0 + 1, 3))
     energy = np.empty((K, 3))
+    q_energy = np.empty((K, n_q, 3))
+    q_mult = np.where((np.arange(n_q) == 0) | (2 * np.arange(n_q) == grid.n_phi), 1.0, 2.0)
     missing = np.zeros(len(edges) - 1, dtype=np.int64)
     dphi = 2.0 * np.pi / grid.n_phi
     for b in range(len(edges) - 1):
         idx = np.nonzero(band == b)[0]
-        values, n_missing = sample_rho_hat(brdf, xi, np.cos(2.0 * theta_v[idx]), phi)  # (n_i, k, n_phi, 3)
+        # (n_i, k, n_phi, 3), evaluated on φ' ∈ [0, π] (ρ̂ is even in φ')
+        values, n_missing = sample_rho_hat_grid(brdf, xi, np.cos(2.0 * theta_v[idx]), grid.n_phi)
         missing[b] = n_missing
-        g = np.fft.rfft(values, axis=2).real[:, :, : P0 + 1] * dphi  # (n_i, k, P0+1, 3)
+        g = np.fft.rfft(values, axis=2).real * dphi  # (n_i, k, n_q, 3)
         n_i, k = g.shape[:2]
-        for q in range(P0 + 1):
-            # Σ_i fi[l, q, i] g[i, k, q, c]: one matrix product (BLAS)
-            rhs = np.ascontiguousarray(g[:, :, q, :]).reshape(n_i, k * 3)
-            T[:, idx, q, :] = 2.0 * np.pi * (fi[:, q, :] @ rhs).reshape(-1, k, 3)
+        # Σ_i fi[l, q, i] g[i, k, q, c]: one matrix product per q (BLAS), batched over q
+        rhs = np.ascontiguousarray(g[:, :, : P0 + 1, :].transpose(2, 0, 1, 3)).reshape(P0 + 1, n_i, k * 3)
+        per_q = np.matmul(fi.transpose(1, 0, 2), rhs).reshape(P0 + 1, F0 + 1, k, 3)  # [q, l, node, c]
+        T[:, idx] = 2.0 * np.pi * per_q.transpose(1, 2, 0, 3)
         # 𝓔(θ_o') = 2π ∫ dω_i ρ̂²: the density whose sin θ_o' dθ_o' integral is ∫∫ ρ̂² (ReparamBRDF.energy)
         energy[idx] = 2.0 * np.pi * dphi * np.tensordot(wi, (values**2).sum(axis=2), axes=(0, 0))
+        # per q, all l (Bessel's equality in θ_i'): mult_q ∫ g_q² d cos θ_i'; Σ_q of it is 𝓔 (Parseval)
+        q_energy[idx] = np.tensordot(wi, g * g, axes=(0, 0)) * q_mult[None, :, None]
     resolved = np.tensordot(T**2, _mult(P0 + 1), axes=(2, 0)).sum(axis=0) / (2.0 * np.pi)
     return ViewProfile(
         edges_deg=edges, theta_v=theta_v, weight=weight, band=band, T=T,
-        beyond=np.clip(energy - resolved, 0.0, None), missing=missing, name=brdf.name,
+        beyond=np.clip(energy - resolved, 0.0, None), missing=missing, name=brdf.name, q_energy=q_energy,
     )
 
 
@@ -310,7 +339,7 @@ FIT_PASSES = 8
 
 
 def fit_view_coefficients(
-    profile: ViewProfile, coefficients: BRDFCoefficients, P: int, max_view_deg: float
+    profile: ViewProfile, coefficients: BRDFCoefficients | None, P: int, max_view_deg: float
 ) -> BRDFCoefficients:
     """ρ̂_lpq (p <= P) fitted to T_lq over the views that matter, instead of projected.
 
@@ -323,42 +352,61 @@ def fit_view_coefficients(
     error counts alike), bands beyond ``max_view_deg`` down-weighted by
     :data:`OUTSIDE_WEIGHT`, then :data:`FIT_PASSES` passes that raise the weight of the bands
     inside with the largest error. The l-expansion is still the projection (exact in l).
-    Same shape as ``coefficients`` (entries p > P zero); the energy is the BRDF's.
+    Same shape as ``coefficients`` (entries p > P zero); the energy is the BRDF's. With
+    ``coefficients`` None (the fit needs only the profile), the shape is (F0+1, P0+1, P0+1, 3)
+    of the profile and the energy its :meth:`ViewProfile.energy`.
     """
+    if coefficients is None:
+        coefficients = _profile_shaped(profile)
     F0 = min(profile.F0, coefficients.F0)
+    fit, _ = _view_fit(profile, P, max_view_deg, F0)
+    out = np.zeros_like(coefficients.coeffs)
+    out[: F0 + 1, : P + 1, : P + 1] = fit
+    return BRDFCoefficients(coeffs=out, energy=coefficients.energy, name=coefficients.name)
+
+
+def _view_fit(profile: ViewProfile, P: int, max_view_deg: float, F0: int) -> tuple[np.ndarray, np.ndarray]:
+    """The fit of :func:`fit_view_coefficients` for l <= F0: ρ̂_lpq as (F0+1, P+1, P+1, 3) [l, p, q, c],
+    and the residual of its last pass Σ_{q<=P} mult (T_lq − T̂_lq)²/(2π) per (node, l, channel),
+    (K, F0+1, 3).
+
+    Every q is solved at once: the basis columns 2π f_pq(cos 2θ_v) (p = q..P) of each q, padded
+    with zero columns to P+1, are stacked, and one stacked pseudo-inverse serves all (l, channel)
+    right-hand sides of all q (a zero column has a zero singular value, which the pseudo-inverse
+    drops: the padding changes nothing)."""
     inside = np.zeros(profile.n_bands, dtype=bool)
     inside[bands_inside(profile, max_view_deg)] = True
     signal = (profile.band_full.sum(axis=1) + profile.band_beyond).sum(axis=1)
     band_w = np.where(inside, 1.0, OUTSIDE_WEIGHT) / np.where(signal > 0, signal, 1.0)
-    fo = legendre_f(P, P, np.cos(2.0 * profile.theta_v))  # (P+1, P+1, K)
-    out = np.zeros_like(coefficients.coeffs)
-    fitted = BRDFCoefficients(coeffs=out, energy=coefficients.energy, name=coefficients.name)
-    at_F0 = _EpsAtF0(profile, F0, P)
+    fo = profile.view_legendre(P)  # (P+1, P+1, K)
+    K = profile.theta_v.size
+    basis = np.zeros((P + 1, K, P + 1))  # [q, node, p − q]
+    for q in range(P + 1):
+        basis[q, :, : P + 1 - q] = 2.0 * np.pi * fo[q : P + 1, q, :].T
     n_cols = (F0 + 1) * 3
+    rhs = profile.T_stack[: P + 1, :, :n_cols]  # (P+1, K, n_cols)
+    mult = _mult(P + 1) / (2.0 * np.pi)
+    at_F0 = _EpsAtF0(profile, F0, P)
     prev_worst = np.inf
     for npass in range(FIT_PASSES + 1):
-        last = npass == FIT_PASSES or not inside.any()
         sw = np.sqrt(profile.weight * band_w[profile.band])
-        residual = None if last else at_F0.fixed.copy()
-        for q in range(P + 1):
-            basis = 2.0 * np.pi * fo[q : P + 1, q, :].T  # (K, P+1−q)
-            A = basis * sw[:, None]  # well conditioned
-            # weighted least squares through the pseudo-inverse of the small matrix: one product
-            # with all (l, channel) right-hand sides
-            sol = (np.linalg.pinv(A) * sw[None, :]) @ profile.T_by_q[q]
-            out[:, q : P + 1, q, :] = sol.reshape(P + 1 - q, -1, 3)[:, : F0 + 1].transpose(1, 0, 2)
-            if residual is not None:  # Σ_l (T_lq − T̂_lq)² per node and channel, l <= F0
-                diff = profile.T_by_q[q][:, :n_cols] - basis @ sol[:, :n_cols]
-                residual += (1.0 if q == 0 else 2.0) / (2.0 * np.pi) * (diff * diff).reshape(-1, F0 + 1, 3).sum(axis=1)
-        if residual is None:
+        # weighted least squares through the pseudo-inverse of the small, well-conditioned matrices
+        sol = (np.linalg.pinv(basis * sw[None, :, None]) * sw[None, None, :]) @ rhs  # (P+1, P+1, n_cols)
+        diff = rhs - basis @ sol
+        residual = np.einsum("q,qkn->kn", mult, diff * diff).reshape(K, F0 + 1, 3)
+        if npass == FIT_PASSES or not inside.any():
             break
-        eps = at_F0.eps(residual)  # = _band_eps_all(profile, fitted, p_list=[P])[:, F0, 0]
+        eps = at_F0.eps(at_F0.fixed + residual.sum(axis=1))  # = _band_eps_all(profile, fitted, [P])[:, F0, 0]
         worst = eps[inside].max()
         if worst <= 0.0 or worst > 0.995 * prev_worst:  # nothing to gain (a view-independent lobe)
             break
         prev_worst = worst
         band_w = band_w * np.where(inside, np.sqrt(np.clip(eps / worst, 1e-3, 1.0)), 1.0)
-    return fitted
+    fit = np.zeros((F0 + 1, P + 1, P + 1, 3))
+    by_l = sol.reshape(P + 1, P + 1, F0 + 1, 3)  # [q, p − q, l, c]
+    for q in range(P + 1):
+        fit[:, q:, q, :] = by_l[q, : P + 1 - q].transpose(1, 0, 2)
+    return fit, residual
 
 
 class _EpsAtF0:
@@ -387,8 +435,57 @@ class _EpsAtF0:
         return np.clip(eps, 0.0, None).max(axis=-1)
 
 
+def _profile_shaped(profile: ViewProfile) -> BRDFCoefficients:
+    """Zero ρ̂_lpq of the profile's orders (F0+1, P0+1, P0+1, 3) carrying its energy: the shape a
+    view fit fills when no projected coefficients are at hand."""
+    shape = (profile.F0 + 1, profile.P0 + 1, profile.P0 + 1, 3)
+    return BRDFCoefficients(coeffs=np.zeros(shape), energy=profile.energy(), name=profile.name)
+
+
+def band_eps_column(profile: ViewProfile, P: int, max_view_deg: float) -> np.ndarray:
+    """One column of :func:`band_eps_table` from the profile alone: ε(F, P) for F = 0..F0 of the
+    worst band inside ``max_view_deg`` (worst channel), with the view fit at order ``P``
+    (equal to ``_band_eps_all`` of :func:`fit_view_coefficients`; the fit's own residual is used)."""
+    _, low = _view_fit(profile, P, max_view_deg, profile.F0)
+    T = profile.T[:, :, : P + 1, :]
+    fitted_orders = np.tensordot(T * T, _mult(P + 1), axes=(2, 0)) / (2.0 * np.pi)  # (F0+1, K, 3), q <= P
+    residual = low + np.moveaxis(profile.full() - fitted_orders, 1, 0)  # q > P: all of it is error
+    inside = bands_inside(profile, max_view_deg)
+    return _eps_from_residual(profile, profile.F0, residual)[inside].max(axis=0)
+
+
+def resolution_tail(profile: ViewProfile, F: int, P: int, max_view_deg: float, n_phi: int) -> float:
+    """Largest share, over the bands inside ``max_view_deg`` (and their live channels), of the band's
+    energy the quadrature grid only just resolves: l above the midpoint of F and the grid's F0,
+    azimuthal orders q above the midpoint of P and the φ' Nyquist order n_phi/2, and what the
+    table leaves unresolved. Gauss–Legendre nodes in cos θ_i' alias a degree l' into l <= F only
+    from l' >= 2·n_theta_i − F (= 3F + 48 for the grids of ``ReparamGrid.for_orders``), and the
+    uniform φ' nodes alias q' into q <= P only from q' >= n_phi − P; when the energy a step above
+    the chosen orders is already this small, the rest — and with it the aliasing into the
+    chosen orders — is smaller still for a decaying spectrum, and a finer grid changes the
+    table by about that much (the resolution check of :func:`~shrmkit.analysis.orders.choose_orders`).
+    """
+    full = profile.band_full  # (nb, F0+1, 3), q <= P0
+    total = full.sum(axis=1) + profile.band_beyond  # (nb, 3)
+    l_cut = F + max(1, (profile.F0 - F) // 2)
+    tail = full[:, l_cut + 1 :].sum(axis=1)
+    if profile.q_energy is not None:
+        per_q = profile.band_sum(profile.q_energy)  # (nb, n_q, 3), all l
+        q_cut = P + max(1, (n_phi // 2 - P) // 2)
+        high_q = per_q[:, q_cut + 1 :].sum(axis=1)
+        # the table's unresolved energy at l > F0 with q <= P0 (beyond holds both kinds)
+        low_q_beyond = np.clip(profile.band_beyond - per_q[:, profile.P0 + 1 :].sum(axis=1), 0.0, None)
+        tail = tail + high_q + low_q_beyond
+    else:
+        tail = tail + profile.band_beyond
+    inside = bands_inside(profile, max_view_deg)
+    live = _live(total.sum(axis=0))[None, :] & (total >= CHANNEL_FLOOR * total.max(axis=1, keepdims=True))
+    share = np.where(live & (total > 0), tail / np.where(total > 0, total, 1.0), 0.0)
+    return float(share[inside].max(initial=0.0))
+
+
 def band_eps_table(
-    profile: ViewProfile, coefficients: BRDFCoefficients, max_view_deg: float, *, fit: bool = True,
+    profile: ViewProfile, coefficients: BRDFCoefficients | None, max_view_deg: float, *, fit: bool = True,
     stop_at: float | None = None,
 ) -> np.ndarray:
     """ε(F, P) of the worst band inside ``max_view_deg`` and the worst channel, (F0+1, P0+1).
@@ -402,6 +499,8 @@ def band_eps_table(
     the fits of higher P on its intermediate grids).
     """
     inside = bands_inside(profile, max_view_deg)
+    if coefficients is None:
+        coefficients = _profile_shaped(profile)
     if not fit:
         return _band_eps_all(profile, coefficients)[inside].max(axis=0)
     P0 = min(profile.P0, coefficients.P0)
@@ -420,6 +519,17 @@ def _band_eps_all(
     """ε_b(F, p) for every band, worst live channel: (n_bands, F0+1, len(p_list)) (all p <= P0
     by default)."""
     F0, P0 = min(profile.F0, coefficients.F0), min(profile.P0, coefficients.P0)
+    p_list = list(range(P0 + 1)) if p_list is None else p_list
+    out = np.empty((profile.n_bands, F0 + 1, len(p_list)))
+    for j, p in enumerate(p_list):
+        residual = np.moveaxis(_residual(profile, _approximation(profile, coefficients, F0, p)), 1, 0)
+        out[:, :, j] = _eps_from_residual(profile, F0, residual)
+    return out
+
+
+def _eps_from_residual(profile: ViewProfile, F0: int, residual: np.ndarray) -> np.ndarray:
+    """ε_b(F) for F = 0..F0 of every band, worst live channel, (n_bands, F0+1), from the error
+    density per (node, l, channel) (K, F0+1, 3) of the kept orders l <= F0."""
     full = profile.band_full  # (nb, F0p+1, 3)
     beyond = profile.band_beyond + full[:, F0 + 1 :].sum(axis=1)  # unresolved by the table
     full = full[:, : F0 + 1]
@@ -429,15 +539,10 @@ def _band_eps_all(
     # relative error there is invisible, and would otherwise decide the orders)
     live = _live(total.sum(axis=0))[None, :] & (total >= CHANNEL_FLOOR * total.max(axis=1, keepdims=True))
     after = total[:, None, :] - np.cumsum(full, axis=1)  # energy at l > f, (nb, F0+1, 3)
-    p_list = list(range(P0 + 1)) if p_list is None else p_list
-    out = np.empty((profile.n_bands, F0 + 1, len(p_list)))
     safe = np.where(total > 0, total, 1.0)[:, None, :]
-    for j, p in enumerate(p_list):
-        res = profile.band_sum(np.moveaxis(_residual(profile, _approximation(profile, coefficients, F0, p)), 1, 0))
-        err = np.cumsum(res, axis=1) + after  # (nb, F0+1, 3)
-        eps = np.where(live[:, None, :] & (total[:, None, :] > 0), err / safe, 0.0)
-        out[:, :, j] = np.clip(eps, 0.0, None).max(axis=-1)
-    return out
+    err = np.cumsum(profile.band_sum(residual), axis=1) + after  # (nb, F0+1, 3)
+    eps = np.where(live[:, None, :] & (total[:, None, :] > 0), err / safe, 0.0)
+    return np.clip(eps, 0.0, None).max(axis=-1)
 
 
 def brdf_view_bands(

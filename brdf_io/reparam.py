@@ -29,7 +29,9 @@ from scipy.special import roots_legendre
 from .brdf import BRDF
 from .errors import BadInputError
 
-__all__ = ["ReparamGrid", "ReparamBRDF", "reparameterize", "reparam_directions", "sample_rho_hat"]
+__all__ = [
+    "ReparamGrid", "ReparamBRDF", "reparameterize", "reparam_directions", "sample_rho_hat", "sample_rho_hat_grid",
+]
 
 
 @dataclass(frozen=True)
@@ -176,7 +178,7 @@ def reparameterize(brdf: BRDF, grid: ReparamGrid) -> ReparamBRDF:
     """
     xi, _ = grid.theta_i()
     xo, _ = grid.theta_o()
-    values, missing = sample_rho_hat(brdf, xi, xo, grid.phi())
+    values, missing = sample_rho_hat_grid(brdf, xi, xo, grid.n_phi)
     return ReparamBRDF(values=values, grid=grid, name=brdf.name, n_without_data=missing)
 
 
@@ -212,6 +214,38 @@ def sample_rho_hat(
         bad = int(np.count_nonzero(~np.isfinite(values)))
         raise BadInputError(brdf.name, f"BRDF evaluates to {bad} non-finite values on the reparameterized grid")
     return values, missing
+
+
+def sample_rho_hat_grid(
+    brdf: BRDF, cos_theta_i: np.ndarray, cos_theta_o: np.ndarray, n_phi: int
+) -> tuple[np.ndarray, int]:
+    """ρ̂ on the product of 1-D node sets and the uniform φ' nodes 2πk/n_phi, as
+    :func:`sample_rho_hat` (values (n_i, n_o, n_phi, 3), points without data), evaluating
+    only φ' ∈ [0, π].
+
+    ρ̂ of an isotropic BRDF is even in φ' (DESIGN §3: the plane of R and L' is a mirror plane),
+    so the nodes 2π − φ'_k repeat the values at φ'_k: about half the BRDF evaluations. Only the
+    even part of a source enters the cosine transforms of RH02 Appendix C; for the tabulated
+    isotropic sources we read (MERL, RGL, tables) the odd part is interpolation rounding
+    (≤ 5·10⁻⁴ of the peak for the RGL files of ../shared/data). The count of points without
+    data is that of the whole grid (each mirrored point counted twice).
+    """
+    n_phi = int(n_phi)
+    phi = 2.0 * np.pi * np.arange(n_phi // 2 + 1) / n_phi  # 0 .. π (π only for even n_phi)
+    ci = np.asarray(cos_theta_i, float)
+    co = np.asarray(cos_theta_o, float)
+    n_end = 2 if n_phi % 2 == 0 else 1  # nodes that are their own mirror image: 0 (and π)
+    if n_phi <= 2:
+        return sample_rho_hat(brdf, ci, co, 2.0 * np.pi * np.arange(n_phi) / max(n_phi, 1))
+    ends = [0, n_phi // 2] if n_end == 2 else [0]
+    inner = np.arange(1, (n_phi + 1) // 2)  # 1 .. ceil(n/2) − 1: each stands for itself and n − k
+    end_values, end_missing = sample_rho_hat(brdf, ci, co, phi[ends])
+    inner_values, inner_missing = sample_rho_hat(brdf, ci, co, phi[inner])
+    values = np.empty((ci.size, co.size, n_phi, 3))
+    values[:, :, ends] = end_values
+    values[:, :, inner] = inner_values
+    values[:, :, n_phi - inner] = inner_values
+    return values, end_missing + 2 * inner_missing
 
 
 def _rho_hat_counted(brdf: BRDF, L: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, int]:
