@@ -5,6 +5,11 @@ Each verb lives in a module ``cli/cmd_<verb>.py`` that defines ``HELP`` (one lin
 verb touches no other file. A :class:`~shrmkit.brdf_io.errors.BadInputError` (or an
 ``OSError`` from the file system) becomes one line on stderr and exit code 2.
 
+The command line is lazy: a verb's module (and with it the analysis and render stack,
+VTK, matplotlib...) is imported only when that verb is parsed. ``shrm --help`` lists every
+verb with its ``HELP`` line read from the module's source, ``shrm --version`` imports no
+verb at all.
+
 Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
 SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
 """
@@ -12,6 +17,7 @@ SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
 from __future__ import annotations
 
 import argparse
+import ast
 import importlib
 import pkgutil
 import sys
@@ -20,33 +26,85 @@ from pathlib import Path
 from .._version import __version__
 from ..brdf_io.errors import ShrmError
 
+HERE = Path(__file__).parent
+
 
 def _verbs() -> list[str]:
     """The verbs: one ``cmd_<verb>.py`` module each, beside this file."""
     return sorted(
         name[len("cmd_"):]
-        for _, name, _ in pkgutil.iter_modules([str(Path(__file__).parent)])
+        for _, name, _ in pkgutil.iter_modules([str(HERE)])
         if name.startswith("cmd_")
     )
 
 
-def build_parser() -> argparse.ArgumentParser:
+def _module(verb: str):
+    return importlib.import_module(f"shrmkit.cli.cmd_{verb}")
+
+
+def _help(verb: str) -> str:
+    """The verb's ``HELP`` line, read from its source without importing it (imported only
+    where the source is not at hand or ``HELP`` is not a plain string literal)."""
+    try:
+        tree = ast.parse((HERE / f"cmd_{verb}.py").read_text(encoding="utf-8"))
+    except (OSError, SyntaxError, ValueError):
+        return _module(verb).HELP
+    for node in tree.body:
+        if isinstance(node, ast.Assign):
+            targets, value = node.targets, node.value
+        elif isinstance(node, ast.AnnAssign) and node.value is not None:
+            targets, value = [node.target], node.value
+        else:
+            continue
+        if any(isinstance(t, ast.Name) and t.id == "HELP" for t in targets):
+            if isinstance(value, ast.Constant) and isinstance(value.value, str):
+                return value.value
+            break
+    return _module(verb).HELP
+
+
+class _VerbParser(argparse.ArgumentParser):
+    """The parser of one verb: its module is imported and its arguments added on first use
+    (when the verb is parsed, or by :meth:`load`)."""
+
+    verb: str | None = None
+
+    def load(self) -> _VerbParser:
+        if self.verb is not None:
+            module = _module(self.verb)
+            self.verb = None
+            module.add_arguments(self)
+            self.set_defaults(_run=module.run)
+        return self
+
+    def parse_known_args(self, args=None, namespace=None):
+        self.load()
+        return super().parse_known_args(args, namespace)
+
+
+def _parser(lazy: bool) -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="shrm",
         description="Measured-BRDF toolkit: frequency-space orders (RH02), fits, SHRM rendering.",
     )
     parser.add_argument("--version", action="version", version=f"shrm {__version__}")
-    sub = parser.add_subparsers(dest="verb", metavar="VERB")
+    sub = parser.add_subparsers(dest="verb", metavar="VERB", parser_class=_VerbParser)
     for verb in _verbs():
-        module = importlib.import_module(f"shrmkit.cli.cmd_{verb}")
-        p = sub.add_parser(verb, help=module.HELP, description=module.HELP)
-        module.add_arguments(p)
-        p.set_defaults(_run=module.run)
+        line = _help(verb)
+        p = sub.add_parser(verb, help=line, description=line)
+        p.verb = verb
+        if not lazy:
+            p.load()
     return parser
 
 
+def build_parser() -> argparse.ArgumentParser:
+    """The whole parser, every verb's module imported and its arguments added."""
+    return _parser(lazy=False)
+
+
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
+    parser = _parser(lazy=True)
     args = parser.parse_args(argv)
     if not getattr(args, "_run", None):
         parser.print_help()

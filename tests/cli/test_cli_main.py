@@ -1,20 +1,87 @@
-"""The `shrm` entry point across verbs: version, help, one-line errors with exit 2."""
+"""The `shrm` entry point across verbs: version, help, one-line errors with exit 2, and a lazy
+command line (a verb's module, and the stack under it, is imported only when that verb runs)."""
 
 from __future__ import annotations
 
+import json
+import os
 import subprocess
 import sys
+
+from shrmkit.cli.main import _verbs, build_parser
+
+#: imported by no `shrm --version` / `shrm --help`; VTK and friends by no `shrm VERB --help` either
+STACK = ("scipy", "ducc0", "rich", "shrmkit.analysis", "shrmkit.render", "shrmkit.cli.report")
+HEAVY = ("vtk", "vtkmodules", "pyvista", "matplotlib", "distributed")
+
+#: runs main(argv) and prints, after its own output, the modules the process imported
+_PROBE = (
+    "import json, sys\n"
+    "from shrmkit.cli.main import main\n"
+    "try:\n"
+    "    code = main(sys.argv[1:])\n"
+    "except SystemExit as stop:\n"
+    "    code = stop.code\n"
+    "sys.stdout.flush()\n"
+    "print('\\nMODULES ' + json.dumps([code, sorted(sys.modules)]))\n"
+)
 
 
 def run_cli(*args: str) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "shrmkit.cli.main", *args], capture_output=True, text=True)
 
 
-def test_version_and_help(capsys):
-    proc = run_cli("--version")
-    assert proc.returncode == 0 and proc.stdout.startswith("shrm ")
-    proc = run_cli("--help")
-    assert proc.returncode == 0 and "orders" in proc.stdout and "prefilter" in proc.stdout
+def imports_of(*args: str) -> tuple[int, str, set[str]]:
+    """(exit code, stdout, modules imported) of `shrm ARGS` in a fresh interpreter."""
+    proc = subprocess.run([sys.executable, "-c", _PROBE, *args], capture_output=True, text=True,
+                          env={**os.environ, "COLUMNS": "200"})
+    out, _, last = proc.stdout.rpartition("\nMODULES ")
+    assert last, proc.stderr[-2000:]
+    code, modules = json.loads(last)
+    return code, out, set(modules)
+
+
+def _loaded(modules: set[str], names: tuple[str, ...]) -> list[str]:
+    return sorted(m for m in modules if any(m == n or m.startswith(n + ".") for n in names))
+
+
+def _verb_modules(modules: set[str]) -> list[str]:
+    return sorted(m for m in modules if m.startswith("shrmkit.cli.cmd_"))
+
+
+def test_version_and_help(monkeypatch):
+    """`--version` and `--help` import no verb and nothing of the analysis/render stack; the
+    help lists every verb with its HELP line, exactly as the parser with every verb imported."""
+    code, out, modules = imports_of("--version")
+    assert code == 0 and out.startswith("shrm ")
+    assert not _verb_modules(modules) and not _loaded(modules, STACK + HEAVY), _loaded(modules, STACK + HEAVY)
+    code, out, modules = imports_of("--help")
+    assert code == 0 and "orders" in out and "prefilter" in out
+    assert not _verb_modules(modules) and not _loaded(modules, STACK + HEAVY), _loaded(modules, STACK + HEAVY)
+    monkeypatch.setenv("COLUMNS", "200")
+    assert out.strip() == build_parser().format_help().strip()
+    assert all(f"    {verb} " in out for verb in _verbs())
+
+
+def test_verb_help_imports_that_verb_only():
+    """`shrm VERB --help` imports VERB's module only (not the other verbs'), prints VERB's own
+    options, and imports no VTK/matplotlib: `orders` not the render stack either."""
+    code, out, modules = imports_of("orders", "--help")
+    assert code == 0 and "--max-view-angle" in out and out.startswith("usage: shrm orders")
+    assert _verb_modules(modules) == ["shrmkit.cli.cmd_orders"]
+    assert not _loaded(modules, HEAVY + ("shrmkit.render", "shrmkit.cli.report")), _loaded(modules, HEAVY)
+    code, out, modules = imports_of("render", "--help")
+    assert code == 0 and "--turntable" in out and out.startswith("usage: shrm render")
+    assert _verb_modules(modules) == ["shrmkit.cli.cmd_render"]
+    assert not _loaded(modules, HEAVY), _loaded(modules, HEAVY)
+
+
+def test_unknown_verb_is_a_usage_error():
+    code, _, modules = imports_of("nosuch")
+    assert code == 2 and not _verb_modules(modules)
+    proc = run_cli("nosuch")
+    assert proc.returncode == 2 and "invalid choice: 'nosuch'" in proc.stderr
+    assert all(f"'{verb}'" in proc.stderr for verb in _verbs())
 
 
 def test_unwritable_outputs_exit_2_without_traceback(tmp_path):
