@@ -147,7 +147,7 @@ def lanczos_window(F: int) -> np.ndarray:
     return np.sinc(np.arange(F + 1) / (F + 1.0))
 
 
-def lanczos_sigma(F: int, P: int, strength: float = 1.0) -> np.ndarray:
+def lanczos_sigma(F: int, P: int, strength: float = 1.0, *, in_view: bool = True) -> np.ndarray:
     """Lanczos σ-factors in both orders, at a ``strength`` t in [0, 1]:
 
         σ_lp(t) = 1 − t (1 − sinc(l/(F+1)) sinc(p/(P+1))),   l = 0..F, p = 0..P,
@@ -159,7 +159,8 @@ def lanczos_sigma(F: int, P: int, strength: float = 1.0) -> np.ndarray:
     t = float(strength)
     if not 0.0 <= t <= 1.0:
         raise ValueError(f"strength must be in [0, 1], got {strength!r}")
-    full = np.outer(lanczos_window(F), np.sinc(np.arange(P + 1) / (P + 1.0)))
+    view = np.sinc(np.arange(P + 1) / (P + 1.0)) if in_view else np.ones(P + 1)
+    full = np.outer(lanczos_window(F), view)
     return 1.0 - t * (1.0 - full)
 
 

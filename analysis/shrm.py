@@ -14,30 +14,48 @@ SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
 
 from __future__ import annotations
 
-import itertools
+import functools
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import ducc0
 import numpy as np
 
 from .._version import __version__
 from ..brdf_io.cubemap import cube_map_directions
 from ..brdf_io.envmap import EnvironmentMap, load_env
 from ..brdf_io.errors import BadInputError
-from ..brdf_io.latlong import bilinear_lookup, pixel_angles, pixel_directions
+from ..brdf_io.latlong import bilinear_lookup
 from ..brdf_io.specs import load_brdf
-from .brdf_coeffs import BRDFCoefficients
-from .lighting import LightingCoefficients, alm_index
 from .orders import DEFAULT_MAX_F, DEFAULT_MAX_P, OrderChoice, choose_orders, orders_on_grid_for
-from .scene import lanczos_sigma, lanczos_window, reflected_error_parts, residual_bound, scene_for
-from .sh import Lambda, real_index, real_sph_harm
+from .scene import reflected_error_parts, residual_bound, scene_for
+from .sh import real_sph_harm
 from .shrm_file import read_shrm_fields, save_shrm
+from .synthesis import (
+    LOCAL_VIEWS_DEG,
+    global_from_local,
+    global_shrm_latlong,
+    local_shrm_at,
+    local_shrm_direct,
+    local_shrm_fast,
+    windowed,
+)
 from .tolerance import DEFAULT_EPS, check_eps
-from .view_bands import DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG, bands_inside, shrm_view_bands
-from .wigner import rotation_D, wigner_d_tilde
+from .view_bands import DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG, shrm_view_bands
+from .window import (
+    DEFAULT_WINDOW,
+    UNDERSHOOT_MAX_VIEW_DEG,
+    WINDOW_BUDGET_EPS,
+    WINDOW_THRESHOLD,
+    WINDOWS,
+    check_window,
+    choose_window,
+    gibbs_negative,
+    undershoot,
+    undershoot_samples,
+    undershoot_views,
+)
 
 __all__ = [
     "SHRM",
@@ -61,29 +79,6 @@ __all__ = [
     "undershoot_samples",
     "undershoot",
 ]
-
-#: The windows of :func:`prefilter` and of every verb that prefilters (``--window``);
-#: :func:`check_window` is their one validator.
-WINDOWS = ("none", "lanczos", "auto")
-DEFAULT_WINDOW = "auto"
-#: ``auto`` windows when the undershoot (most negative sampled radiance over the largest,
-#: worst channel; :func:`undershoot`) exceeds this fraction. Chosen from renders of the Grace
-#: probe with Phong s = 32: black blotches are visible (+4 stops) at 0.4 % of the peak, barely
-#: at 0.15 %, not at 0.03 % (README, accuracy).
-WINDOW_THRESHOLD = 1e-3
-#: ``auto``'s window may add at most this many ε of error energy to ε_B (worst channel): with
-#: the truncation's own ≲ ε, √ε_B stays inside the tested 2√ε + 1 % relative RMS.
-WINDOW_BUDGET_EPS = 2.0
-#: Largest view angle θ_v = angle(N, V) of the undershoot sample (:func:`undershoot_samples`).
-UNDERSHOOT_MAX_VIEW_DEG = 85.0
-
-
-def check_window(window: Any, name: str = "window") -> str:
-    """The one validator of a window name (:data:`WINDOWS`); BadInputError otherwise."""
-    if not isinstance(window, str) or window not in WINDOWS:
-        raise BadInputError(None, f"{name}={window!r}: choose one of {', '.join(WINDOWS)}")
-    return window
-
 
 def _unit_rows(vectors: np.ndarray, name: str) -> np.ndarray:
     """(n, 3) float64 unit vectors; BadInputError for a wrong shape, zero or non-finite rows."""
@@ -201,447 +196,6 @@ def load_shrm(path: str | Path) -> SHRM:
     return SHRM(**read_shrm_fields(path))
 
 
-def _full_m_lighting(lighting: LightingCoefficients, l: int) -> np.ndarray:
-    """L_lm for m = −l..l (complex (3, 2l+1)) from the m >= 0 layout."""
-    m = np.arange(0, l + 1)
-    pos = lighting.alm[:, alm_index(l, m, lighting.lmax)]
-    neg = ((-1.0) ** m)[None, :] * np.conj(pos)
-    return np.concatenate([neg[:, :0:-1], pos], axis=1)
-
-
-def _spin_terms(
-    lighting: LightingCoefficients, coefficients: BRDFCoefficients, F: int, P: int, only_p: int | None = None
-):
-    """Yield (p, s, channel, E_lm, lmax): the ducc0 input of each spin-s synthesis.
-
-    With 𝒟^l_{m,−s}(α, β) = (−1)^s Λ_l ₛY_lm(α, β) for ducc0's spin-s harmonics (fed
-    E_lm = −a_lm, B_lm = 0 for a real-symmetric set; checked against the explicit sum),
-    B_{p,−s} = Σ_lm (−1)^s Λ_l L_lm ρ̂_lps ₛY_lm is one spin-s synthesis (GRAD_ONLY) of
-    E_lm = −(−1)^s Λ_l L_lm ρ̂_lps, and B_{p,s} = (−1)^s conj(B_{p,−s}). For s = 0 the
-    input is the plain spin-0 set Λ_l L_lm ρ̂_lp0.
-    """
-    lmax = min(F, lighting.lmax, coefficients.F0)
-    if P > coefficients.P0:
-        raise ValueError(f"P={P} exceeds the computed P0={coefficients.P0}")
-    l_of_index = np.concatenate([np.arange(m, lmax + 1) for m in range(lmax + 1)])
-    m_of_index = np.concatenate([np.full(lmax + 1 - m, m) for m in range(lmax + 1)])
-    alm_light = lighting.alm[:, alm_index(l_of_index, m_of_index, lighting.lmax)] * Lambda(l_of_index)[None, :]
-    for p in range(P + 1) if only_p is None else (only_p,):
-        for s in range(min(p, lmax) + 1):  # spin s needs l >= s: B_{p,±s} = 0 when s > lmax
-            rho = np.where(l_of_index[None, :] >= s, coefficients.coeffs[l_of_index, p, s, :].T, 0.0)
-            for c in range(3):
-                alm = alm_light[c] * rho[c]
-                yield p, s, c, (alm if s == 0 else -((-1.0) ** s) * alm), lmax
-
-
-def _store_spin_field(out: np.ndarray, p: int, s: int, c: int, P: int, field: np.ndarray) -> None:
-    """Place a synthesized B_{p,−s} (and its conjugate partner B_{p,s}) into ``out``."""
-    if s == 0:
-        out[p, P, ..., c] = field[0]
-    else:
-        neg = field[0] + 1j * field[1]
-        out[p, P - s, ..., c] = neg
-        out[p, P + s, ..., c] = ((-1.0) ** s) * np.conj(neg)
-
-
-def _synthesize_latlong(alm: np.ndarray, spin: int, lmax: int, height: int, width: int, nthreads: int) -> np.ndarray:
-    """One ducc0 synthesis on the pixel-centred lat-long grid (F1 rings, phi0 = π/W): the real
-    map (spin 0) or Q, U of a gradient-only spin field, shape (1 or 2, H, W)."""
-    return ducc0.sht.experimental.synthesis_2d(
-        alm=alm[None, :], spin=spin, lmax=lmax, geometry="F1", ntheta=height, nphi=width,
-        phi0=np.pi / width, nthreads=nthreads, mode="STANDARD" if spin == 0 else "GRAD_ONLY",
-    )
-
-
-def local_shrm_fast(
-    lighting: LightingCoefficients,
-    coefficients: BRDFCoefficients,
-    F: int,
-    P: int,
-    height: int,
-    width: int,
-    *,
-    nthreads: int = 1,
-) -> np.ndarray:
-    """Local SHRM B_pq(α, β) on a lat-long grid by spin-weighted SHT (DESIGN §6).
-
-    One ducc0 ``synthesis_2d`` per (p, |q|, channel); see :func:`_spin_terms`.
-
-    Returns
-    -------
-    complex128 (P+1, 2P+1, H, W, 3), indexed [p, q+P]; zero where |q| > p.
-    """
-    out = np.zeros((P + 1, 2 * P + 1, height, width, 3), dtype=np.complex128)
-    for p, s, c, alm, lmax in _spin_terms(lighting, coefficients, F, P):
-        _store_spin_field(out, p, s, c, P, _synthesize_latlong(alm, s, lmax, height, width, nthreads))
-    return out
-
-
-def global_shrm_latlong(
-    lighting: LightingCoefficients,
-    coefficients: BRDFCoefficients,
-    F: int,
-    P: int,
-    height: int,
-    width: int,
-    *,
-    nthreads: int = 1,
-    azimuth_free: bool = False,
-) -> np.ndarray:
-    """Global SHRM on a lat-long grid, one view order p at a time (memory-lean path).
-
-    Same result as :func:`global_from_local` of :func:`local_shrm_fast`, but only the
-    q <= 0 half of one p-block of the local SHRM is held at a time (B_{p,q} =
-    (−1)^q conj(B_{p,−q})), in real arithmetic, and the rotation
-    B̃_ps = e^{−isβ} Σ_q B_pq d̃^p_sq(α) is done one output order s at a time.
-    ``azimuth_free`` keeps only q = 0 (Kautz & McCool 2000).
-
-    Returns float32 ((P+1)², H, W, 3), real basis.
-    """
-    theta, phi = pixel_angles(height, width)
-    out = np.zeros(((P + 1) ** 2, height, width, 3), dtype=np.float32)
-    root2 = np.sqrt(2.0)
-    terms = itertools.groupby(_spin_terms(lighting, coefficients, F, P), key=lambda term: term[0])
-    for p, p_terms in terms:
-        # real and imaginary parts of B_{p,−s}, s = 0..p, laid out (row, s, column, channel): each
-        # row's (p+1) × (column·channel) block is one right-hand side of the rotation below. The
-        # rotation runs in float32, the maps' storage type (relative rounding ~(p+1)·2⁻²⁴): it is
-        # memory-bound, and float32 halves the traffic
-        re = np.zeros((height, p + 1, width, 3), dtype=np.float32)
-        im = np.zeros((height, p + 1, width, 3), dtype=np.float32)
-        for _, s, c, alm, lmax in p_terms:
-            if azimuth_free and s > 0:
-                continue
-            field = _synthesize_latlong(alm, s, lmax, height, width, nthreads)
-            re[:, s, :, c] = field[0]
-            if s:
-                im[:, s, :, c] = field[1]
-        if p == 0:
-            out[0] = re[:, 0]
-            continue
-        # Σ_q B_pq d̃_sq with B_{p,q>0} = (−1)^q conj(B_{p,−q}): the q > 0 columns fold onto the
-        # q < 0 ones, + for the real part and − for the imaginary part
-        d = wigner_d_tilde(p, theta)[:, p:, :]  # (H, s = 0..p, q = −p..p)
-        d_neg = d[:, :, p::-1]  # q = 0, −1, ..., −p
-        d_pos = d[:, :, p + 1 :] * np.where(np.arange(1, p + 1) % 2, -1.0, 1.0)  # q = 1..p
-        fold_re = d_neg.copy()
-        fold_re[:, :, 1:] += d_pos
-        fold_re = fold_re.astype(np.float32)
-        fold_im = (d_neg[:, :, 1:] - d_pos).astype(np.float32)  # the q = 0 imaginary part is 0
-        # one (p+1) × (p+1) matrix per row times that row's fields: a batched product (BLAS)
-        t_re = fold_re @ re.reshape(height, p + 1, width * 3)  # (H, s, column·channel)
-        t_im = fold_im @ im[:, 1:].reshape(height, p, width * 3)
-        del re, im
-        s_phi = np.arange(p + 1)[:, None] * phi[None, :]  # e^{−isβ}, per (s, column·channel)
-        cos_sb = np.repeat(np.cos(s_phi), 3, axis=1).astype(np.float32)
-        sin_sb = np.repeat(np.sin(s_phi), 3, axis=1).astype(np.float32)
-        value_re = t_re * cos_sb
-        value_re += t_im * sin_sb
-        value_im = t_im * cos_sb
-        value_im -= t_re * sin_sb
-        del t_re, t_im
-        out[real_index(p, 0)] = value_re[:, 0].reshape(height, width, 3)
-        for s in range(1, p + 1):
-            sign = -1.0 if s % 2 else 1.0
-            out[real_index(p, s)] = (np.float32(root2 * sign) * value_re[:, s]).reshape(height, width, 3)
-            out[real_index(p, -s)] = (np.float32(-root2 * sign) * value_im[:, s]).reshape(height, width, 3)
-    return out
-
-
-def local_shrm_at(
-    lighting: LightingCoefficients,
-    coefficients: BRDFCoefficients,
-    F: int,
-    P: int,
-    theta: np.ndarray,
-    phi: np.ndarray,
-    *,
-    nthreads: int = 1,
-    epsilon: float = 1e-10,
-) -> np.ndarray:
-    """Local SHRM at arbitrary directions (θ, φ) by ducc0's general (NUFFT) synthesis.
-
-    Used for cube-map output. Returns complex128 (P+1, 2P+1, n, 3) for n directions.
-    """
-    loc = np.stack([np.ravel(theta), np.mod(np.ravel(phi), 2.0 * np.pi)], axis=-1).astype(np.float64)
-    out = np.zeros((P + 1, 2 * P + 1, loc.shape[0], 3), dtype=np.complex128)
-    for p, s, c, alm, lmax in _spin_terms(lighting, coefficients, F, P):
-        field = ducc0.sht.experimental.synthesis_general(
-            alm=alm[None, :], spin=s, lmax=lmax, loc=loc, epsilon=epsilon, nthreads=nthreads,
-            mode="STANDARD" if s == 0 else "GRAD_ONLY",
-        )
-        _store_spin_field(out, p, s, c, P, field)
-    return out
-
-
-def local_shrm_direct(
-    lighting: LightingCoefficients,
-    coefficients: BRDFCoefficients,
-    F: int,
-    P: int,
-    alpha: np.ndarray,
-    beta: np.ndarray,
-) -> np.ndarray:
-    """Local SHRM B_pq(α, β) = Σ_lm L_lm ρ̂_lpq 𝒟^l_mq(α, β) by explicit Wigner-d sums.
-
-    Slow reference path (RH02 eqs. 5–7); returns complex (n, P+1, 2P+1, 3).
-    """
-    alpha = np.atleast_1d(np.asarray(alpha, float))
-    beta = np.atleast_1d(np.asarray(beta, float))
-    lmax = min(F, lighting.lmax, coefficients.F0)
-    out = np.zeros((alpha.size, P + 1, 2 * P + 1, 3), dtype=np.complex128)
-    for l in range(lmax + 1):
-        D = rotation_D(l, alpha, beta)  # (n, 2l+1, 2l+1) [m+l, q+l]
-        Lm = _full_m_lighting(lighting, l)  # (3, 2l+1)
-        for p in range(P + 1):
-            for q in range(-min(l, p), min(l, p) + 1):
-                rho = coefficients.coeffs[l, p, abs(q), :]  # (3,)
-                out[:, p, q + P, :] += np.einsum("nm,cm->nc", D[:, :, q + l], Lm) * rho
-    return out
-
-
-def global_from_local(local: np.ndarray, alpha: np.ndarray, beta: np.ndarray) -> np.ndarray:
-    """Global SHRM from the local one (RH02 eq. 8, DESIGN §5).
-
-    B̃_ps(α, β) = Σ_q B_pq(α, β) conj(𝒟^p_sq(α, β)) = e^{−isβ} Σ_q B_pq d̃^p_sq(α), from
-    Y_pq(R⁻¹V) = Σ_s conj(𝒟^p_sq) Y_ps(V) (unitarity of 𝒟). Returned in the real basis.
-
-    Parameters
-    ----------
-    local
-        complex (P+1, 2P+1, *grid, 3) with ``alpha``/``beta`` broadcastable to ``grid``.
-    """
-    P = local.shape[0] - 1
-    grid_shape = local.shape[2:-1]
-    # d̃ depends on α only: keep α's own (broadcastable) shape, e.g. one value per row
-    a = np.asarray(alpha, dtype=np.float64)
-    b = np.asarray(beta, dtype=np.float64)
-    real = np.zeros(((P + 1) ** 2,) + grid_shape + (3,))
-    root2 = np.sqrt(2.0)
-    rows_only = a.ndim == len(grid_shape) and all(n == 1 for n in a.shape[1:])  # α constant along rows
-    for p in range(P + 1):
-        blk = local[p, P - p : P + p + 1]  # (2p+1 over q, *grid, 3)
-        if rows_only:
-            # one small d̃^p(α) per row and a batched matrix product over the rest of the row
-            d = wigner_d_tilde(p, a.reshape(-1))[:, p:, :]  # (H, s = 0..p, q)
-            rows = blk.reshape(2 * p + 1, grid_shape[0], -1).transpose(1, 0, 2)  # (H, q, rest)
-            tilde = np.matmul(d, rows).transpose(1, 0, 2).reshape((p + 1,) + grid_shape + (3,))
-        else:
-            d = wigner_d_tilde(p, a)[..., p:, :]  # (*grid, s = 0..p, q)
-            tilde = np.einsum("...sq,q...c->s...c", d, blk, optimize=True)
-        for s in range(0, p + 1):
-            value = np.exp(-1j * s * b)[..., None] * tilde[s]
-            if s == 0:
-                real[real_index(p, 0)] = value.real
-            else:
-                sign = -1.0 if s % 2 else 1.0
-                real[real_index(p, s)] = root2 * sign * value.real
-                real[real_index(p, -s)] = -root2 * sign * value.imag
-    return real
-
-
-def gibbs_negative(coeffs: np.ndarray, P: int) -> float:
-    """Ringing measure: −min / max of the normal-view radiance B(R, V = R) over the map
-    (worst channel; 0 when nothing is negative). Truncating a sharp lobe creates
-    negative lobes (Gibbs); a window reduces them."""
-    height, width = coeffs.shape[1:3]
-    dirs = pixel_directions(height, width)
-    peak = np.full(3, -np.inf)
-    low = np.full(3, np.inf)
-    for r0 in range(0, height, 32):  # row blocks keep the basis array small at high P
-        basis = real_sph_harm(P, dirs[r0 : r0 + 32]).astype(np.float32)  # (h, W, n_coef)
-        normal_view = np.einsum("hwk,khwc->hwc", basis, coeffs[:, r0 : r0 + 32])
-        peak = np.maximum(peak, normal_view.max(axis=(0, 1)))
-        low = np.minimum(low, normal_view.min(axis=(0, 1)))
-    return undershoot(np.stack([low, peak], axis=1))
-
-
-_GOLDEN = (np.sqrt(5.0) - 1.0) / 2.0
-#: Oblique views per pixel of the undershoot sample when P > 0 (:func:`undershoot_views`).
-OBLIQUE_VIEWS = 2
-
-
-def undershoot_views(
-    height: int, width: int, P: int, *, max_view_deg: float = UNDERSHOOT_MAX_VIEW_DEG
-) -> list[tuple[np.ndarray, np.ndarray]]:
-    """The view directions of the undershoot sample of an H × W map, one (θ_V, Δφ_V) pair of
-    (H,) arrays per view: at pixel (i, j) (reflection direction R_ij) the view V_ij has polar
-    angle θ_V[i] and azimuth φ_j + Δφ_V[i], φ_j the pixel column's azimuth.
-
-    The first is the normal view V = R (what :func:`gibbs_negative` measures). When P > 0,
-    :data:`OBLIQUE_VIEWS` more give each pixel a view at θ_v = angle(N, V) in
-    (0, ``max_view_deg``], N = normalize(R + V), since the view-order (P) truncation rings at
-    oblique views too: for row i and extra view e, k = i·OBLIQUE_VIEWS + e, θ_v at
-    1 − frac((k + ½)·0.618…) of the range, and V = cos 2θ_v R + sin 2θ_v (cos ψ t + sin ψ b)
-    with ψ = 2π frac(k·√2), t = z × R / |z × R| and b = R × t. The choice depends on the row
-    only, so rotating the environment about z by whole columns shifts the sample with it (and
-    ``prefilter``'s ``auto`` decision does not change). For P = 0, B does not depend on V.
-    """
-    theta, _ = pixel_angles(height, width)
-    views = [(theta, np.zeros(height))]
-    if P > 0:
-        # R in the x-z plane (φ = 0): t = (0, 1, 0), b = R × t; then rotate by each column's φ
-        R0 = np.stack([np.sin(theta), np.zeros(height), np.cos(theta)], axis=-1)
-        t_axis = np.array([0.0, 1.0, 0.0])
-        b_axis = np.cross(R0, t_axis)
-        for extra in range(OBLIQUE_VIEWS):
-            k = np.arange(height, dtype=np.float64) * OBLIQUE_VIEWS + extra
-            two_theta = (2.0 * np.radians(max_view_deg) * (1.0 - ((k + 0.5) * _GOLDEN) % 1.0))[:, None]
-            psi = (2.0 * np.pi * ((k * np.sqrt(2.0)) % 1.0))[:, None]
-            V0 = np.cos(two_theta) * R0 + np.sin(two_theta) * (np.cos(psi) * t_axis + np.sin(psi) * b_axis)
-            views.append((np.arccos(np.clip(V0[:, 2], -1.0, 1.0)), np.arctan2(V0[:, 1], V0[:, 0])))
-    return views
-
-
-def _row_basis(P: int, theta: np.ndarray, offset: np.ndarray, phi: np.ndarray) -> np.ndarray:
-    """Real SH Y^r_k (k < (P+1)²) at the directions (θ[i], offset[i] + φ[j]): float32 (h, W, n_coef).
-
-    Y^r_lm = A_l|m|(θ) cos(mφ) for m >= 0 and A_l|m|(θ) sin(|m|φ) for m < 0 (the real basis of
-    ``analysis.sh``), so the θ part is evaluated once per row, at φ = 0."""
-    n = (P + 1) ** 2
-    l_of = np.floor(np.sqrt(np.arange(n))).astype(int)
-    m_of = np.arange(n) - l_of * l_of - l_of
-    at_zero = np.stack([np.sin(theta), np.zeros_like(theta), np.cos(theta)], axis=-1)
-    amplitude = real_sph_harm(P, at_zero)[:, l_of * l_of + l_of + np.abs(m_of)].astype(np.float32)  # (h, n)
-    angle = (offset[:, None, None] + phi[None, :, None]) * np.arange(P + 1)  # (h, W, P+1): mφ
-    trig = np.concatenate([np.cos(angle), np.sin(angle)], axis=-1).astype(np.float32)
-    pick = np.where(m_of < 0, P + 1 - m_of, m_of)  # cos(mφ) for m >= 0, sin(|m|φ) for m < 0
-    basis = trig[..., pick]
-    basis *= amplitude[:, None, :]
-    return basis
-
-
-def undershoot_samples(coeffs: np.ndarray, P: int, views: list | None = None) -> np.ndarray:
-    """B(R, V) of a global SHRM (unclamped) on its undershoot sample, channel-major float32
-    (3, n): R at every pixel centre (the renderer interpolates bilinearly between them, which
-    creates no new minimum at a fixed V), V from :func:`undershoot_views` (computed here when
-    not given); the first H·W columns are the normal views."""
-    height, width = coeffs.shape[1:3]
-    views = undershoot_views(height, width, P) if views is None else views
-    _, phi = pixel_angles(height, width)
-    out = np.empty((3, len(views) * height * width), dtype=np.float32)
-    for i, (theta_v, offset) in enumerate(views):
-        block = out[:, i * height * width : (i + 1) * height * width].reshape(3, height, width)
-        for r0 in range(0, height, 32):  # row blocks keep the basis array small at high P
-            rows = slice(r0, r0 + 32)
-            basis = _row_basis(P, theta_v[rows], offset[rows], phi)  # (h, W, n_coef)
-            # per pixel (1, n_coef) @ (n_coef, 3): a batched product over (h, W)
-            per_pixel = np.matmul(basis[:, :, None, :], coeffs[:, rows].transpose(1, 2, 0, 3))  # (h, W, 1, 3)
-            block[:, rows] = per_pixel[:, :, 0, :].transpose(2, 0, 1)
-    return out
-
-
-def undershoot(values: np.ndarray) -> float:
-    """−min / max of sampled radiance, channel-major (3, n); worst channel, 0 when nothing is
-    negative (the measure of ``eps["gibbs_negative"]`` and ``meta["negative_after"]``)."""
-    peak = values.max(axis=1)
-    low = values.min(axis=1)
-    live = peak > 0
-    return float(np.max(np.clip(-low[live] / peak[live], 0.0, None), initial=0.0))
-
-
-def _strength_for(before: np.ndarray, full: np.ndarray, threshold: float, t_max: float) -> float:
-    """The window strength t in [0, t_max] for ``auto``: the smallest t (to t_max·2⁻¹³) with
-    undershoot((1 − t)·before + t·full) <= threshold — the synthesis is linear in σ, so these are
-    the samples of the map at strength t — or, when no t reaches the threshold, the t of a 33-point
-    grid with the least undershoot (0 when the window does not reduce it: where the true radiance
-    is 0 over large regions, any ringing is negative).
-
-    Only two small subsets of the samples matter, per channel: those negative at some t
-    (min(before, full) < 0), and those that can be the maximum at some t
-    (max(before, full) >= max over samples of min(before, full))."""
-    low_side = np.minimum(before, full)
-    high_side = np.maximum(before, full)
-    floor = low_side.max(axis=1, keepdims=True)  # <= the maximum at every t
-    channels = []
-    for c in range(before.shape[0]):
-        keep = (low_side[c] < 0.0) | (high_side[c] >= floor[c])
-        channels.append((before[c, keep].astype(np.float64), full[c, keep].astype(np.float64)))
-
-    def under(t: float) -> float:
-        worst = 0.0
-        for b, f in channels:
-            value = b + t * (f - b)
-            peak = value.max(initial=0.0)
-            if peak > 0.0:
-                worst = max(worst, -value.min(initial=0.0) / peak)
-        return worst
-
-    grid = t_max * np.arange(33) / 32.0
-    values = np.array([under(t) for t in grid])
-    ok = np.flatnonzero(values <= threshold)
-    if ok.size == 0:
-        return float(grid[int(np.argmin(values))])
-    if ok[0] == 0:
-        return 0.0
-    lo, hi = float(grid[ok[0] - 1]), float(grid[ok[0]])
-    for _ in range(8):
-        mid = 0.5 * (lo + hi)
-        if under(mid) <= threshold:
-            hi = mid
-        else:
-            lo = mid
-    return hi
-
-
-def _order_for_window(
-    orders: Any, base: BRDFCoefficients, band_energy: np.ndarray, F: int, P: int, eps: float, q_max: int | None,
-    top: int,
-) -> int | None:
-    """The smallest F' in [F, top] whose field with the full Lanczos window σ_lp(F', P) is
-    predicted to meet ``eps`` in every view band inside the limit, or None (then the window's
-    cost is only budgeted, :func:`_band_window_budget`). Scans with a growing step, then back."""
-    inside = bands_inside(orders.profile, orders.max_view_deg)
-    top = min(top, orders.profile.F0, base.F0)
-
-    def meets(f: int) -> bool:
-        # the window in l (its cost falls as F grows); the view part's cost does not depend on F
-        bands = shrm_view_bands(orders.profile, base, band_energy, f, P, sigma=lanczos_window(f), q_max=q_max).bands
-        return max(bands[b]["predicted_rel_rms"] ** 2 for b in inside) <= eps
-
-    prev, f, step = F, F, 1
-    while f <= top:
-        if meets(f):
-            for g in range(prev + 1, f):
-                if meets(g):
-                    return g
-            return f
-        prev, f, step = f, f + step, step * 2
-    return None
-
-
-def _band_window_budget(
-    orders: Any, base: BRDFCoefficients, band_energy: np.ndarray, F: int, P: int, eps: float, q_max: int | None
-) -> float:
-    """The largest Lanczos strength t whose window adds at most :data:`WINDOW_BUDGET_EPS`·ε to
-    the predicted error energy ε_b of every view band inside the limit (bisection on t; the
-    prediction of :func:`~shrmkit.analysis.view_bands.shrm_view_bands` without the map term)."""
-    inside = bands_inside(orders.profile, orders.max_view_deg)
-
-    def worst_excess(t: float) -> float:
-        sigma = lanczos_sigma(F, P, t) if t > 0.0 else None
-        bands = shrm_view_bands(orders.profile, base, band_energy, F, P, sigma=sigma, q_max=q_max).bands
-        return max(bands[b]["predicted_rel_rms"] ** 2 for b in inside)
-
-    limit = worst_excess(0.0) + WINDOW_BUDGET_EPS * eps
-    if worst_excess(1.0) <= limit:
-        return 1.0
-    lo, hi = 0.0, 1.0
-    for _ in range(10):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if worst_excess(mid) <= limit else (lo, mid)
-    return lo
-
-
-def _windowed(coefficients: BRDFCoefficients, sigma: np.ndarray | None, F: int, P: int) -> BRDFCoefficients:
-    """ρ̂_lpq multiplied by σ_lp (l <= F, p <= P, every q); unchanged for None."""
-    if sigma is None:
-        return coefficients
-    damped = coefficients.coeffs.copy()
-    damped[: F + 1, : P + 1] *= sigma[:, :, None, None]
-    return BRDFCoefficients(coeffs=damped, energy=coefficients.energy, name=coefficients.name)
-
-
 def cube_directions(size: int) -> np.ndarray:
     """Unit texel-centre directions (6, S, S, 3) of the SHRM cube map, faces +x, −x, +y, −y,
     +z, −z of the z-up frame with OpenGL texel axes (the one table: ``brdf_io.cubemap``)."""
@@ -662,6 +216,61 @@ def default_size(F: int, P: int = 0, budget_bytes: int = DEFAULT_MAP_BUDGET_BYTE
     per_row_squared = (P + 1) ** 2 * 2 * 3 * 4  # bytes per S² texels of all maps
     fits = int(np.sqrt(budget_bytes / per_row_squared))
     return max(8, min(rule, fits))
+
+
+#: Under the ``"bands"`` rule the map is the smallest whose bilinear lookup adds at most this
+#: fraction of ε to the predicted error energy of every view band inside the limit (:func:`map_rows`).
+MAP_ERROR_SHARE = 0.01
+#: … and whose bound (which takes the lookup error of the global maps at degree l + P, RH02 eq. 8)
+#: is at most this fraction above the bound of exact evaluation.
+MAP_BOUND_SHARE = 0.25
+
+
+def map_rows(
+    profile: Any, coefficients: Any, band_energy: np.ndarray, F: int, P: int, eps: float, *,
+    sigma: np.ndarray | None = None, q_max: int | None = None, lighting_rows: tuple[int, int] | None = None,
+    max_view_deg: float = DEFAULT_MAX_VIEW_DEG, budget_bytes: int = DEFAULT_MAP_BUDGET_BYTES,
+) -> tuple[int, bool]:
+    """Rows S of the S × 2S maps for the ``"bands"`` rule, and whether the memory budget bound them.
+
+    The error-driven size: the smallest S in [32, :func:`default_size`] (RH02's 10 F within the
+    budget) for which bilinear lookup in the maps adds at most :data:`MAP_ERROR_SHARE` × ε to the
+    predicted error energy of every view band inside the limit (the map term of
+    :func:`~shrmkit.analysis.view_bands.shrm_view_bands`, κ_l ≈ (l(l+1))² h⁴/160 per degree,
+    h = π/S, beside the same statement without lookup) and raises no band's bound by more than
+    :data:`MAP_BOUND_SHARE`. The lookup error falls as h⁴, so this is typically S ≈ 3–5 F instead
+    of RH02's 10 F: what the stated error needs, not more.
+    """
+    from .view_bands import bands_inside  # one module, same layer
+
+    rule_hi = int(np.clip(10 * F, 32, 1024))
+    hi = default_size(F, P, budget_bytes)
+    inside = bands_inside(profile, max_view_deg)
+
+    def statement(rows: int | None) -> list:
+        return shrm_view_bands(profile, coefficients, band_energy, F, P, sigma=sigma, q_max=q_max, map_rows=rows,
+                               lighting_rows=lighting_rows, max_view_deg=max_view_deg).bands
+
+    exact = statement(None)
+    allowed = MAP_ERROR_SHARE * eps
+
+    def fits(rows: int) -> bool:
+        bands = statement(rows)
+        return all(
+            bands[b]["map_rel_rms"] ** 2 - exact[b]["map_rel_rms"] ** 2 <= allowed
+            and bands[b]["bound_rel_rms"] <= (1.0 + MAP_BOUND_SHARE) * exact[b]["bound_rel_rms"]
+            for b in inside
+        )
+
+    lo = min(32, hi)
+    if not fits(hi):
+        return hi, hi < rule_hi
+    if fits(lo):
+        return lo, False
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        lo, hi = (lo, mid) if fits(mid) else (mid, hi)
+    return hi, False
 
 
 def _check_finite(coeffs: np.ndarray, env: Any) -> np.ndarray:
@@ -824,105 +433,59 @@ def prefilter(
     timings["lighting"] = time.perf_counter() - t0
     F_B = scene.F_B if F is None else int(min(F, lighting.lmax))
     P_B = scene.P_B if P is None else int(min(P, orders.P0))
-    sigma = lanczos_sigma(F_B, P_B) if window == "lanczos" else None
     base = orders.coefficients_for(P_B)  # projected (rh02) or fitted to the views that matter (bands)
     band_energy = lighting.band_energy_all()
-    coefficients = _windowed(base, sigma, F_B, P_B)
-    S = default_size(F_B, P_B) if size is None else int(size)
-    if S < 2 or S > 8192:
-        raise BadInputError(None, f"SHRM size must be in [2, 8192] rows, got {S}")
-
-    def synthesize(coefficients: BRDFCoefficients) -> np.ndarray:
-        with np.errstate(over="ignore", invalid="ignore"):  # overflow is checked (and reported) below
-            coeffs = global_shrm_latlong(
-                lighting, coefficients, F_B, P_B, S, 2 * S, nthreads=nthreads, azimuth_free=azimuth_free
-            )
-        return _check_finite(coeffs, env)
-
     q_max = 0 if azimuth_free else None
-    stage("synthesis")
-    t0 = time.perf_counter()
-    coeffs = synthesize(coefficients)
-    timings["synthesis"] = time.perf_counter() - t0
     stage("window")
     t0 = time.perf_counter()
-    views = undershoot_views(S, 2 * S, P_B)
-    values = undershoot_samples(coeffs, P_B, views)
-    before = undershoot(values)
-    strength = 1.0 if window == "lanczos" else 0.0
-    raised = ""
-    if window == "auto" and before > WINDOW_THRESHOLD and orders.criterion != "rh02" and F is None:
-        # a window costs accuracy: find the F at which the fully windowed field still meets ε in
-        # every band inside the view limit, and prefilter there instead (Lanczos costs ~F⁻⁴)
-        # the F the full field needs with the window (an azimuth-free SHRM is judged by the
-        # same F: its own q > 0 loss does not fall with F)
-        F_W = _order_for_window(orders, base, band_energy, F_B, P_B, eps, None, lighting.lmax)
-        if F_W is not None and F_W > F_B:
-            raised = f"F_B raised from {F_B} to {F_W} so that the windowed field meets eps in every view band"
-            F_B = F_W
-            if size is None:
-                S = default_size(F_B, P_B)
-            del coeffs
-            coeffs = synthesize(_windowed(base, None, F_B, P_B))
-            views = undershoot_views(S, 2 * S, P_B)
-            values = undershoot_samples(coeffs, P_B, views)
-            before = undershoot(values)
-    if window in ("none", "lanczos"):
-        reason = "requested"
-    elif before <= WINDOW_THRESHOLD:
-        reason = f"auto: undershoot {before:.3%} of the peak <= threshold {WINDOW_THRESHOLD:.1%}"
-    else:
-        full = lanczos_sigma(F_B, P_B)
+    # the window (and, under the bands rule, the F it needs) from the coefficients and a coarse
+    # sample of the reflected field; the map itself is synthesized once, below
+    lighting_rows = (lighting.rows, lighting.source_rows)
+
+    @functools.cache
+    def rows_for(F_: int) -> int:
+        """The map's rows at order F_ (the window's sample needs no more)."""
+        if size is not None:
+            return int(size)
         if orders.criterion == "rh02":
-            truncation, cost = reflected_error_parts(lighting, orders.coefficients, F_B, P_B, full, q_max=q_max)
-            allowed = truncation.max() + WINDOW_BUDGET_EPS * eps  # ε_B may grow to this (worst channel)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                t_budget = float(np.min(np.sqrt(np.clip(allowed - truncation, 0.0, None) / cost), initial=1.0))
-        else:
-            t_budget = _band_window_budget(orders, base, band_energy, F_B, P_B, eps, q_max)
-        # the synthesis is linear in σ: the map at strength t is (1 − t)·unwindowed + t·full. Keep
-        # the unwindowed map for that when two maps fit the map budget; else one map at a time
-        # (the 256 MiB default budget holds while windowing too) and synthesize again
-        unwindowed = coeffs if 2 * coeffs.nbytes <= DEFAULT_MAP_BUDGET_BYTES else None
-        del coeffs
-        coefficients = _windowed(base, full, F_B, P_B)
-        coeffs = synthesize(coefficients)
-        values_full = undershoot_samples(coeffs, P_B, views)
-        strength = _strength_for(values, values_full, WINDOW_THRESHOLD, t_budget)
-        if strength == 1.0:
-            sigma, values = full, values_full
-        else:
-            sigma = lanczos_sigma(F_B, P_B, strength) if strength > 0.0 else None
-            coefficients = _windowed(base, sigma, F_B, P_B)
-            if unwindowed is not None and strength == 0.0:
-                coeffs = unwindowed
-            elif unwindowed is not None:  # t·full + (1 − t)·unwindowed, in place (float32 rounding)
-                with np.errstate(over="ignore", invalid="ignore"):
-                    coeffs -= unwindowed
-                    coeffs *= np.float32(strength)
-                    coeffs += unwindowed
-                _check_finite(coeffs, env)
-            else:
-                del coeffs
-                coeffs = synthesize(coefficients)
-            # these are the new map's samples (up to float32 rounding)
-            values += np.float32(strength) * (values_full - values)
-        del unwindowed
-        del values_full
-        reason = f"auto: undershoot {before:.3%} of the peak > threshold {WINDOW_THRESHOLD:.1%}"
-        if strength == 0.0:
-            reason += ", not reduced by the Lanczos window"
-        elif undershoot(values) > WINDOW_THRESHOLD:
-            reason += (f", strength capped by the error budget ({WINDOW_BUDGET_EPS:g} eps of added error energy)"
-                       if strength >= t_budget and t_budget < 1.0 else ", strength of the least undershoot")
-    if raised:
-        reason += f"; {raised}"
-    after = undershoot(values)
-    negative_fraction = float(np.mean(values.min(axis=0) < 0.0))
-    if after > 0.0:
-        reason += (f"; undershoot left {after:.3%} of the peak on {negative_fraction:.2%} of the samples, "
-                   "clamped to 0 at the output")
+            return default_size(F_, P_B)
+        return map_rows(orders.profile, base, band_energy, F_, P_B, eps, q_max=q_max, lighting_rows=lighting_rows,
+                        max_view_deg=orders.max_view_deg)[0]
+
+    choice = choose_window(
+        window, lighting, base, F_B, P_B, eps, criterion=orders.criterion,
+        profile=orders.profile if orders.criterion != "rh02" else None, max_view_deg=orders.max_view_deg,
+        band_energy=band_energy, projected=orders.coefficients if orders.criterion == "rh02" else None,
+        q_max=q_max, top=None if F is not None else min(lighting.lmax, orders.F0), map_rows=rows_for,
+        nthreads=max(nthreads, 1),
+    )
+    F_B, sigma, strength = choice.F, choice.sigma, choice.strength
     timings["window"] = time.perf_counter() - t0
+    coefficients = windowed(base, sigma, F_B, P_B)
+    t0 = time.perf_counter()
+    budget_bound = False
+    if size is not None:
+        S = int(size)
+    elif orders.criterion == "rh02":
+        S = default_size(F_B, P_B)  # RH02 §5.2: S ≈ 10 F
+        budget_bound = S < default_size(F_B, 0)
+    else:
+        S, budget_bound = map_rows(
+            orders.profile, base, band_energy, F_B, P_B, eps, sigma=sigma, q_max=q_max,
+            lighting_rows=(lighting.rows, lighting.source_rows), max_view_deg=orders.max_view_deg,
+        )
+    if S < 2 or S > 8192:
+        raise BadInputError(None, f"SHRM size must be in [2, 8192] rows, got {S}")
+    timings["map size"] = time.perf_counter() - t0
+    stage("synthesis")
+    t0 = time.perf_counter()
+    with np.errstate(over="ignore", invalid="ignore"):  # overflow is checked (and reported) below
+        coeffs = global_shrm_latlong(
+            lighting, coefficients, F_B, P_B, S, 2 * S, nthreads=nthreads, azimuth_free=azimuth_free
+        )
+    coeffs = _check_finite(coeffs, env)
+    timings["synthesis"] = time.perf_counter() - t0
+    reason, before, after, negative_fraction = choice.reason, choice.before, choice.after, choice.negative_fraction
     cube_coeffs = None
     if cube:
         stage("cube map")
@@ -963,12 +526,12 @@ def prefilter(
         "lighting": float(lighting.eps()[min(F_B, lighting.lmax)]),
         "reflected": reflected,
         "bound": bound,
-        "gibbs_negative": undershoot(values[:, : S * 2 * S]),  # the normal views: gibbs_negative(coeffs, P_B)
+        "gibbs_negative": choice.normal_after,  # the normal views V = R of the undershoot sample
     }
     timings["errors"] = time.perf_counter() - t0
     timings["total"] = time.perf_counter() - t
-    size_note = "" if size is not None or S == default_size(F_B, 0) else (
-        f"map rows lowered from {default_size(F_B, 0)} to {S} to fit the 256 MiB default budget (use size=)"
+    size_note = "" if not budget_bound else (
+        f"map rows held at {S} by the 256 MiB default budget (use size=)"
     )
     meta = {
         "brdf": brdf.name,
@@ -990,10 +553,12 @@ def prefilter(
         "window_threshold": WINDOW_THRESHOLD,
         "window_cost": float(cost.max()),
         "eps_reflected_unwindowed": unwindowed,
-        "negative_before": None if window == "lanczos" else before,
+        "negative_before": before,
         "negative_after": after,
         "negative_fraction_after": negative_fraction,
-        "negative_max_view_deg": UNDERSHOOT_MAX_VIEW_DEG,
+        "negative_max_view_deg": float(max(v[0] for v in LOCAL_VIEWS_DEG)) if P_B > 0 else 0.0,
+        "negative_sample_pairs": choice.pairs,
+        "window_capped": bool(choice.capped),
         "criterion": orders.criterion,
         "max_view_deg": orders.max_view_deg,
         "scene_capped": bool(scene.capped),

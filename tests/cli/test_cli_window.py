@@ -93,7 +93,15 @@ def test_compare_window(capsys) -> None:
         shrm_rows = [r for r in doc["rows"] if r["key"] in ("shrm", "kautz_mccool")]
         assert len(shrm_rows) == 2
         for r in shrm_rows:
-            assert r["params"]["window"] == ("none" if window == "none" else "lanczos")
+            params = r["params"]
+            if window == "auto":
+                # auto: the window the undershoot needs within the error budget; this 16-row map cannot
+                # resolve the lobe (the scene is capped: F_B = 15 already misses eps), so the budget
+                # leaves no room and the ringing is reported, not hidden
+                assert params["window"] in ("none", "lanczos")
+                assert params["negative_before"] > params["negative_after"] or params["window_strength"] == 0.0
+            else:
+                assert params["window"] == window
     assert main(["compare", "phong:s=100", *COMPARE_FAST]) == 0
     assert "window auto" in capsys.readouterr().out
 

@@ -49,7 +49,7 @@ def test_grace_phong_render_has_no_negative_pixel(offscreen, shared_data, mode):
     assert np.all(linear >= 0.0)
     info = result.built.info
     assert info["window_requested"] == "auto" and info["window"] == "lanczos"
-    # the bands rule first raises F_B so that the windowed field meets eps (8 -> 13); it still rings
+    # the bands rule raises F_B until the field with the window it needs meets eps in every band
     assert info["negative_before"] > WINDOW_THRESHOLD and info["negative_after"] <= WINDOW_THRESHOLD * 1.01
     assert any(line.startswith("window: lanczos") for line in result.built.description)
     # the bare truncation rings on this very image (the issue: ~19 % of the covered pixels) ...
@@ -66,16 +66,15 @@ def test_grace_phong_render_has_no_negative_pixel(offscreen, shared_data, mode):
 
 def test_one_pixel_sun_render_has_no_negative_pixel(offscreen):
     """CI-independent: a one-pixel sun with a sharp Phong lobe rings (2.8 % of the peak at the
-    rule's F_B = 26); ``auto`` raises F_B until the windowed field meets eps in every view band
-    (47), where the ringing is below the threshold and no window is needed; the clamp removes
-    the rest."""
+    rule's F_B = 26); ``auto`` raises F_B to the smallest F whose field, with the window its
+    undershoot needs, meets eps in every view band; the clamp removes the rest."""
     env = shrmkit.load_env("builtin:sun,height=64")
     for mode in ("perpixel", "distant"):
         result, linear, covered = _render(env, "phong:s=200", mode)
         assert np.all(linear >= 0.0) and linear.max() > 0.0
         info = result.built.info
         assert "F_B raised" in info["window_reason"] and info["negative_after"] <= WINDOW_THRESHOLD
-        assert max(b["predicted_rel_rms"] for b in info["view_bands"]) < 0.01
+        assert max(b["predicted_rel_rms"] for b in info["view_bands"]) <= np.sqrt(1.011 * 0.03)
     bare, bare_linear, covered = _render(env, "phong:s=200", "perpixel", window="none")
     assert np.all(bare_linear >= 0.0)
     assert _unclamped_negative_pixels(bare.model, covered) > 0.2 * covered.sum()

@@ -65,10 +65,13 @@ def test_kautz_mccool_equals_shrm_for_phong() -> None:
     match the angular reference."""
     env = load_env("builtin:studio,height=16")
     brdf = load_brdf("phong:s=8")
-    full = prefilter(env, brdf, eps=0.01, P=3)
-    km = prefilter(env, brdf, eps=0.01, F=full.F, P=3, size=full.height, azimuth_free=True)
+    full = prefilter(env, brdf, eps=0.01, P=3, window="none")
+    km = prefilter(env, brdf, eps=0.01, F=full.F, P=3, size=full.height, azimuth_free=True, window="none")
     R, V, _ = sample_pairs(300, seed=5)
     a, b = full.radiance(R, V), km.radiance(R, V)
     np.testing.assert_allclose(b, a, rtol=1e-5, atol=1e-6 * np.abs(a).max())
     ref = reference_radiance(env, brdf, R, V)
-    assert _err(b, ref, np.ones(len(R), bool)) < 0.05  # F capped by the 16-row map
+    # the bare expansion's stated error (the same in every band: Phong does not depend on V),
+    # within the Monte Carlo error of 300 pairs
+    stated = max(band["predicted_rel_rms"] for band in full.meta["view_bands"])
+    assert stated < np.sqrt(0.01) and _err(b, ref, np.ones(len(R), bool)) < 1.2 * stated
