@@ -44,7 +44,8 @@ from .sh import Lambda
 from .view_bands import bands_inside, scene_error_curve, shrm_view_bands, window_matrix
 
 __all__ = [
-    "SceneOrders", "scene_orders", "scene_for", "lighting_lmax", "reflected_error", "reflected_error_parts",
+    "SceneOrders", "scene_orders", "scene_for", "lighting_for", "lighting_lmax", "reflected_error",
+    "reflected_error_parts",
     "residual_bound", "lanczos_window", "lanczos_sigma",
 ]
 
@@ -252,6 +253,15 @@ def scene_for(
     """The lighting coefficients to :func:`lighting_lmax` and the scene orders of ``env`` with
     a BRDF's ``orders``: the one rule used by ``prefilter``, ``shrm orders --env`` and
     ``shrm report``."""
+    lighting = lighting_for(env, orders, F=F, nthreads=nthreads)
+    return lighting, scene_orders(orders, lighting)
+
+
+def lighting_for(
+    env: EnvironmentMap, orders: OrderChoice, *, F: int | None = None, nthreads: int = 0
+) -> LightingCoefficients:
+    """The lighting coefficients of ``env`` to :func:`lighting_lmax`, and (``"bands"``) the pixels'
+    point-light band energies beyond them up to the BRDF's F0."""
     lmax = lighting_lmax(orders, env.radiance.shape[0], F)
     lighting = lighting_coefficients(env.radiance, lmax, name=env.name, nthreads=nthreads)
     if orders.criterion != "rh02" and orders.F0 > lmax:
@@ -259,4 +269,4 @@ def scene_for(
         # point-light spectrum beyond the map's Nyquist limit (what the angular reference sees)
         beyond = point_band_energy(env.radiance, lmax + 1, orders.F0, nthreads=max(nthreads, 1))
         lighting = dataclasses.replace(lighting, beyond=beyond)
-    return lighting, scene_orders(orders, lighting)
+    return lighting

@@ -28,8 +28,9 @@ from ..brdf_io.envmap import EnvironmentMap, load_env
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.latlong import bilinear_lookup
 from ..brdf_io.specs import load_brdf
+from .lights import DEFAULT_LIGHTS, LightSet, check_lights, extract_lights, merge_error_by_band
 from .orders import DEFAULT_MAX_F, DEFAULT_MAX_P, OrderChoice, choose_orders, orders_on_grid_for
-from .scene import reflected_error_parts, residual_bound, scene_for
+from .scene import lighting_for, reflected_error_parts, residual_bound, scene_for
 from .sh import real_sph_harm
 from .shrm_file import read_shrm_fields, save_shrm
 from .synthesis import (
@@ -113,6 +114,13 @@ class SHRM:
         Dict of achieved error estimates (``"brdf"``, ``"lighting"``, ``"bound"``).
     meta
         Provenance: BRDF and environment names, timings, tool version.
+    lights
+        The explicit lights taken out of the environment before prefiltering
+        (:class:`~shrmkit.analysis.lights.LightSet`; None or empty: none): the maps hold the
+        reflection of the rest of the map, and :meth:`radiance` adds the lights' exact reflection.
+    brdf
+        The BRDF the lights are shaded with (loaded from ``meta["lights_brdf"]`` — its spec, or
+        the file it came from — when first needed if not given).
     """
 
     F: int
@@ -122,6 +130,8 @@ class SHRM:
     eps: dict[str, float] = field(default_factory=dict)
     meta: dict[str, Any] = field(default_factory=dict)
     cube: np.ndarray | None = None
+    lights: LightSet | None = field(default=None, repr=False)
+    brdf: Any = field(default=None, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         n = (self.P + 1) ** 2
@@ -140,8 +150,14 @@ class SHRM:
     def width(self) -> int:
         return int(self.coeffs.shape[2])
 
-    def radiance(self, R: np.ndarray, V: np.ndarray, *, clamp: bool = True) -> np.ndarray:
-        """Predicted reflected radiance B(R, V), shape (n, 3) (RH02 eq. 8).
+    @property
+    def has_lights(self) -> bool:
+        """True when the scene has explicit lights beside the maps."""
+        return self.lights is not None and len(self.lights) > 0
+
+    def radiance(self, R: np.ndarray, V: np.ndarray, *, clamp: bool = True, lights: bool = True) -> np.ndarray:
+        """Predicted reflected radiance B(R, V), shape (n, 3): the SHRM (RH02 eq. 8) plus the
+        explicit lights' exact reflection Σ_k ρ̂(ω_k; V, N) E_k (DESIGN §5a).
 
         Parameters
         ----------
@@ -150,10 +166,18 @@ class SHRM:
             here (zero or non-finite rows are refused); the surface normal is
             normalize(R + V).
         clamp
-            Set negative values to 0 (default): the Gibbs undershoot the window left
-            (``meta["negative_after"]`` of the peak on ``meta["negative_fraction_after"]`` of
-            the sampled (R, V); ``data_specs/shrm_file.md``). False returns the truncated
+            Set negative values of the SHRM part to 0 (default): the Gibbs undershoot the
+            window left (``meta["negative_after"]`` of the peak on ``meta["negative_fraction_after"]``
+            of the sampled (R, V); ``data_specs/shrm_file.md``). False returns the truncated
             expansion itself.
+        lights
+            Add the lights (default). ``lights=False`` gives the SHRM part alone;
+            :meth:`light_radiance` gives the lights alone.
+
+        Raises
+        ------
+        BadInputError
+            Bad directions; lights whose BRDF cannot be loaded (``meta["lights_brdf"]``).
         """
         R = _unit_rows(R, "R")
         V = _unit_rows(V, "V")
@@ -163,14 +187,38 @@ class SHRM:
         at_r = bilinear_lookup(maps, R)  # (n, n_coef, 3)
         basis = real_sph_harm(self.P, V)  # (n, n_coef)
         out = np.einsum("nc,nck->nk", basis, at_r)
-        return np.maximum(out, 0.0) if clamp else out
+        if clamp:
+            out = np.maximum(out, 0.0)
+        if lights and self.has_lights:
+            out += self.lights.radiance(self.lights_brdf(), R, V)
+        return out
+
+    def light_radiance(self, R: np.ndarray, V: np.ndarray) -> np.ndarray:
+        """The explicit lights' reflection alone, (n, 3) (zeros without lights)."""
+        R = _unit_rows(R, "R")
+        V = _unit_rows(V, "V")
+        if not self.has_lights:
+            return np.zeros(R.shape)
+        return self.lights.radiance(self.lights_brdf(), R, V)
+
+    def lights_brdf(self) -> Any:
+        """The BRDF the lights are shaded with: ``brdf`` as given, else loaded (once) from
+        ``meta["lights_brdf"]`` (a spec string or the file the BRDF came from)."""
+        if self.brdf is None:
+            source = self.meta.get("lights_brdf")
+            if not source:
+                raise BadInputError(self.meta.get("brdf"), "this SHRM has lights but names no BRDF to shade them")
+            object.__setattr__(self, "brdf", load_brdf(source))
+        return self.brdf
 
     def save(self, path: str | Path) -> Path:
         """Write the SHRM to a ``.shrm.npz`` file (atomic; see ``data_specs/shrm_file.md``)."""
         return save_shrm(path, self)
 
     def view_map(self, view: np.ndarray, *, clamp: bool = True) -> np.ndarray:
-        """Distant-viewer map Σ B̃_pq(α, β) Y^r_pq(V) for one view direction (RH02 eq. 12).
+        """Distant-viewer map Σ B̃_pq(α, β) Y^r_pq(V) for one view direction (RH02 eq. 12): the SHRM
+        part only — a light's highlight is sharper than the map resolves, so renderers shade the
+        lights per pixel (:meth:`light_radiance`).
 
         Returns float32 (H, W, 3); ``clamp`` as in :meth:`radiance`.
         """
@@ -313,6 +361,7 @@ def prefilter(
     criterion: str = DEFAULT_CRITERION,
     max_view_deg: float = DEFAULT_MAX_VIEW_DEG,
     orders: OrderChoice | None = None,
+    lights: str | int = DEFAULT_LIGHTS,
 ) -> SHRM:
     """Prefilter an environment into a global SHRM (RH02 §4–5, Appendix C).
 
@@ -369,6 +418,15 @@ def prefilter(
     cube, cube_size
         Also synthesize the SHRM on a 6 × S × S cube map (default S = rows // 2) through
         ducc0's general synthesis at the texel centres.
+    lights
+        ``"auto"`` (default), ``"none"`` or N: the compact bright regions of the map (sun, lamps,
+        windows) taken out as explicit lights before prefiltering
+        (:func:`~shrmkit.analysis.lights.extract_lights`). The maps then hold the reflection of the
+        rest of the map — orders, window and every stated error are those of that residual,
+        relative to its own reflection (a conservative statement for the whole: the lights only add
+        signal) — and :meth:`SHRM.radiance` adds the lights' exact reflection. Lights merged from
+        more pixels than :data:`~shrmkit.analysis.lights.MAX_SAMPLES_PER_LIGHT` add their merge
+        error, measured against their pixels, to the per-band statement.
     progress
         Optional callable ``progress(stage: str)`` told when each stage starts.
 
@@ -406,6 +464,7 @@ def prefilter(
     """
     eps = check_eps(eps)
     window = check_window(window)
+    lights = check_lights(lights)
 
     def stage(name: str) -> None:
         if progress is not None:
@@ -427,6 +486,16 @@ def prefilter(
         orders = choose_orders(brdf, eps=eps, max_F=max_F, max_P=max_P, criterion=criterion,
                                max_view_deg=max_view_deg)
     timings["orders"] = time.perf_counter() - t0
+    stage("lights")
+    t0 = time.perf_counter()
+    extraction = extract_lights(env, lights)
+    light_set = extraction.lights
+    timings["lights"] = time.perf_counter() - t0
+    source_env, env = env, extraction.residual  # the SHRM holds the map without its lights
+    if not np.any(env.radiance > 0.0):
+        # the lights took everything: the maps are zero and every error is the lights' own
+        env = EnvironmentMap(np.full(env.radiance.shape, np.finfo(np.float32).tiny), name=env.name,
+                             source=env.source)
     stage("lighting")
     t0 = time.perf_counter()
     lighting, scene = scene_for(env, orders, F=F, nthreads=nthreads)
@@ -504,10 +573,33 @@ def prefilter(
         ).astype(np.float32)
         timings["cube"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    statement = shrm_view_bands(
-        orders.profile, base, band_energy, F_B, P_B, sigma=sigma, q_max=q_max, map_rows=S,
-        lighting_rows=(lighting.rows, lighting.source_rows), max_view_deg=orders.max_view_deg,
-    )
+    def state(signal: np.ndarray | None = None):
+        return shrm_view_bands(
+            orders.profile, base, band_energy, F_B, P_B, sigma=sigma, q_max=q_max, map_rows=S,
+            lighting_rows=(lighting.rows, lighting.source_rows), max_view_deg=orders.max_view_deg,
+            signal_band_energy=signal,
+        )
+
+    statement = state()
+    if len(light_set):
+        # the maps hold the map without its lights: relative to that reflection (what holds away from
+        # the lights, ``*_residual``) and, the main statement, to the whole map's reflection (the
+        # lights add signal and, where merged from pixels, their merge error)
+        whole = lighting_for(source_env, orders, F=F, nthreads=nthreads).band_energy_all()
+        residual_bands, statement = statement.bands, state(whole)
+        part = SHRM(F=F_B, P=P_B, coeffs=coeffs)
+        merge_res, merge_whole = (np.zeros(len(residual_bands)),) * 2
+        if extraction.merged:
+            merge_res, merge_whole = merge_error_by_band(
+                extraction, brdf, lambda R, V: part.radiance(R, V, lights=False), orders.profile.edges_deg,
+                whole=lambda R, V: part.radiance(R, V, lights=False) + light_set.radiance(brdf, R, V))
+        for band, own, extra_res, extra in zip(statement.bands, residual_bands, merge_res, merge_whole, strict=True):
+            # merged samples: a Monte Carlo measure, 1.5× in amplitude in the bound covers its sampling error
+            band["lights_rel_rms"] = float(np.sqrt(extra))
+            band["predicted_rel_rms"] = float(np.sqrt(band["predicted_rel_rms"] ** 2 + extra))
+            band["bound_rel_rms"] = float(band["bound_rel_rms"] + 1.5 * np.sqrt(extra))
+            band["predicted_rel_rms_residual"] = float(np.sqrt(own["predicted_rel_rms"] ** 2 + extra_res))
+            band["bound_rel_rms_residual"] = float(own["bound_rel_rms"] + 1.5 * np.sqrt(extra_res))
     # on the coefficients the map was made of (the projection for rh02, the view fit for bands):
     # the window's cost, the energy of its change over all views, is exact for either
     truncation, cost = reflected_error_parts(lighting, base, F_B, P_B, sigma, q_max=q_max)
@@ -535,8 +627,16 @@ def prefilter(
     )
     meta = {
         "brdf": brdf.name,
-        "environment": env.name,
-        "environment_source": getattr(env, "source", ""),
+        "environment": source_env.name,
+        "environment_source": getattr(source_env, "source", ""),
+        "lights_requested": lights,
+        "lights": [light.to_dict() for light in light_set.lights],
+        "lights_flux_share": extraction.flux_share,
+        "lights_threshold": float(extraction.threshold) if np.isfinite(extraction.threshold) else None,
+        "lights_left_in_map": int(extraction.skipped),
+        "lights_brdf": (brdf.to_spec() if brdf.kind == "analytic" else getattr(brdf, "source", None))
+        if len(light_set) else None,
+        "statement_signal": "the reflection of the map without its lights" if len(light_set) else "the reflection",
         "F_rho": orders.F,
         "P_rho": orders.P,
         "F_L": scene.F_L,
@@ -565,4 +665,5 @@ def prefilter(
         "view_bands": statement.bands,
         "extrapolated_samples": int(orders.n_without_data),
     }
-    return SHRM(F=F_B, P=P_B, coeffs=coeffs, tolerance=float(eps), eps=eps_info, meta=meta, cube=cube_coeffs)
+    return SHRM(F=F_B, P=P_B, coeffs=coeffs, tolerance=float(eps), eps=eps_info, meta=meta, cube=cube_coeffs,
+                lights=light_set if len(light_set) else None, brdf=brdf if len(light_set) else None)

@@ -6,7 +6,10 @@ Layout (see ``data_specs/shrm_file.md``): a NumPy ``.npz`` archive with
   index p² + p + q, lat-long pixel centres, z-up frame;
 - ``header``: a JSON string with ``format`` ("shrmkit-shrm"), ``version`` (1), ``F``,
   ``P``, ``tolerance``, ``eps`` (dict), ``grid`` ("latlong"), ``orientation`` and
-  ``meta`` (provenance, timings).
+  ``meta`` (provenance, timings; ``lights`` describes the explicit lights, ``lights_brdf``
+  names the BRDF that shades them);
+- optional ``light_directions`` (n, 3), ``light_power`` (n, 3) float64 and ``light_index``
+  (n,) int64: the explicit lights' samples (DESIGN §5a), all three or none.
 """
 
 from __future__ import annotations
@@ -36,7 +39,12 @@ _MEMBERS = {
     "coeffs": NpzMember("f", "float32", ndim=4, itemsize=4),
     "header": NpzMember("U", "a JSON string", ndim=0, max_bytes=4 * 2**24),
     "cube": NpzMember("f", "float32", ndim=5, itemsize=4, required=False),
+    # explicit lights (DESIGN §5a): sample directions, RGB powers, the light of each sample
+    "light_directions": NpzMember("f", "float64", ndim=2, itemsize=8, required=False, max_bytes=1 << 24),
+    "light_power": NpzMember("f", "float64", ndim=2, itemsize=8, required=False, max_bytes=1 << 24),
+    "light_index": NpzMember("i", "int64", ndim=1, itemsize=8, required=False, max_bytes=1 << 22),
 }
+_LIGHT_KEYS = ("light_directions", "light_power", "light_index")
 _REQUIRED_KEYS = ("format", "version", "F", "P", "tolerance", "eps", "grid", "orientation", "meta")
 
 
@@ -156,6 +164,11 @@ def save_shrm(path: str | Path, shrm: Any) -> Path:
     arrays = {"coeffs": np.asarray(shrm.coeffs, dtype=np.float32)}
     if shrm.cube is not None:
         arrays["cube"] = np.asarray(shrm.cube, dtype=np.float32)
+    lights = getattr(shrm, "lights", None)
+    if lights is not None and len(lights):
+        arrays["light_directions"] = np.asarray(lights.directions, dtype=np.float64)
+        arrays["light_power"] = np.asarray(lights.power, dtype=np.float64)
+        arrays["light_index"] = np.asarray(lights.light, dtype=np.int64)
     text = json.dumps(header, allow_nan=False)
     check_header(path, loads_strict(text, path, "SHRM header"), "cube" in arrays)
     _check_arrays(path, header["P"], arrays["coeffs"], arrays.get("cube"))
@@ -198,4 +211,40 @@ def read_shrm_fields(path: str | Path) -> dict[str, Any]:
     _check_arrays(path, P, coeffs, cube)
     tolerance = math.nan if header["tolerance"] is None else float(header["tolerance"])
     return {"F": F, "P": P, "coeffs": coeffs, "tolerance": tolerance, "eps": header["eps"],
-            "meta": header["meta"], "cube": cube}
+            "meta": header["meta"], "cube": cube, "lights": _read_lights(path, arrays, header["meta"])}
+
+
+def _read_lights(path: Path, arrays: dict[str, np.ndarray], meta: dict) -> Any:
+    """The file's :class:`~shrmkit.analysis.lights.LightSet`, or None; all three arrays or none,
+    matching shapes, finite, non-negative power, a BRDF named to shade them."""
+    from .lights import Light, LightSet
+
+    present = [key for key in _LIGHT_KEYS if key in arrays]
+    if not present:
+        return None
+    if len(present) != len(_LIGHT_KEYS):
+        raise BadInputError(path, f"light arrays incomplete: has {', '.join(present)}, needs {', '.join(_LIGHT_KEYS)}")
+    d, e, k = (np.asarray(arrays[key]) for key in _LIGHT_KEYS)
+    if d.ndim != 2 or d.shape[1] != 3 or e.shape != d.shape or k.shape != (d.shape[0],):
+        raise BadInputError(path, f"light arrays disagree: directions {d.shape}, power {e.shape}, index {k.shape}")
+    if not isinstance(meta.get("lights_brdf"), str) or not meta["lights_brdf"]:
+        raise BadInputError(path, "the file has lights but its meta names no BRDF to shade them (lights_brdf)")
+    described = meta.get("lights") if isinstance(meta.get("lights"), list) else []
+    lights = []
+    for item in described:
+        try:
+            lights.append(Light(
+                direction=tuple(float(x) for x in item["direction"]), elevation_deg=float(item["elevation_deg"]),
+                azimuth_deg=float(item["azimuth_deg"]), power=tuple(float(x) for x in item["power"]),
+                radius_deg=float(item["radius_deg"]), solid_angle=float(item["solid_angle_sr"]),
+                share=float(item["flux_share"]), pixels=int(item["pixels"]), samples=int(item["samples"]),
+                merge_deg=float(item["merge_deg"]),
+            ))
+        except (KeyError, TypeError, ValueError):
+            raise BadInputError(path, f"light description {item!r} is not one the format defines") from None
+    if k.size and (k.min() < 0 or (lights and k.max() >= len(lights))):
+        raise BadInputError(path, "light_index names a light the header does not describe")
+    try:
+        return LightSet(d.astype(np.float64), e.astype(np.float64), k.astype(np.int64), tuple(lights))
+    except (BadInputError, ValueError) as err:
+        raise BadInputError(path, f"bad lights: {err}") from None

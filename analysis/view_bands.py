@@ -623,6 +623,7 @@ def shrm_view_bands(
     map_rows: int | None = None,
     lighting_rows: tuple[int, int] | None = None,
     max_view_deg: float = DEFAULT_MAX_VIEW_DEG,
+    signal_band_energy: np.ndarray | None = None,
 ) -> BandStatement:
     """Predicted and bounded relative RMS error of an SHRM per θ_v band (module docs).
 
@@ -639,6 +640,10 @@ def shrm_view_bands(
         Rows S of the stored S × 2S maps (bilinear lookup; None: exact evaluation).
     lighting_rows
         (rows the SHT ran on, rows of the source map): area averaging before the SHT.
+    signal_band_energy
+        a_l of the lighting the errors are relative to, when it is not the one the map was made
+        of (``band_energy``): the whole map when the SHRM holds the map without its explicit
+        lights (the lights add signal, not error).
 
     Returns
     -------
@@ -679,9 +684,12 @@ def shrm_view_bands(
     map_p = (kept_w * map_pred[None, :, None]).sum(axis=1)
     map_b = (kept_w * map_bound[None, :, None]).sum(axis=1)
     # the resolved signal at the l the lighting holds: a lower bound on the band's signal
-    known = min(band_energy.shape[0], F0 + 1)
-    signal_low = (full[:, :known] * w_bound[None, :known]).sum(axis=1)
-    signal_pred = (full * w_pred[None]).sum(axis=1) + w_pred[-1] * profile.beyond
+    signal_energy = band_energy if signal_band_energy is None else signal_band_energy
+    s_pred, s_bound, _ = (w_pred, w_bound, None) if signal_band_energy is None else _lighting_weights(
+        signal_energy, F0)
+    known = min(signal_energy.shape[0], F0 + 1)
+    signal_low = (full[:, :known] * s_bound[None, :known]).sum(axis=1)
+    signal_pred = (full * s_pred[None]).sum(axis=1) + s_pred[-1] * profile.beyond
     b_tp, b_tb = profile.band_sum(trunc_pred), profile.band_sum(trunc_bound)
     b_mp, b_mb = profile.band_sum(map_p), profile.band_sum(map_b)
     b_sp, b_sl = profile.band_sum(signal_pred), profile.band_sum(signal_low)

@@ -185,7 +185,7 @@ def test_rotating_the_environment_rotates_the_map():
 
 def test_one_pixel_sun_and_sharp_lobe_stay_finite():
     """DESIGN §7: one bright pixel 10⁵× the sky, a sharp lobe: no NaN/overflow."""
-    m = shrmkit.prefilter("builtin:sun,height=64", "phong:s=2000", eps=0.01, size=64)
+    m = shrmkit.prefilter("builtin:sun,height=64", "phong:s=2000", eps=0.01, size=64, lights="none")
     assert np.all(np.isfinite(m.coeffs)) and m.F > 50
 
 
@@ -209,8 +209,8 @@ def test_lanczos_window_damps_ringing_and_reports_its_cost():
     """DESIGN §7: a sharp lobe against a one-pixel sun rings; the Lanczos window reduces the
     negative lobes, and its blur shows up in the reported error."""
     env = shrmkit.load_env("builtin:sun,height=64")
-    plain = shrmkit.prefilter(env, "phong:s=200", eps=0.03, window="none")
-    damped = shrmkit.prefilter(env, "phong:s=200", eps=0.03, window="lanczos")
+    plain = shrmkit.prefilter(env, "phong:s=200", eps=0.03, window="none", lights="none")
+    damped = shrmkit.prefilter(env, "phong:s=200", eps=0.03, window="lanczos", lights="none")
     assert plain.eps["gibbs_negative"] > 0.01
     assert damped.eps["gibbs_negative"] < 0.2 * plain.eps["gibbs_negative"]
     assert damped.eps["reflected"] > plain.eps["reflected"]

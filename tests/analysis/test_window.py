@@ -39,6 +39,12 @@ from shrmkit.brdf_io.errors import BadInputError
 EPS = 0.03
 
 
+def prefilter(*args, **kwargs):
+    """The window works on what is left in the map: these scenes keep their bright lights in it
+    (``lights="none"``) so that they ring."""
+    return shrmkit.prefilter(*args, lights="none", **kwargs)
+
+
 def _undershoot(B: np.ndarray) -> float:
     """−min / max of (n, 3) radiance, worst channel."""
     return float(np.max(np.clip(-B.min(axis=0) / B.max(axis=0), 0.0, None)))
@@ -60,8 +66,8 @@ def _check_auto_against_none(env, brdf_spec: str, *, n_pairs: int = 2000, ratio:
     sits where the bright lights blur, on few pairs: 2000 pairs measure √ε_B to a few % for the
     Phong cases (``ratio``: the band of tests/cli/report/test_report.py)."""
     brdf = shrmkit.load_brdf(brdf_spec)
-    bare = shrmkit.prefilter(env, brdf, eps=EPS, criterion="rh02", window="none")
-    auto = shrmkit.prefilter(env, brdf, eps=EPS, criterion="rh02")  # the default
+    bare = prefilter(env, brdf, eps=EPS, criterion="rh02", window="none")
+    auto = prefilter(env, brdf, eps=EPS, criterion="rh02")  # the default
     assert auto.meta["window_requested"] == "auto" and auto.meta["window"] == "lanczos"
     # orders are chosen first and never change
     assert (auto.F, auto.P, auto.height) == (bare.F, bare.P, bare.height)
@@ -115,7 +121,7 @@ def test_auto_window_one_pixel_sun():
     left is clamped."""
     env = shrmkit.load_env("builtin:sun,height=64")
     got = _check_auto_against_none(env, "phong:s=200")
-    auto = shrmkit.prefilter(env, "phong:s=200", eps=EPS, criterion="rh02")
+    auto = prefilter(env, "phong:s=200", eps=EPS, criterion="rh02")
     assert got["strength"] < 1.0 and "error budget" in auto.meta["window_reason"]
     assert auto.meta["negative_after"] < 0.4 * auto.meta["negative_before"]
     assert auto.meta["negative_fraction_after"] > 0.0 and "clamped to 0" in auto.meta["window_reason"]
@@ -126,7 +132,7 @@ def test_view_dependent_ringing_is_measured_and_damped():
     oblique ones do (the P truncation); the undershoot sample sees them and the (l, p) window
     brings them under the threshold."""
     env = shrmkit.load_env("builtin:sky,height=48")
-    bare = shrmkit.prefilter(env, "microfacet:sigma=0.2", eps=EPS, criterion="rh02", window="none")
+    bare = prefilter(env, "microfacet:sigma=0.2", eps=EPS, criterion="rh02", window="none")
     assert bare.P == 2 and bare.eps["gibbs_negative"] == 0.0
     assert bare.meta["negative_after"] > 10 * WINDOW_THRESHOLD
     # builtin:sky's small sun on a view-dependent lobe: 2000 pairs measure √ε_B only to ±30 %
@@ -139,8 +145,8 @@ def test_no_window_when_nothing_rings():
     """A smooth scene below the threshold keeps the bare expansion (same numbers as "none"): a sky
     whose sun is only 10× the zenith (the default 10⁴× rings)."""
     env = shrmkit.load_env("builtin:sky,height=32,sun_ratio=10")
-    auto = shrmkit.prefilter(env, "microfacet:sigma=0.4", eps=EPS, criterion="rh02")
-    bare = shrmkit.prefilter(env, "microfacet:sigma=0.4", eps=EPS, criterion="rh02", window="none")
+    auto = prefilter(env, "microfacet:sigma=0.4", eps=EPS, criterion="rh02")
+    bare = prefilter(env, "microfacet:sigma=0.4", eps=EPS, criterion="rh02", window="none")
     assert auto.meta["window"] == "none" and auto.meta["window_strength"] == 0.0
     assert auto.meta["negative_before"] <= WINDOW_THRESHOLD and "threshold" in auto.meta["window_reason"]
     assert np.array_equal(auto.coeffs, bare.coeffs) and auto.eps == bare.eps
@@ -148,10 +154,10 @@ def test_no_window_when_nothing_rings():
 
 def test_explicit_windows_and_meta_round_trip(tmp_path):
     env = shrmkit.load_env("builtin:sun,height=32")
-    lanczos = shrmkit.prefilter(env, "phong:s=100", eps=EPS, criterion="rh02", window="lanczos")
+    lanczos = prefilter(env, "phong:s=100", eps=EPS, criterion="rh02", window="lanczos")
     assert lanczos.meta["window"] == "lanczos" and lanczos.meta["window_strength"] == 1.0
     assert lanczos.meta["negative_before"] is None and lanczos.meta["window_reason"].startswith("requested")
-    bare = shrmkit.prefilter(env, "phong:s=100", eps=EPS, criterion="rh02", window="none")
+    bare = prefilter(env, "phong:s=100", eps=EPS, criterion="rh02", window="none")
     assert bare.meta["negative_before"] == bare.meta["negative_after"] == pytest.approx(bare.eps["gibbs_negative"])
     back = shrmkit.load_shrm(lanczos.save(tmp_path / "w.shrm.npz"))
     for key in ("window", "window_requested", "window_strength", "window_reason", "negative_before",
@@ -163,13 +169,13 @@ def test_undershoot_sample_matches_gibbs_negative_and_rotates_with_the_map():
     """The first H·W samples are the normal views (gibbs_negative); rotating the environment by
     whole columns rotates the SHRM, its sample and so the auto decision."""
     env = shrmkit.load_env("builtin:studio,height=32")
-    m = shrmkit.prefilter(env, "microfacet:sigma=0.2", eps=EPS, criterion="rh02", size=32, window="none")
+    m = prefilter(env, "microfacet:sigma=0.2", eps=EPS, criterion="rh02", size=32, window="none")
     values = undershoot_samples(m.coeffs, m.P)
     assert values.shape == (3, 3 * m.height * m.width)  # normal + 2 oblique views per pixel
     assert undershoot(values[:, : m.height * m.width]) == pytest.approx(gibbs_negative(m.coeffs, m.P), abs=1e-7)
     sun = shrmkit.load_env("builtin:sun,height=32,elevation=30")
-    a = shrmkit.prefilter(sun, "microfacet:sigma=0.2", eps=EPS, criterion="rh02", size=32)
-    b = shrmkit.prefilter(sun.rotated_z(2 * np.pi * 8 / 64), "microfacet:sigma=0.2", eps=EPS, criterion="rh02",
+    a = prefilter(sun, "microfacet:sigma=0.2", eps=EPS, criterion="rh02", size=32)
+    b = prefilter(sun.rotated_z(2 * np.pi * 8 / 64), "microfacet:sigma=0.2", eps=EPS, criterion="rh02",
                           size=32)
     assert a.meta["window"] == "lanczos"
     assert b.meta["window_strength"] == pytest.approx(a.meta["window_strength"], rel=1e-9)
@@ -209,7 +215,7 @@ def test_one_validator_for_the_window_name():
     env = shrmkit.load_env("builtin:constant,height=8")
     for bad in ("hann", "", None, "Auto"):
         with pytest.raises(BadInputError, match="window"):
-            shrmkit.prefilter(env, "phong:s=8", eps=0.1, window=bad)
+            prefilter(env, "phong:s=8", eps=0.1, window=bad)
         with pytest.raises(BadInputError, match="window"):
             CompareOptions(window=bad)
     assert CompareOptions().window == "auto"
@@ -222,7 +228,7 @@ def test_map_at_partial_strength_is_the_synthesis_at_that_strength():
 
     env = shrmkit.load_env("builtin:sun,height=64")
     brdf = shrmkit.load_brdf("phong:s=200")
-    auto = shrmkit.prefilter(env, brdf, eps=EPS, criterion="rh02")
+    auto = prefilter(env, brdf, eps=EPS, criterion="rh02")
     t = auto.meta["window_strength"]
     assert 0.0 < t < 1.0
     rh02 = choose_orders(brdf, eps=EPS, criterion="rh02")

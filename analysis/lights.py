@@ -1,0 +1,426 @@
+"""Bright lights as lights: compact bright regions of an environment map taken out as explicit
+lights, the smooth rest left for the SHRM (DESIGN §5a).
+
+A truncated SH expansion of a map holding a sun, lamps or windows beside a smooth rest needs
+orders in the hundreds and rings (Gibbs). Here the map is split once, before prefiltering:
+
+    L(ω) = L_res(ω) + Σ_k E_k δ(ω − ω_k),
+
+where the samples (ω_k, E_k) of the lights are the excess radiance of the bright pixels over
+their surroundings times each pixel's exact solid angle, at the pixel centres — exactly how the
+angular reference (``analysis.reference``) reads a pixel — and the residual L_res holds, in each
+light's pixels, the mean radiance of the ring of pixels around it (never more than the pixel
+held). Per pixel light + residual = original, so the flux ∫ L dω is conserved to rounding.
+The reflected radiance is then B = B_SHRM[L_res](R, V) + Σ_k ρ̂(ω_k; V, N) E_k with
+N = normalize(R + V): the residual through the SHRM, the lights exactly (:meth:`LightSet.radiance`).
+
+**Which regions** (``lights="auto"``, documented in ``data_specs/lights.md``): pixels whose
+luminance (Rec. 709) exceeds :data:`LIGHT_CONTRAST` × the solid-angle-weighted median luminance
+of the map (at least 10⁻³ × its maximum) form connected regions (8-neighbours, across the
+φ seam and around the poles); a region is a light when it fits in a cap of
+:data:`MAX_LIGHT_RADIUS_DEG` about its flux-weighted centre — larger bright regions are smooth
+enough for the SHRM and stay in the map. At most :data:`MAX_LIGHTS` lights, the brightest
+(by flux) first; ``lights=N`` takes at most N of them, ``"none"`` none. What that saves: the
+one-pixel sun of ``builtin:sun`` holds all of the map's high-order energy (a flat spectrum up to
+any order); taken out, the residual is a smooth sky whose SHRM needs low orders and no window.
+
+**Samples.** A light of up to :data:`MAX_SAMPLES_PER_LIGHT` pixels is one sample per pixel
+(exact, as the reference); a larger one is cut into that many groups by median cut (split the
+group of largest angular extent at its flux median along its longest axis), each group one
+sample at its flux-weighted direction carrying its total RGB power. The merge moves flux by at
+most the group's angular radius, stated per light (``merge_deg``) and counted in the error
+statements of :func:`~shrmkit.analysis.shrm.prefilter`.
+
+Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
+SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611; P. Debevec, "A Median Cut Algorithm for Light
+Probe Sampling", SIGGRAPH 2005 posters (the split rule of the samples).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy import ndimage
+
+from ..brdf_io.brdf import BRDF
+from ..brdf_io.envmap import EnvironmentMap
+from ..brdf_io.errors import BadInputError
+from ..brdf_io.exr import luminance_weights
+from ..brdf_io.latlong import pixel_directions, row_solid_angles
+from .pairs import sample_pairs_focused
+from .reference import local_frames
+
+__all__ = [
+    "LightSet", "Light", "extract_lights", "check_lights", "LIGHT_MODES", "DEFAULT_LIGHTS", "LIGHT_CONTRAST",
+    "MAX_LIGHT_RADIUS_DEG", "MAX_LIGHTS", "MAX_SAMPLES_PER_LIGHT", "light_radiance", "Extraction",
+    "merge_error_by_band",
+]
+
+#: ``--lights``: ``auto`` (default), ``none``, or a number N (at most N lights).
+LIGHT_MODES = ("auto", "none")
+DEFAULT_LIGHTS = "auto"
+#: A pixel can belong to a light when its luminance is this many times the map's solid-angle-weighted
+#: median (the sky, the room): the sun of ``builtin:sky`` is 10⁴×, Grace's windows 10²–10⁴×.
+LIGHT_CONTRAST = 100.0
+#: A bright region is a light when it fits in a cap of this angular radius about its centre.
+MAX_LIGHT_RADIUS_DEG = 5.0
+#: At most this many lights per map (the brightest by flux).
+MAX_LIGHTS = 8
+#: Samples per light: one per pixel up to this count, median-cut groups beyond.
+MAX_SAMPLES_PER_LIGHT = 16
+
+
+def check_lights(value: Any) -> str | int:
+    """The one validator of ``lights=``/``--lights``: ``"auto"``, ``"none"`` or an integer N in
+    [0, :data:`MAX_LIGHTS`] (0 is ``"none"``); BadInputError otherwise."""
+    if isinstance(value, str):
+        text = value.strip().lower()
+        if text in LIGHT_MODES:
+            return text
+        try:
+            value = int(text)
+        except ValueError:
+            raise BadInputError(None, f"lights={value!r}: choose auto, none or a number of lights "
+                                      f"0..{MAX_LIGHTS}") from None
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or not 0 <= int(value) <= MAX_LIGHTS:
+        raise BadInputError(None, f"lights={value!r}: choose auto, none or a number of lights 0..{MAX_LIGHTS}")
+    return "none" if int(value) == 0 else int(value)
+
+
+@dataclass(frozen=True)
+class Light:
+    """One extracted light (what ``--json`` and reports list).
+
+    Attributes
+    ----------
+    direction
+        Flux-weighted centre, unit (3,) in the z-up frame, and its ``elevation_deg``/``azimuth_deg``.
+    power
+        RGB Σ E_k (radiance × solid angle, the map's radiance units × sr).
+    radius_deg
+        Angular radius of its pixels about the centre; ``solid_angle`` their total (sr).
+    share
+        Share of the map's flux (luminance) it took out.
+    pixels, samples
+        Pixels it covers; samples it is shaded with.
+    merge_deg
+        Largest angle between a pixel and the sample it was merged into (0 when one per pixel).
+    """
+
+    direction: tuple[float, float, float]
+    elevation_deg: float
+    azimuth_deg: float
+    power: tuple[float, float, float]
+    radius_deg: float
+    solid_angle: float
+    share: float
+    pixels: int
+    samples: int
+    merge_deg: float
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "direction": list(self.direction), "elevation_deg": self.elevation_deg, "azimuth_deg": self.azimuth_deg,
+            "power": list(self.power), "radius_deg": self.radius_deg, "solid_angle_sr": self.solid_angle,
+            "flux_share": self.share, "pixels": self.pixels, "samples": self.samples, "merge_deg": self.merge_deg,
+        }
+
+
+@dataclass(frozen=True, eq=False)
+class LightSet:
+    """The explicit lights of a scene: samples (ω_k, E_k) shaded exactly.
+
+    Attributes
+    ----------
+    directions
+        float64 (n, 3): unit sample directions, z-up frame (DESIGN §2).
+    power
+        float64 (n, 3): RGB E_k = excess radiance × solid angle of each sample.
+    light
+        int (n,): the light each sample belongs to.
+    lights
+        The lights (:class:`Light`), brightest first.
+    """
+
+    directions: np.ndarray
+    power: np.ndarray
+    light: np.ndarray
+    lights: tuple[Light, ...] = field(default=())
+
+    def __post_init__(self) -> None:
+        d = np.asarray(self.directions, dtype=np.float64).reshape(-1, 3)
+        e = np.asarray(self.power, dtype=np.float64).reshape(-1, 3)
+        k = np.asarray(self.light, dtype=np.int64).reshape(-1)
+        if not (d.shape[0] == e.shape[0] == k.shape[0]):
+            raise ValueError(f"light samples disagree: {d.shape}, {e.shape}, {k.shape}")
+        if not (np.all(np.isfinite(d)) and np.all(np.isfinite(e)) and np.all(e >= 0.0)):
+            raise BadInputError(None, "light samples must be finite, with non-negative power")
+        norms = np.linalg.norm(d, axis=1) if d.size else np.ones(0)
+        if np.any(norms == 0.0):
+            raise BadInputError(None, "light sample directions must not be zero")
+        d = d / norms[:, None] if d.size else d
+        for name, value in (("directions", d), ("power", e), ("light", k)):
+            value.setflags(write=False)
+            object.__setattr__(self, name, value)
+
+    @classmethod
+    def empty(cls) -> LightSet:
+        return cls(np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, dtype=np.int64))
+
+    def __len__(self) -> int:
+        return int(self.directions.shape[0])
+
+    @property
+    def total_power(self) -> np.ndarray:
+        """Σ_k E_k per channel (3,)."""
+        return self.power.sum(axis=0)
+
+    def radiance(self, brdf: BRDF, R: np.ndarray, V: np.ndarray) -> np.ndarray:
+        """Σ_k ρ̂(ω_k; V, N) E_k at unit (n, 3) R and V, N = normalize(R + V): (n, 3).
+
+        :func:`light_radiance` of these samples."""
+        return light_radiance(brdf, self.directions, self.power, R, V)
+
+
+def light_radiance(brdf: BRDF, directions: np.ndarray, power: np.ndarray, R: np.ndarray, V: np.ndarray,
+                   *, chunk: int = 1 << 15) -> np.ndarray:
+    """Reflected radiance of point lights: Σ_k ρ̂(ω_k; V, N) E_k, (n, 3), with ρ̂ evaluated in the
+    frame of N = normalize(R + V) exactly as the angular reference (``analysis.reference``) does
+    for each pixel: the model's own ρ̂ (RH02 eq. 2), or ρ · max(N·ω, 0) for measured data."""
+    R = np.atleast_2d(np.asarray(R, dtype=np.float64))
+    V = np.atleast_2d(np.asarray(V, dtype=np.float64))
+    out = np.zeros((R.shape[0], 3))
+    if len(directions) == 0:
+        return out
+    for start in range(0, R.shape[0], chunk):
+        stop = start + chunk
+        frames = local_frames(R[start:stop] + V[start:stop])  # (k, 3, 3) rows t, b, n
+        L_loc = np.einsum("kij,nj->kni", frames, directions)
+        V_loc = np.broadcast_to(np.einsum("kij,kj->ki", frames, V[start:stop])[:, None, :], L_loc.shape)
+        if brdf.kind == "analytic":
+            rho_hat = brdf.rho_hat(L_loc, V_loc)
+        else:
+            rho, _ = brdf.eval_counted(L_loc, V_loc)
+            rho_hat = rho * np.maximum(L_loc[..., 2], 0.0)[..., None]
+        out[start:stop] = np.einsum("knc,nc->kc", rho_hat, power)
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class Extraction:
+    """What :func:`extract_lights` gives: the lights, the residual map and the rule's numbers."""
+
+    lights: LightSet
+    residual: EnvironmentMap
+    threshold: float
+    reference_luminance: float
+    skipped: int  # bright regions left in the map (too large, or beyond the count)
+    flux_share: float  # share of the map's flux (luminance) the lights took
+    exact: LightSet | None = None  # one sample per pixel, when some light was merged
+
+    @property
+    def merged(self) -> bool:
+        return self.exact is not None
+
+
+def extract_lights(env: EnvironmentMap, mode: str | int = DEFAULT_LIGHTS) -> Extraction:
+    """Split ``env`` into explicit lights and a residual map (module docs).
+
+    Parameters
+    ----------
+    env
+        The environment (lat-long, z-up).
+    mode
+        ``"auto"``, ``"none"`` or N (at most N lights): :func:`check_lights`.
+
+    Returns
+    -------
+    Extraction
+        ``lights`` (possibly empty) and ``residual`` (``env`` itself when nothing was taken), such
+        that residual + lights = ``env`` per pixel.
+    """
+    mode = check_lights(mode)
+    radiance = np.asarray(env.radiance, dtype=np.float64)
+    height, width = radiance.shape[:2]
+    if mode == "none" or height < 2:
+        return Extraction(LightSet.empty(), env, np.inf, 0.0, 0, 0.0)
+    limit = MAX_LIGHTS if mode == "auto" else int(mode)
+    Y = radiance @ luminance_weights()
+    omega = np.repeat(row_solid_angles(height, width)[:, None], width, axis=1)
+    y_max = float(Y.max())
+    if not y_max > 0.0:
+        return Extraction(LightSet.empty(), env, np.inf, 0.0, 0, 0.0)
+    reference = _weighted_median(Y.ravel(), omega.ravel())
+    threshold = max(LIGHT_CONTRAST * reference, 1e-3 * y_max)
+    labels, n = _components(Y > threshold)
+    if n == 0:
+        return Extraction(LightSet.empty(), env, threshold, reference, 0, 0.0)
+    dirs = pixel_directions(height, width)
+    index = np.arange(1, n + 1)
+    flux = ndimage.sum_labels(Y * omega, labels, index)
+    order = np.argsort(flux)[::-1]
+    cos_max = np.cos(np.radians(MAX_LIGHT_RADIUS_DEG))
+    kept, skipped = [], 0
+    for j in order:
+        label = index[j]
+        mask = labels == label
+        centre = _centre(dirs[mask], (Y * omega)[mask])
+        if float((dirs[mask] @ centre).min()) < cos_max or len(kept) >= limit:
+            skipped += 1
+            continue
+        kept.append((label, mask, centre))
+    if not kept:
+        return Extraction(LightSet.empty(), env, threshold, reference, skipped, 0.0)
+    residual = radiance.copy()
+    all_bright = labels > 0
+    samples_d, samples_e, samples_k, lights = [], [], [], []
+    pixels_d, pixels_e, pixels_k = [], [], []
+    total_flux = float((Y * omega).sum())
+    for k, (_, mask, centre) in enumerate(kept):
+        ring = _dilate(mask) & ~all_bright
+        fill = (radiance[ring] * omega[ring, None]).sum(axis=0) / max(float(omega[ring].sum()), 1e-300) \
+            if ring.any() else np.zeros(3)
+        # rounded to the map's own type first, so that residual + lights = map holds to float64 rounding
+        residual[mask] = np.minimum(radiance[mask], fill[None, :]).astype(env.radiance.dtype)
+        excess = (radiance[mask] - residual[mask]) * omega[mask][:, None]  # (m, 3) ≥ 0
+        pix_dirs = dirs[mask]
+        d, e, merge = _median_cut(pix_dirs, excess, MAX_SAMPLES_PER_LIGHT)
+        pixels_d.append(pix_dirs)
+        pixels_e.append(excess)
+        pixels_k.append(np.full(len(pix_dirs), k))
+        samples_d.append(d)
+        samples_e.append(e)
+        samples_k.append(np.full(len(d), k))
+        lum = excess @ luminance_weights()
+        centre = _centre(pix_dirs, lum) if lum.sum() > 0 else centre
+        el = float(np.degrees(np.arcsin(np.clip(centre[2], -1.0, 1.0))))
+        az = float(np.degrees(np.arctan2(centre[1], centre[0])) % 360.0)
+        radius = float(np.degrees(np.arccos(np.clip((pix_dirs @ centre).min(), -1.0, 1.0))))
+        lights.append(Light(
+            direction=tuple(float(x) for x in centre), elevation_deg=el, azimuth_deg=az,
+            power=tuple(float(x) for x in excess.sum(axis=0)), radius_deg=radius,
+            solid_angle=float(omega[mask].sum()), share=float(lum.sum() / total_flux) if total_flux > 0 else 0.0,
+            pixels=int(mask.sum()), samples=len(d), merge_deg=merge,
+        ))
+    light_set = LightSet(np.concatenate(samples_d), np.concatenate(samples_e), np.concatenate(samples_k),
+                         tuple(lights))
+    residual_env = EnvironmentMap(residual.astype(env.radiance.dtype), name=env.name,
+                                  source=f"{env.source or env.name} without {len(lights)} light(s)")
+    share = float(sum(light.share for light in lights))
+    exact = None
+    if any(light.merge_deg > 0.0 for light in lights):
+        exact = LightSet(np.concatenate(pixels_d), np.concatenate(pixels_e), np.concatenate(pixels_k), tuple(lights))
+    return Extraction(light_set, residual_env, threshold, reference, skipped, share, exact)
+
+
+def merge_error_by_band(
+    extraction: Extraction, brdf: BRDF, shrm_part: Any, edges_deg: Any, *, whole: Any = None,
+    per_band: int = 48, seed: int = 0,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per band of θ_v: the energy of the merged samples' error (against one sample per pixel) over
+    the energy of ``shrm_part`` (the SHRM's reflection of the residual map) and of ``whole`` (that
+    plus the lights; callables (R, V) -> (n, 3)), measured on (R, V) pairs focused on the lights
+    with importance weights (:func:`~shrmkit.analysis.pairs.sample_pairs_focused`): two
+    (n_bands,) arrays, zeros when nothing was merged. The same relative measures as the per-band
+    statements they are added to."""
+    n_bands = len(edges_deg) - 1
+    if not extraction.merged:
+        return np.zeros(n_bands), np.zeros(n_bands)
+    merged, exact = extraction.lights, extraction.exact
+    centres = np.array([light.direction for light in merged.lights])
+    weights = np.array([max(float(np.sum(light.power)), 1e-300) for light in merged.lights])
+    R, V, theta_v, w = sample_pairs_focused(per_band, edges_deg, centre=centres, centre_weights=weights, seed=seed)
+    diff = merged.radiance(brdf, R, V) - exact.radiance(brdf, R, V)
+    band = np.clip(np.searchsorted(np.radians(np.asarray(edges_deg, dtype=np.float64)), theta_v, side="right") - 1,
+                   0, n_bands - 1)
+    num = np.bincount(band, weights=w * (diff**2).sum(axis=1), minlength=n_bands)
+
+    def ratio(signal_of: Any) -> np.ndarray:
+        signal = np.asarray(signal_of(R, V), dtype=np.float64)
+        den = np.bincount(band, weights=w * (signal**2).sum(axis=1), minlength=n_bands)
+        return np.where(den > 0, num / np.where(den > 0, den, 1.0), np.where(num > 0, np.inf, 0.0))
+
+    return ratio(shrm_part), ratio(whole if whole is not None else shrm_part)
+
+
+def _weighted_median(values: np.ndarray, weights: np.ndarray) -> float:
+    order = np.argsort(values)
+    cumulative = np.cumsum(weights[order])
+    return float(values[order][np.searchsorted(cumulative, 0.5 * cumulative[-1])])
+
+
+def _components(mask: np.ndarray) -> tuple[np.ndarray, int]:
+    """Connected regions of a lat-long mask, 8-neighbours, joined across the φ seam and, for regions
+    touching the first or last row, around the pole. Labels 1..n."""
+    labels, n = ndimage.label(mask, structure=np.ones((3, 3), dtype=bool))
+    if n == 0:
+        return labels, 0
+    parent = np.arange(n + 1)
+
+    def find(a: int) -> int:
+        while parent[a] != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        return a
+
+    def union(a: int, b: int) -> None:
+        if a and b:
+            ra, rb = find(a), find(b)
+            if ra != rb:
+                parent[max(ra, rb)] = min(ra, rb)
+
+    height = mask.shape[0]
+    for i in range(height):  # the seam: column W−1 neighbours column 0 in rows i−1..i+1
+        for di in (-1, 0, 1):
+            if 0 <= i + di < height:
+                union(int(labels[i, -1]), int(labels[i + di, 0]))
+    for row in (0, height - 1):  # a pole: every pixel of the first (last) row touches it
+        touching = np.unique(labels[row][labels[row] > 0])
+        for a in touching[1:]:
+            union(int(touching[0]), int(a))
+    roots = np.array([find(a) for a in range(n + 1)])
+    unique = np.unique(roots[1:])
+    relabel = np.zeros(n + 1, dtype=labels.dtype)
+    relabel[1:] = np.searchsorted(unique, roots[1:]) + 1
+    return relabel[labels], int(unique.size)
+
+
+def _dilate(mask: np.ndarray) -> np.ndarray:
+    """One-pixel 8-neighbour dilation, periodic in φ."""
+    padded = np.concatenate([mask[:, -1:], mask, mask[:, :1]], axis=1)
+    grown = ndimage.binary_dilation(padded, structure=np.ones((3, 3), dtype=bool))
+    return grown[:, 1:-1]
+
+
+def _centre(dirs: np.ndarray, weight: np.ndarray) -> np.ndarray:
+    c = (dirs * weight[:, None]).sum(axis=0)
+    norm = np.linalg.norm(c)
+    return c / norm if norm > 0 else dirs.mean(axis=0) / max(np.linalg.norm(dirs.mean(axis=0)), 1e-300)
+
+
+def _median_cut(dirs: np.ndarray, power: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray, float]:
+    """(sample directions, sample powers, largest merge angle in degrees): one sample per pixel up
+    to ``count`` pixels, else ``count`` flux-median-cut groups."""
+    if len(dirs) <= count:
+        return dirs.copy(), power.copy(), 0.0
+    weight = power @ luminance_weights()
+    weight = np.where(weight > 0, weight, 1e-300)
+    groups = [np.arange(len(dirs))]
+    while len(groups) < count:
+        spans = [np.ptp(dirs[g], axis=0).max() if len(g) > 1 else -1.0 for g in groups]
+        j = int(np.argmax(spans))
+        if spans[j] <= 0.0:
+            break
+        g = groups.pop(j)
+        axis = int(np.argmax(np.ptp(dirs[g], axis=0)))
+        order = g[np.argsort(dirs[g, axis], kind="stable")]
+        cumulative = np.cumsum(weight[order])
+        cut = int(np.clip(np.searchsorted(cumulative, 0.5 * cumulative[-1]) + 1, 1, len(order) - 1))
+        groups += [order[:cut], order[cut:]]
+    out_d = np.array([_centre(dirs[g], weight[g]) for g in groups])
+    out_e = np.array([power[g].sum(axis=0) for g in groups])
+    merge = max(float(np.degrees(np.arccos(np.clip((dirs[g] @ c).min(), -1.0, 1.0)))) for g, c in zip(groups, out_d,
+                                                                                                       strict=True))
+    return out_d, out_e, merge
