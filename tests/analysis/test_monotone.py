@@ -11,6 +11,8 @@ microfacet lobe under the sun of ``builtin:sky``.
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 
@@ -50,11 +52,11 @@ def test_tighter_tolerance_never_gives_a_larger_error(env_spec, spec):
         # what is stated holds: within the tolerance (plus the map's documented 1 % of ε) unless capped
         if not shrm.meta["scene_capped"]:
             assert stated[-1] ** 2 <= 1.011 * eps, (eps, stated[-1])
-    for a, b in zip(stated, stated[1:]):
+    for a, b in itertools.pairwise(stated):
         assert b <= a + 1e-12, stated
-    for a, b in zip(bounds, bounds[1:]):
+    for a, b in itertools.pairwise(bounds):
         assert b <= a + 1e-12, bounds
-    for (a, sa), (b, sb) in zip(measured, measured[1:]):
+    for (a, sa), (b, sb) in itertools.pairwise(measured):
         assert b <= a + 2.0 * np.hypot(sa, sb), measured
     # and it falls by much: the loosest against the tightest tolerance
     assert measured[-1][0] < 0.6 * measured[0][0], measured
