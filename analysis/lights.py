@@ -275,6 +275,16 @@ def extract_lights(env: EnvironmentMap, mode: str | int = DEFAULT_LIGHTS) -> Ext
         return Extraction(LightSet.empty(), env, threshold, reference, skipped, 0.0)
     residual = radiance.copy()
     all_bright = labels > 0
+    if not np.any(np.where(np.any([mask for _, mask, _ in kept], axis=0)[..., None], 0.0, radiance) > 0.0):
+        # the lights are all there is: keep the residual a map (the smallest normal float32, so the
+        # SHT has something to expand) rather than a black one, which analyses refuse
+        residual[...] = np.maximum(residual, 0.0)
+        tiny = np.finfo(np.float32).tiny
+        outside = ~np.any([mask for _, mask, _ in kept], axis=0)
+        residual[outside] = tiny
+        floor = tiny
+    else:
+        floor = 0.0
     samples_d, samples_e, samples_k, lights = [], [], [], []
     pixels_d, pixels_e, pixels_k = [], [], []
     total_flux = float((Y * omega).sum())
@@ -283,7 +293,7 @@ def extract_lights(env: EnvironmentMap, mode: str | int = DEFAULT_LIGHTS) -> Ext
         fill = (radiance[ring] * omega[ring, None]).sum(axis=0) / max(float(omega[ring].sum()), 1e-300) \
             if ring.any() else np.zeros(3)
         # rounded to the map's own type first, so that residual + lights = map holds to float64 rounding
-        residual[mask] = np.minimum(radiance[mask], fill[None, :]).astype(env.radiance.dtype)
+        residual[mask] = np.minimum(radiance[mask], np.maximum(fill, floor)[None, :]).astype(env.radiance.dtype)
         excess = (radiance[mask] - residual[mask]) * omega[mask][:, None]  # (m, 3) ≥ 0
         pix_dirs = dirs[mask]
         d, e, merge = _median_cut(pix_dirs, excess, MAX_SAMPLES_PER_LIGHT)

@@ -492,10 +492,6 @@ def prefilter(
     light_set = extraction.lights
     timings["lights"] = time.perf_counter() - t0
     source_env, env = env, extraction.residual  # the SHRM holds the map without its lights
-    if not np.any(env.radiance > 0.0):
-        # the lights took everything: the maps are zero and every error is the lights' own
-        env = EnvironmentMap(np.full(env.radiance.shape, np.finfo(np.float32).tiny), name=env.name,
-                             source=env.source)
     stage("lighting")
     t0 = time.perf_counter()
     lighting, scene = scene_for(env, orders, F=F, nthreads=nthreads)
@@ -662,6 +658,13 @@ def prefilter(
         "criterion": orders.criterion,
         "max_view_deg": orders.max_view_deg,
         "scene_capped": bool(scene.capped),
+        # one summary of every budget that stops the rule from meeting ε (orders' caps, the map's
+        # resolution of the lighting, the window, the map's memory budget)
+        "capped": bool(orders.capped or scene.capped or choice.capped or budget_bound),
+        "capped_by": [name for name, hit in (
+            ("orders: --max-F/--max-P", orders.capped), ("lighting: the map's resolution (F_B at its lmax)",
+                                                           scene.capped),
+            ("window budget", choice.capped), ("map budget: 256 MiB", budget_bound)) if hit],
         "view_bands": statement.bands,
         "extrapolated_samples": int(orders.n_without_data),
     }

@@ -27,6 +27,7 @@ from ..render.mesh import load_mesh
 from ..render.strip import write_comparison_strip
 from .common import (
     add_env_orientation,
+    add_lights_option,
     add_order_rule,
     add_window_option,
     load_env_arg,
@@ -59,6 +60,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--eps", type=tolerance, default=DEFAULT_EPS,
                         help=f"SHRM tolerance (default {DEFAULT_EPS:g})")
     add_window_option(parser)
+    add_lights_option(parser)
     add_order_rule(parser)
     parser.add_argument("--pairs", type=number_in(10, 10**6, integer=True), default=d.n_pairs,
                         help=f"sampled (R, V) pairs (default {d.n_pairs})")
@@ -98,7 +100,7 @@ def _options(args: argparse.Namespace) -> CompareOptions:
         eps=args.eps, env_height=args.env_height, n_pairs=args.pairs, max_view_deg=args.max_view, seed=args.seed,
         lower_P=args.lower_p, lobes=_lobes(args.lobes), n_elevations=args.elevations,
         cabral_reference_height=args.cabral_reference_height or None, window=args.window,
-        criterion=args.criterion, rule_max_view_deg=args.max_view_deg,
+        criterion=args.criterion, rule_max_view_deg=args.max_view_deg, lights=args.lights,
     )
 
 

@@ -11,12 +11,14 @@ import argparse
 import numpy as np
 from rich.table import Table
 
+from ..analysis.lights import extract_lights
 from ..analysis.orders import DEFAULT_MAX_F, DEFAULT_MAX_P, choose_orders
 from ..analysis.scene import scene_for
 from ..analysis.tolerance import DEFAULT_EPS
 from ..brdf_io.specs import load_brdf
 from .common import (
     add_env_orientation,
+    add_lights_option,
     add_order_rule,
     load_env_arg,
     order_rule,
@@ -40,6 +42,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--env", help="environment (builtin:sky or a map file): also report F_L, F_B and the bound")
     parser.add_argument("--json", action="store_true", help="print one JSON object instead of tables")
     add_order_rule(parser)
+    add_lights_option(parser)
     add_env_orientation(parser)
 
 
@@ -66,9 +69,11 @@ def run(args: argparse.Namespace) -> int:
     }
     if args.env:
         env = load_env_arg(args.env, args)
-        _, scene = scene_for(env, orders)
+        extraction = extract_lights(env, args.lights)  # the SHRM holds the map without its lights
+        _, scene = scene_for(extraction.residual, orders)
         doc.update(
-            environment=env.name, F_L=scene.F_L, F_B=scene.F_B, P_B=scene.P_B, eps_L=scene.eps_L,
+            environment=env.name, lights=[light.to_dict() for light in extraction.lights.lights], F_L=scene.F_L,
+            F_B=scene.F_B, P_B=scene.P_B, eps_L=scene.eps_L,
             lighting_capped=scene.lighting_capped, bound=scene.bound, bound_units=scene.bound_units,
             scene_capped=scene.capped, scene_view_bands=list(scene.view_bands),
         )
@@ -100,7 +105,9 @@ def _print_tables(doc: dict, table: np.ndarray) -> None:
     print_view_bands(doc["view_bands"], f"error by view band at (F, P) = ({doc['F']}, {doc['P']}) under a point light",
                      point_light=True)
     if "F_B" in doc:
-        scene = Table(title=f"scene orders with {doc['environment']}")
+        lights = doc["lights"]
+        with_lights = f" without its {len(lights)} light(s), shaded exactly" if lights else ""
+        scene = Table(title=f"scene orders with {doc['environment']}{with_lights}")
         bound_name = "residual bound (eps)" if doc["criterion"] == "rh02" else "bound (rel. RMS, worst band)"
         for key in ("F_L", "F_B", "P_B", "eps_L(F_L)", bound_name):
             scene.add_column(key, justify="right")

@@ -20,6 +20,7 @@ from ..brdf_io.errors import BadInputError
 from ..brdf_io.specs import load_brdf
 from .common import (
     add_env_orientation,
+    add_lights_option,
     add_order_rule,
     add_window_option,
     load_env_arg,
@@ -39,12 +40,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--env", required=True, help="environment: builtin:sky, builtin:studio, or a map file")
     parser.add_argument("--brdf", required=True, help="BRDF spec or file")
     parser.add_argument("--eps", type=tolerance, default=DEFAULT_EPS, help=f"tolerance (default {DEFAULT_EPS:g})")
-    parser.add_argument("--size", type=int, help="SHRM rows S (S x 2S lat-long); default 10 F, clamped to [32, 1024]")
+    parser.add_argument("--size", type=int, help="SHRM rows S (S x 2S lat-long); default: the smallest whose "
+                        "bilinear lookup adds at most 1%% of eps to any view band's error (bands rule; 10 F for rh02)")
     parser.add_argument("--max-F", type=int, default=DEFAULT_MAX_F)
     parser.add_argument("--max-P", type=int, default=DEFAULT_MAX_P)
     parser.add_argument("--cube", action="store_true", help="also store the SHRM on a 6 x S x S cube map")
     parser.add_argument("--cube-size", type=int, help="cube face size S (default: rows // 2)")
     add_window_option(parser)
+    add_lights_option(parser)
     add_order_rule(parser)
     parser.add_argument("--json", action="store_true",
                         help="print one JSON object (orders, errors, view bands, meta) instead of tables")
@@ -66,7 +69,7 @@ def run(args: argparse.Namespace) -> int:
         task = bar.add_task("prefiltering", total=None)
         shrm = prefilter(
             env, brdf, eps=args.eps, size=args.size, max_F=args.max_F, max_P=args.max_P, cube=args.cube,
-            cube_size=args.cube_size, window=args.window, **order_rule(args),
+            cube_size=args.cube_size, window=args.window, lights=args.lights, **order_rule(args),
             progress=lambda stage: bar.update(task, description=f"prefiltering: {stage}"),
         )
     shrm.save(out)
@@ -75,15 +78,30 @@ def run(args: argparse.Namespace) -> int:
                     "eps": shrm.eps, "bytes": out.stat().st_size, "meta": shrm.meta})
         return 0
     table = Table(title=f"SHRM {brdf.name} x {env.name}")
-    for key in ("F", "P", "map", "eps brdf", "eps reflected", "bound", "orders s", "lighting s", "synthesis s", "MB"):
+    for key in ("F", "P", "map", "lights", "eps brdf", "eps reflected", "bound", "total s", "MB"):
         table.add_column(key, justify="right")
     t = shrm.meta["timings"]
+    n_lights = len(shrm.meta["lights"])
     table.add_row(
-        str(shrm.F), str(shrm.P), f"{shrm.height}x{shrm.width}", f"{shrm.eps['brdf']:.3g}",
-        f"{shrm.eps['reflected']:.3g}", f"{shrm.eps['bound']:.3g}", f"{t['orders']:.3f}", f"{t['lighting']:.3f}",
-        f"{t['synthesis']:.3f}", f"{out.stat().st_size / 1e6:.2f}",
+        str(shrm.F), str(shrm.P), f"{shrm.height}x{shrm.width}",
+        f"{n_lights} ({len(shrm.lights)} samples)" if n_lights else "0", f"{shrm.eps['brdf']:.3g}",
+        f"{shrm.eps['reflected']:.3g}", f"{shrm.eps['bound']:.3g}", f"{t['total']:.3f}",
+        f"{out.stat().st_size / 1e6:.2f}",
     )
     print_table(table)
+    stdout.print("time by stage (s): " + ", ".join(f"{key} {value:.3f}" for key, value in t.items() if key != "total"),
+                 markup=False, soft_wrap=True)
+    if n_lights:
+        lights = Table(title=f"lights taken out of the map ({shrm.meta['lights_flux_share']:.1%} of its flux), "
+                             "shaded exactly")
+        for key in ("elevation", "azimuth", "radius", "flux share", "RGB power", "pixels", "samples", "merge"):
+            lights.add_column(key, justify="right")
+        for light in shrm.meta["lights"]:
+            lights.add_row(f"{light['elevation_deg']:.2f}°", f"{light['azimuth_deg']:.2f}°",
+                           f"{light['radius_deg']:.2f}°", f"{light['flux_share']:.2%}",
+                           " ".join(f"{x:.3g}" for x in light["power"]), str(light["pixels"]), str(light["samples"]),
+                           f"{light['merge_deg']:.2f}°" if light["merge_deg"] else "exact")
+        print_table(lights)
     limit = f"view limit {shrm.meta['max_view_deg']:g}°, rule {shrm.meta['criterion']}"
     print_view_bands(shrm.meta["view_bands"], f"error by view band ({limit})")
     if shrm.cube is not None:
@@ -95,6 +113,9 @@ def run(args: argparse.Namespace) -> int:
     stdout.print(f"undershoot (most negative radiance / peak): before {before}, after {meta['negative_after']:.3%}; "
                  f"eps reflected {shrm.eps['reflected']:.3g} includes the window's {meta['window_cost']:.3g}",
                  markup=False, soft_wrap=True)
+    if shrm.meta.get("capped"):
+        stdout.print(f"[yellow]capped:[/yellow] eps {shrm.tolerance:g} is not met in every view band inside the "
+                     f"limit ({', '.join(shrm.meta['capped_by'])})", soft_wrap=True)
     if shrm.meta.get("orders_message"):
         stdout.print(f"[yellow]note:[/yellow] {shrm.meta['orders_message']}")
     stdout.print(f"wrote {out}")

@@ -18,7 +18,15 @@ from ..analysis.tolerance import DEFAULT_EPS
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.specs import brdf_sources
 from ..render.mesh import load_mesh
-from .common import add_env_orientation, add_order_rule, add_window_option, stderr, stdout, tolerance
+from .common import (
+    add_env_orientation,
+    add_lights_option,
+    add_order_rule,
+    add_window_option,
+    stderr,
+    stdout,
+    tolerance,
+)
 from .report.batch import BRDF_SUFFIXES, run_batch
 from .report.options import load_report_env, profile
 
@@ -78,6 +86,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--fit-samples", type=_positive_int, default=None, help="fit samples (default 16384, quick 4096)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_window_option(p)
+    add_lights_option(p)
     add_order_rule(p)
     add_env_orientation(p)
     p.epilog = "exit status: 0 all reports made, 1 some BRDFs failed (see summary), 2 bad usage"
@@ -89,7 +98,8 @@ def options_from_args(args: argparse.Namespace):
     changes = {"eps": args.eps, "lobes": args.lobes, "preview": args.preview, "seed": args.seed, "mesh": args.mesh,
                "env_up": args.env_up, "env_flip": args.env_flip, "env_azimuth": args.env_azimuth,
                "env_layer": args.env_layer, "env_part": args.env_part,
-               "window": args.window, "criterion": args.criterion, "max_view_deg": args.max_view_deg}
+               "window": args.window, "lights": args.lights, "criterion": args.criterion,
+               "max_view_deg": args.max_view_deg}
     for key, value in (("tolerances", args.tolerances), ("envs", tuple(args.env) if args.env else None),
                        ("env_height", args.env_height), ("models", args.models), ("n_pairs", args.pairs),
                        ("max_F", args.max_F), ("fit_samples", args.fit_samples)):

@@ -28,6 +28,7 @@ from ..render.webgl_page import (
 )
 from .common import (
     add_env_orientation,
+    add_lights_option,
     add_order_rule,
     add_window_option,
     load_env_arg,
@@ -47,8 +48,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--eps", type=tolerance, default=DEFAULT_EPS,
                    help=f"SHRM tolerance epsilon (default {DEFAULT_EPS:g})")
     p.add_argument("--size", type=number_in(8, 1024, integer=True), default=None, metavar="S",
-                   help="SHRM rows S (S x 2S lat-long) for the prefilter; default 10 F, then lowered to fit the page")
+                   help="SHRM rows S (S x 2S lat-long) for the prefilter; default: what the error needs "
+                   "(shrm prefilter), then lowered to fit the page")
     add_window_option(p)
+    add_lights_option(p)
     add_order_rule(p)
     p.add_argument("--mode", choices=VIEW_MODES, default="distant", help="initial render mode (default distant)")
     p.add_argument("--exposure", type=number_in(-30.0, 30.0, unit=" stops"), default=None,
@@ -78,7 +81,8 @@ def run(args: argparse.Namespace) -> int:
     check_writable(out)
     env = load_env_arg(args.env, args)
     brdf = load_brdf(args.brdf)
-    shrm = prefilter(env, brdf, eps=args.eps, size=args.size, window=args.window, **order_rule(args))
+    shrm = prefilter(env, brdf, eps=args.eps, size=args.size, window=args.window, lights=args.lights,
+                     **order_rule(args))
     page = build_view(
         shrm, env, mesh=args.mesh, mode=args.mode, exposure=args.exposure, tone=args.tone, azimuth=args.azimuth,
         elevation=args.elevation, zoom=args.zoom, background=not args.no_background, budget=budget, still=args.still,
@@ -87,8 +91,11 @@ def run(args: argparse.Namespace) -> int:
     write_view(out, text)
     s = page.data["shrm"]
     mesh = page.data["mesh"]
-    print(f"SHRM F={shrm.F} P={shrm.P} on {shrm.height}x{shrm.width} (eps {args.eps:g}, achieved eps_B "
-          f"{shrm.eps['reflected']:.3g})")
+    worst = max((band["predicted_rel_rms"] for band in shrm.meta["view_bands"] if band["inside"]), default=0.0)
+    lights = len(shrm.meta["lights"])
+    print(f"SHRM F={shrm.F} P={shrm.P} on {shrm.height}x{shrm.width} (eps {args.eps:g}: predicted relative RMS "
+          f"{worst:.3g} in the worst view band to {shrm.meta['max_view_deg']:g} degrees)"
+          + (f", {lights} light(s) shaded exactly" if lights else ""))
     print(f"page: P={s['P']}, maps {s['height']}x{s['width']}, mesh {mesh['name']} {mesh['triangles']} triangles, "
           f"still image: {page.still_renderer}")
     for note in page.notes:

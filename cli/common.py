@@ -12,6 +12,7 @@ from rich.console import Console
 from rich.measure import Measurement
 from rich.table import Table
 
+from ..analysis.lights import DEFAULT_LIGHTS, LIGHT_CONTRAST, MAX_LIGHT_RADIUS_DEG, MAX_LIGHTS, check_lights
 from ..analysis.shrm import DEFAULT_WINDOW, WINDOW_BUDGET_EPS, WINDOW_THRESHOLD, WINDOWS
 from ..analysis.tolerance import check_eps
 from ..analysis.view_bands import CRITERIA, DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG
@@ -22,6 +23,7 @@ from ..brdf_io.jsonutil import to_jsonable
 __all__ = [
     "add_env_orientation",
     "add_window_option",
+    "add_lights_option",
     "add_order_rule",
     "order_rule",
     "env_orientation",
@@ -126,9 +128,29 @@ def add_window_option(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--window", choices=WINDOWS, default=DEFAULT_WINDOW,
         help=f"damping of the SHRM's Gibbs ringing (negative lobes): auto (default) applies Lanczos sigma-factors "
-        f"just strong enough when the undershoot passes {100 * WINDOW_THRESHOLD:g}%% of the peak, within "
-        f"{WINDOW_BUDGET_EPS:g} eps of added error; lanczos: full Lanczos; none: the bare truncation. What is left "
+        f"just strong enough when the undershoot passes {100 * WINDOW_THRESHOLD:g}%% of the peak, raising F_B "
+        "until the windowed field meets eps in every view band (the rh02 rule: within "
+        f"{WINDOW_BUDGET_EPS:g} eps of added error); lanczos: full Lanczos; none: the bare truncation. What is left "
         "is clamped to 0 at the output",
+    )
+
+
+def _lights_arg(text: str) -> str | int:
+    """argparse type of ``--lights`` (:func:`~shrmkit.analysis.lights.check_lights`)."""
+    try:
+        return check_lights(text)
+    except BadInputError as err:
+        raise argparse.ArgumentTypeError(str(err)) from None
+
+
+def add_lights_option(parser: argparse.ArgumentParser) -> None:
+    """``--lights auto|none|N``: bright compact regions taken out of the map as exact lights, for
+    every verb that prefilters (``analysis.lights``; data_specs/lights.md)."""
+    parser.add_argument(
+        "--lights", type=_lights_arg, default=DEFAULT_LIGHTS, metavar="auto|none|N",
+        help=f"take the sun, lamps and windows out of the map as lights shaded exactly (auto, default: regions "
+        f"{LIGHT_CONTRAST:g}x brighter than the map's median within a {MAX_LIGHT_RADIUS_DEG:g} degree cap, at most "
+        f"{MAX_LIGHTS}); N: at most N; none: keep them in the map (they ring)",
     )
 
 

@@ -37,7 +37,7 @@ from typing import Any
 
 import numpy as np
 
-from ...brdf_io.latlong import bilinear_lookup
+from ...brdf_io.latlong import bilinear_lookup, pixel_directions
 from ..reference import reference_map
 from .icosahedron import barycentric_weights, icosahedron
 
@@ -105,10 +105,17 @@ class RSIBRMaps:
 
 
 def rsibr_from_shrm(shrm: Any) -> RSIBRMaps:
-    """The twelve maps from an SHRM: M_i = Σ B̃_pq Y^r_pq(v_i) (RH02 eq. 12), on the SHRM's grid."""
+    """The twelve maps from an SHRM: M_i = Σ B̃_pq Y^r_pq(v_i) (RH02 eq. 12), on the SHRM's grid,
+    plus, when the SHRM has explicit lights (DESIGN §5a), their reflection at each pixel's R
+    (Cabral's maps hold the whole radiance: they have no other place for the lights)."""
     views, faces = icosahedron()
     t0 = time.perf_counter()
     maps = np.stack([shrm.view_map(v) for v in views]).astype(np.float32)
+    if getattr(shrm, "has_lights", False):
+        R = pixel_directions(shrm.height, shrm.width).reshape(-1, 3)
+        for i, v in enumerate(views):
+            V = np.broadcast_to(np.asarray(v, dtype=np.float64) / np.linalg.norm(v), R.shape)
+            maps[i] += shrm.light_radiance(R, V).reshape(maps.shape[1:]).astype(np.float32)
     seconds = time.perf_counter() - t0
     return RSIBRMaps(views, faces, maps, {"source": "shrm", "seconds": seconds})
 

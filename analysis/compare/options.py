@@ -6,6 +6,7 @@ import math
 from dataclasses import dataclass
 
 from ...brdf_io.errors import BadInputError
+from ..lights import DEFAULT_LIGHTS, check_lights
 from ..shrm import DEFAULT_WINDOW, check_window
 from ..tolerance import DEFAULT_EPS, check_eps
 from ..view_bands import DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG, check_criterion, check_max_view
@@ -53,6 +54,9 @@ class CompareOptions:
         The window of every SHRM of the comparison (the SHRM rows, Kautz–McCool, Cabral's
         maps from the SHRM) against Gibbs ringing, one of ``analysis.shrm.WINDOWS``
         (:func:`~shrmkit.analysis.shrm.prefilter`; default ``"auto"``).
+    lights
+        The explicit lights of every SHRM of the comparison (``prefilter(lights=)``: ``"auto"``,
+        ``"none"`` or N; :mod:`~shrmkit.analysis.lights`). Cabral's maps from the SHRM hold them too.
     """
 
     eps: float = DEFAULT_EPS
@@ -68,11 +72,13 @@ class CompareOptions:
     window: str = DEFAULT_WINDOW
     criterion: str = DEFAULT_CRITERION
     rule_max_view_deg: float = DEFAULT_MAX_VIEW_DEG
+    lights: str | int = DEFAULT_LIGHTS
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
         set_(self, "eps", check_eps(self.eps))
         check_window(self.window)
+        set_(self, "lights", check_lights(self.lights))
         check_criterion(self.criterion)
         set_(self, "rule_max_view_deg", check_max_view(self.rule_max_view_deg))
         set_(self, "lobes", tuple(int(k) for k in self.lobes))

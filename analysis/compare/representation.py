@@ -157,7 +157,8 @@ class BuildContext:
             self.stage("SHRM")
             t0 = time.perf_counter()
             shrm = prefilter(self.env, self.brdf, eps=self.options.eps, window=self.options.window,
-                             criterion=self.options.criterion, max_view_deg=self.options.rule_max_view_deg)
+                             criterion=self.options.criterion, max_view_deg=self.options.rule_max_view_deg,
+                             lights=self.options.lights)
             self._base = (shrm, time.perf_counter() - t0)
         return self._base
 

@@ -26,7 +26,7 @@ def _params(shrm: SHRM, **extra: Any) -> dict[str, Any]:
     return {"F": shrm.F, "P": shrm.P, "map": f"{shrm.height}x{shrm.width}", "window": meta["window"],
             "window_strength": meta["window_strength"], "eps_B": shrm.eps["reflected"],
             "negative_before": meta["negative_before"], "negative_after": meta["negative_after"],
-            "view_bands": meta["view_bands"], **extra}
+            "view_bands": meta["view_bands"], "lights": len(meta.get("lights", [])), **extra}
 
 
 def _same_grid(ctx: BuildContext, P: int, **kwargs: Any) -> tuple[SHRM, float]:
@@ -36,7 +36,7 @@ def _same_grid(ctx: BuildContext, P: int, **kwargs: Any) -> tuple[SHRM, float]:
     t0 = time.perf_counter()
     shrm = prefilter(ctx.env, ctx.brdf, eps=ctx.options.eps, F=base.F, P=P, size=base.height,
                      window=ctx.options.window, criterion=ctx.options.criterion,
-                     max_view_deg=ctx.options.rule_max_view_deg, **kwargs)
+                     max_view_deg=ctx.options.rule_max_view_deg, lights=ctx.options.lights, **kwargs)
     return shrm, time.perf_counter() - t0
 
 

@@ -260,7 +260,7 @@ def _environments(brdf: BRDF, options: ReportOptions, choices: dict[float, Order
             _stage(progress, f"prefilter {env.name} eps={tol:g}")
             shrm = prefilter(env, brdf, eps=tol, max_F=options.max_F, max_P=options.max_P, window=options.window,
                              criterion=options.criterion, max_view_deg=options.max_view_deg, nthreads=nthreads,
-                             orders=choices[tol])
+                             orders=choices[tol], lights=options.lights)
             err = relative_rms(shrm.radiance(R, V), reference)  # clamped at 0, as rendered
             bands = beside_measured(band_relative_rms(shrm.radiance(Rb, Vb), reference_b, theta_b, BAND_EDGES,
                                                       weight_b), shrm.meta["view_bands"])
@@ -297,6 +297,9 @@ def _environments(brdf: BRDF, options: ReportOptions, choices: dict[float, Order
                 "lighting_seconds": t["lighting"],
                 "synthesis_seconds": t["synthesis"],
                 "window_seconds": t["window"],
+                "lights": len(shrm.meta["lights"]),
+                "capped": bool(shrm.meta["capped"]),
+                "capped_by": list(shrm.meta["capped_by"]),
                 # the angular reference for the same S x 2S output, extrapolated from the pairs
                 "reference_map_seconds": ref_seconds / options.n_pairs * n_out,
             }
@@ -317,6 +320,10 @@ def _environments(brdf: BRDF, options: ReportOptions, choices: dict[float, Order
                     "window": row["window"],
                     "window_strength": row["window_strength"],
                     "negative_after": row["negative_after"],
+                    "lights": list(shrm.meta["lights"]),
+                    "lights_flux_share": shrm.meta["lights_flux_share"],
+                    "capped": row["capped"],
+                    "capped_by": row["capped_by"],
                     "n_pairs": options.n_pairs,
                     "max_view_deg": options.max_view_deg,
                 })

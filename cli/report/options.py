@@ -11,6 +11,7 @@ from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 from ...analysis.fit.models_param import MODELS
+from ...analysis.lights import DEFAULT_LIGHTS, check_lights
 from ...analysis.orders import DEFAULT_MAX_P
 from ...analysis.shrm import DEFAULT_WINDOW, check_window
 from ...analysis.tolerance import DEFAULT_EPS, check_eps
@@ -70,6 +71,9 @@ class ReportOptions:
     criterion, max_view_deg
         The order rule and its view limit (``analysis.view_bands``); the measured errors are
         sampled up to the same view limit.
+    lights
+        The explicit lights of every SHRM of the report (``prefilter(lights=)``; ``"auto"``,
+        ``"none"`` or N): the report lists them per environment.
     """
 
     eps: float = DEFAULT_EPS
@@ -96,11 +100,13 @@ class ReportOptions:
     window: str = DEFAULT_WINDOW
     criterion: str = DEFAULT_CRITERION
     max_view_deg: float = DEFAULT_MAX_VIEW_DEG
+    lights: str | int = DEFAULT_LIGHTS
     profile: str = field(default="full")
 
     def __post_init__(self) -> None:
         check_eps(self.eps)
         check_window(self.window)
+        object.__setattr__(self, "lights", check_lights(self.lights))
         check_criterion(self.criterion)
         check_max_view(self.max_view_deg)
         for tol in self.tolerances:

@@ -1,5 +1,7 @@
 """``--window none|lanczos|auto`` on every verb that prefilters (prefilter, render, report,
-compare): default ``auto``, passed through to the SHRM, an invalid name exits 2."""
+compare): default ``auto``, passed through to the SHRM, an invalid name exits 2. The scenes keep
+their sun in the map (``--lights none``): taken out as a light it would not ring
+(tests/cli/test_cli_lights.py)."""
 
 from __future__ import annotations
 
@@ -17,9 +19,9 @@ from shrmkit.cli.report.options import ReportOptions
 SUN = "builtin:sun,height=32"
 
 REPORT_FAST = ["--quick", "--preview", "none", "--models", "lafortune", "--tolerances", "0.1", "--eps", "0.1",
-               "--pairs", "30", "--fit-samples", "1024", "--no-progress", "--env", SUN]
+               "--pairs", "30", "--fit-samples", "1024", "--no-progress", "--env", SUN, "--lights", "none"]
 COMPARE_FAST = ["--env", SUN, "--env-height", "16", "--pairs", "100", "--lobes", "none",
-                "--cabral-reference-height", "0"]
+                "--cabral-reference-height", "0", "--lights", "none"]
 
 
 @pytest.mark.parametrize("verb", ["prefilter", "render", "report", "compare"])
@@ -40,7 +42,8 @@ def test_invalid_window_exits_2(verb, tmp_path: Path, capsys) -> None:
 @pytest.mark.parametrize("window", ["none", "lanczos", "auto"])
 def test_prefilter_window(window, tmp_path: Path, capsys) -> None:
     out = tmp_path / "m.shrm.npz"
-    assert main(["prefilter", "--env", SUN, "--brdf", "phong:s=100", "--window", window, "-o", str(out)]) == 0
+    assert main(["prefilter", "--env", SUN, "--brdf", "phong:s=100", "--window", window, "--lights", "none",
+                 "-o", str(out)]) == 0
     meta = shrmkit.load_shrm(out).meta
     assert meta["window_requested"] == window
     assert meta["window"] == ("none" if window == "none" else "lanczos")
@@ -50,7 +53,7 @@ def test_prefilter_window(window, tmp_path: Path, capsys) -> None:
 
 def test_prefilter_window_defaults_to_auto(tmp_path: Path) -> None:
     out = tmp_path / "m.shrm.npz"
-    assert main(["prefilter", "--env", SUN, "--brdf", "phong:s=100", "-o", str(out)]) == 0
+    assert main(["prefilter", "--env", SUN, "--brdf", "phong:s=100", "--lights", "none", "-o", str(out)]) == 0
     meta = shrmkit.load_shrm(out).meta
     assert meta["window_requested"] == "auto" and meta["negative_before"] > meta["negative_after"]
 
@@ -61,7 +64,7 @@ def test_render_window(offscreen, tmp_path: Path, capsys) -> None:
         png = tmp_path / f"{window}.png"
         extra = [] if window is None else ["--window", window]
         rc = main(["render", "builtin:sphere", "--env", SUN, "--brdf", "phong:s=100", "--size", "24",
-                   "--fps-frames", "0", "--mode", "perpixel", *extra, "-o", str(png)])
+                   "--fps-frames", "0", "--mode", "perpixel", "--lights", "none", *extra, "-o", str(png)])
         assert rc == 0 and png.is_file()
         assert shown in capsys.readouterr().out
 
