@@ -277,21 +277,23 @@ def shrmkit_row(env: EnvironmentMap, brdf: Any, method: str, eps: float, views: 
     grid = pixel_directions(S, 2 * S).reshape(-1, 3)
     sample = views[:: max(1, len(views) // n_time_views)][:n_time_views]
 
-    def maps() -> None:
+    def maps(lights: bool) -> None:
         for v in sample:
             m = shrm.view_map(v)
-            if has_lights:  # the lights are shaded per pixel beside the map (DESIGN §5a)
+            if lights:  # the lights are shaded per pixel beside the map (DESIGN §5a)
                 m = m + shrm.light_radiance(grid, np.broadcast_to(v, grid.shape)).reshape(m.shape)
 
-    t_maps, _ = clocked(maps)
+    t_maps, _ = clocked(lambda: maps(has_lights))
     R, V, theta_v, w = pairs
     bands = measure_bands(shrm.radiance(R, V), ref, theta_v, w, shrm.meta.get("view_bands"))
     timings = shrm.meta["timings"]
     stages = ", ".join(f"{k} {fmt_time(v)}" for k, v in timings.items() if k != "total" and v >= 5e-4)
     notes = [f"T_setup stages (wall): {stages}", f"window: {shrm.meta.get('window_reason', '')}"]
     if has_lights:
+        t_bare, _ = clocked(lambda: maps(False))
         notes.append(f"lights: {len(shrm.lights)} samples of {len(shrm.meta.get('lights', []))} light(s), "
-                     f"{100 * float(shrm.meta.get('lights_flux_share', 0.0)):.3g} % of the flux")
+                     f"{100 * float(shrm.meta.get('lights_flux_share', 0.0)):.3g} % of the flux; T_map without "
+                     f"them {fmt_time(t_bare.cpu / len(sample))}")
     row = Measured(
         method=method, setup=setup, per_map=t_maps * (1.0 / len(sample)),
         nbytes=int(shrm.coeffs.nbytes) + light_bytes(shrm), bands=bands,
@@ -336,12 +338,18 @@ def truncated_row(env: EnvironmentMap, brdf: Any, S: int, views: np.ndarray, pai
         b["bound"] = float(np.sqrt((w[sel, None] * bound[sel] ** 2).sum() / den)) if den > 0 else None
     lit = int(ts.lit.sum())
     cones = np.degrees(ts.cones.half_angle)
+    # the same sum with the KD-tree cone query (scipy cKDTree.query_ball_point on the pixel directions)
+    t_tree, kd = clocked(lambda: lobe_truncated_sum(env, brdf, cones=ts.cones, query="kdtree"))
+    t_kd, _ = clocked(lambda: kd.radiance_and_bound(grid[pi], views[vi]))
+    kd_note = (f"with the KD-tree cone query instead: T_map {fmt_time(t_kd.cpu * grid.shape[0] / n_samples)}* "
+               f"(+ tree {fmt_time(t_tree.cpu)}); the lat-long row query is used above")
     return Measured(
         method="truncated", setup=setup, per_map=t_sample * (grid.shape[0] / n_samples), nbytes=ts.nbytes,
         bands=bands, orders=(f"cone {cones.min():.3g}°" if cones.min() == cones.max() else
                              f"cone {cones.min():.3g}-{cones.max():.3g}°"), grid=f"{S}", extrapolated=True,
         exact_bound=True,
-        notes=[f"sums {terms / n_samples:.4g} pixels per output of {lit} lit ({100 * terms / n_samples / lit:.3g} %)"],
+        notes=[f"sums {terms / n_samples:.4g} pixels per output of {lit} lit ({100 * terms / n_samples / lit:.3g} %); "
+               + kd_note],
     )
 
 
@@ -393,6 +401,8 @@ def speed_table(tasks: list[tuple[str, str]], args: argparse.Namespace, lut: Any
                 rows.append(row)
             base = rows[0].total(n_maps)
             for row in rows:
+                row.notes.append("per band " + ", ".join(
+                    f"{band_name(b['theta_v_deg'])} {fmt_err(b['measured_rel_rms'])}" for b in row.bands))
                 worst = row.worst()
                 row_flags = row.flags(args.flag_se)
                 total = row.total(n_maps)
