@@ -87,6 +87,13 @@ class Shading:
         Fragment replacements of the same shading as a screen pass
         (:func:`screen_fragment_replacements`: R read from the geometry pass, V per pixel), or
         None when the mode cannot be deferred (it needs N, vertex attributes or a per-frame map).
+    uniforms
+        Constant uniforms of the fragment shader (both passes): name -> (GLSL type, flat
+        values), types ``float``, ``int``, ``vec3`` and ``vec3[]`` (an array of vec3) — the
+        lights and the BRDF's parameters (``render.brdf_glsl``).
+    textures
+        Further float32 (h, w, 3) textures by sampler name (a measured BRDF's table,
+        ``shrmBrdfTex``), bound beside ``shrmTex`` in both passes.
     """
 
     texture: np.ndarray
@@ -95,6 +102,8 @@ class Shading:
     attributes: dict[str, np.ndarray] = field(default_factory=dict)
     state: Any = None
     deferred: Replacements | None = None
+    uniforms: dict[str, tuple[str, list[float]]] = field(default_factory=dict)
+    textures: dict[str, np.ndarray] = field(default_factory=dict)
 
 
 def check_texture_size(shape: tuple[int, ...], what: str, hint: str = "") -> None:

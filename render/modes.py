@@ -42,6 +42,7 @@ import numpy as np
 from ..analysis.baselines.gaussian_lobes import GaussianLobeModel, fit_gaussian_lobes, sg_mip_stack
 from ..analysis.baselines.rsibr import RSIBRMaps, rsibr_from_shrm
 from ..analysis.baselines.selfshadow import vertex_visibility_sh
+from ..analysis.lights import DEFAULT_LIGHTS, check_lights
 from ..analysis.shrm import DEFAULT_WINDOW, SHRM, check_window, prefilter
 from ..analysis.view_bands import DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG, check_criterion, check_max_view
 from ..brdf_io.brdf import BRDF
@@ -50,7 +51,14 @@ from ..brdf_io.errors import BadInputError
 from .gaussian_shader import gaussian_shading
 from .glsl import Shading
 from .mesh import Mesh
-from .shader import distant_shading, distant_update, perpixel_shading, rsibr_shading, rsibr_update
+from .shader import (
+    cached_light_shading,
+    distant_shading,
+    distant_update,
+    perpixel_shading,
+    rsibr_shading,
+    rsibr_update,
+)
 
 __all__ = [
     "RenderOptions",
@@ -61,6 +69,7 @@ __all__ = [
     "mode_names",
     "get_mode",
     "self_shadow_modes",
+    "lights_info",
 ]
 
 #: Gaussian lobes per view elevation and fitted elevations allowed (``fit_gaussian_lobes``).
@@ -87,6 +96,11 @@ class RenderOptions:
     criterion, max_view_deg
         The SHRM modes' order rule and its view limit (``prefilter(criterion=, max_view_deg=)``,
         :mod:`shrmkit.analysis.view_bands`).
+    lights
+        The SHRM modes' explicit lights (``prefilter(lights=)``: ``"auto"``, ``"none"`` or at most
+        N lights; validated by :func:`~shrmkit.analysis.lights.check_lights`): the compact bright
+        regions of the map are taken out and shaded exactly per pixel (``render.brdf_glsl``).
+        ``rsibr`` always prefilters with ``"none"``: Cabral et al.'s maps hold the whole map.
     """
 
     lobes: int = 3
@@ -95,10 +109,12 @@ class RenderOptions:
     window: str = DEFAULT_WINDOW
     criterion: str = DEFAULT_CRITERION
     max_view_deg: float = DEFAULT_MAX_VIEW_DEG
+    lights: str | int = DEFAULT_LIGHTS
 
     def __post_init__(self) -> None:
         check_window(self.window)
         check_criterion(self.criterion)
+        object.__setattr__(self, "lights", check_lights(self.lights))
         object.__setattr__(self, "max_view_deg", check_max_view(self.max_view_deg))
         for name, (lo, hi) in (("lobes", LOBES_RANGE), ("elevations", ELEVATIONS_RANGE)):
             value = getattr(self, name)
@@ -174,21 +190,50 @@ WINDOW_INFO_KEYS = ("window", "window_requested", "window_strength", "window_rea
                     "negative_after", "negative_fraction_after")
 
 
+def lights_info(shrm: SHRM) -> tuple[dict[str, Any], str]:
+    """``BuiltModel.info["lights"]`` and the ``lights:`` line of an SHRM's explicit lights: the
+    lights (``SHRM.meta["lights"]``), their sample count and how the renderers shade them
+    (``render.brdf_glsl``: the BRDF's GLSL; a measured BRDF's table with its measured error)."""
+    meta = shrm.meta
+    requested = meta.get("lights_requested", "none")
+    if not shrm.has_lights:
+        return ({"requested": requested, "count": 0, "samples": 0, "lights": []},
+                f"lights: none ({'none requested' if requested == 'none' else 'no compact bright region'})")
+    shading = cached_light_shading(shrm)
+    lights = list(meta.get("lights", []))
+    info: dict[str, Any] = {
+        "requested": requested, "count": len(lights), "samples": len(shrm.lights),
+        "flux_share": meta.get("lights_flux_share"), "left_in_map": meta.get("lights_left_in_map"),
+        "brdf_glsl": shading.shader.source, "lights": lights,
+    }
+    if shading.table is not None:
+        info["brdf_table"] = {"shape": list(shading.table.shape), "missing": shading.table.missing,
+                              "seconds": shading.table.seconds, **(shading.table_error or {})}
+    share = meta.get("lights_flux_share") or 0.0
+    line = (f"lights: {len(lights)} ({len(shrm.lights)} samples, {100 * share:.3g} % of the map's flux), "
+            + shading.describe())
+    return info, line
+
+
 def _prefiltered(
-    env: EnvironmentMap, brdf: BRDF, eps: float, options: RenderOptions, *, azimuth_free: bool = False
+    env: EnvironmentMap, brdf: BRDF, eps: float, options: RenderOptions, *, azimuth_free: bool = False,
+    lights: str | int | None = None,
 ) -> BuiltModel:
     t0 = time.perf_counter()
     shrm = prefilter(env, brdf, eps=eps, azimuth_free=azimuth_free, window=options.window,
-                     criterion=options.criterion, max_view_deg=options.max_view_deg)
+                     criterion=options.criterion, max_view_deg=options.max_view_deg,
+                     lights=options.lights if lights is None else lights)
     seconds = time.perf_counter() - t0
+    light_info, light_line = lights_info(shrm)
     info = {"F": shrm.F, "P": shrm.P, "height": shrm.height, "width": shrm.width, "eps": eps,
             "achieved_eps": dict(shrm.eps), "azimuth_free": azimuth_free, "prefilter_seconds": seconds,
             "criterion": shrm.meta["criterion"], "max_view_deg": shrm.meta["max_view_deg"],
-            "view_bands": shrm.meta["view_bands"], **{key: shrm.meta[key] for key in WINDOW_INFO_KEYS}}
+            "view_bands": shrm.meta["view_bands"], **{key: shrm.meta[key] for key in WINDOW_INFO_KEYS},
+            "lights": light_info}
     meta = shrm.meta
     used = meta["window"] if meta["window"] == "none" else f"{meta['window']} x{meta['window_strength']:.3g}"
     lines = (f"SHRM F={shrm.F} P={shrm.P} on {shrm.height}x{shrm.width} (eps {eps:g}, achieved eps_B "
-             f"{shrm.eps['reflected']:.3g})", f"window: {used} ({meta['window_reason']})",
+             f"{shrm.eps['reflected']:.3g})", f"window: {used} ({meta['window_reason']})", light_line,
              f"prefilter: {seconds:.3f} s")
     return BuiltModel(shrm, info, lines)
 
@@ -206,10 +251,14 @@ def build_kautz_mccool(
 
 
 def build_rsibr(env: EnvironmentMap, brdf: BRDF, mesh: Mesh, *, eps: float, options: RenderOptions) -> BuiltModel:
-    """Cabral et al. 1999: the SHRM, then its twelve maps at the icosahedron's vertices."""
-    built = _prefiltered(env, brdf, eps, options)
+    """Cabral et al. 1999: the SHRM, then its twelve maps at the icosahedron's vertices. The SHRM is
+    prefiltered without explicit lights (``lights="none"``, whatever ``options.lights``): the
+    method's maps hold the whole environment, sun included."""
+    built = _prefiltered(env, brdf, eps, options, lights="none")
     maps = rsibr_from_shrm(built.model)
-    return BuiltModel(maps, {**built.info, "rsibr_seconds": float(maps.meta["seconds"])}, built.description)
+    lines = tuple("lights: none (rsibr: the maps hold the whole environment, bright lights included)"
+                  if line.startswith("lights:") else line for line in built.description)
+    return BuiltModel(maps, {**built.info, "rsibr_seconds": float(maps.meta["seconds"])}, lines)
 
 
 def build_gaussian_lobes(

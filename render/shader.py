@@ -27,6 +27,7 @@ window left (``SHRM.meta["negative_after"]``, ``data_specs/shrm_file.md``) never
 from __future__ import annotations
 
 import math
+import weakref
 from typing import Any
 
 import numpy as np
@@ -34,6 +35,7 @@ import numpy as np
 from ..analysis.baselines.rsibr import RSIBRMaps, rsibr_from_shrm
 from ..analysis.sh import real_sph_harm
 from ..analysis.shrm import SHRM
+from .brdf_glsl import LightShading, light_shading
 from .glsl import (
     LATLONG_GLSL,
     Shading,
@@ -44,6 +46,19 @@ from .glsl import (
     vertex_replacements,
 )
 from .mesh import Mesh
+
+_LIGHT_SHADINGS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def cached_light_shading(shrm: SHRM) -> LightShading | None:
+    """:func:`~shrmkit.render.brdf_glsl.light_shading` of ``shrm``, made once per SHRM object
+    (a measured BRDF's table and its error are computed once for the build's description and
+    the shaders); the same result as a fresh call."""
+    if not shrm.has_lights:
+        return None
+    if shrm not in _LIGHT_SHADINGS:
+        _LIGHT_SHADINGS[shrm] = light_shading(shrm)
+    return _LIGHT_SHADINGS[shrm]
 
 __all__ = [
     "atlas_layout",
@@ -56,6 +71,7 @@ __all__ = [
     "perpixel_shading",
     "rsibr_shading",
     "rsibr_update",
+    "cached_light_shading",
 ]
 
 _LOOKUP = LATLONG_GLSL + """
@@ -142,7 +158,7 @@ def _packed_sum_glsl(n: int, height: int, width: int) -> list[str]:
 
 
 def shrm_fragment_replacements(
-    lmax: int, height: int, width: int, *, per_pixel: bool, screen: bool = False
+    lmax: int, height: int, width: int, *, per_pixel: bool, screen: bool = False, lights: LightShading | None = None
 ) -> list[tuple[str, str]]:
     """Fragment shader replacements of one SHRM actor.
 
@@ -151,7 +167,10 @@ def shrm_fragment_replacements(
     and Σ_c Y^r_c(V) map_c(R) is summed, channel by channel, in the same order as a sum over
     RGB tiles (bilinear per scalar map, then the SH weight). ``screen=True``: the same body
     in the deferred screen pass (``glsl.screen_fragment_replacements``: R read back from the
-    geometry pass), once per covered pixel.
+    geometry pass), once per covered pixel. ``lights`` (:func:`~shrmkit.render.brdf_glsl.light_shading`):
+    the explicit lights' exact reflection Σ_k ρ̂(ω_k; V, N) E_k, N = normalize(R + V), added per
+    pixel after the clamp (DESIGN §5a; ``render/webgl/lights.glsl`` and the BRDF's GLSL); None
+    (no lights) leaves no light code in the shader.
     """
     n = (lmax + 1) ** 2
     dec = [
@@ -168,24 +187,40 @@ def shrm_fragment_replacements(
         body.append("  vec3 shrmRad = shrm_fetch(ivec2(0, 0), shrmIdx, shrmF);")
     # the Gibbs undershoot the prefilter's window left (SHRM.meta "negative_after") ends here
     body.append("  shrmRad = max(shrmRad, vec3(0.0));")
+    if lights is not None:  # the lights, exactly, per pixel (V of the pixel, also in mode distant)
+        dec.append(lights.glsl())
+        body.append("  shrmRad += shrm_lights(shrmR, shrmV);")
     return screen_fragment_replacements(dec, body) if screen else fragment_replacements(dec, body)
 
 
-def _view_map_shading(height: int, width: int, state: Any) -> Shading:
+def _light_parts(lights: LightShading | None) -> dict[str, Any]:
+    """The Shading fields of the lights: uniforms and the BRDF table texture."""
+    if lights is None:
+        return {}
+    textures = {} if lights.table is None else {"shrmBrdfTex": lights.table.atlas()}
+    if textures:
+        check_texture_size(textures["shrmBrdfTex"].shape, "the BRDF table of the lights")
+    return {"uniforms": dict(lights.uniforms), "textures": textures}
+
+
+def _view_map_shading(height: int, width: int, state: Any, lights: LightShading | None = None) -> Shading:
     """A per-frame H × W map looked up by R (filled by the mode's update before each frame)."""
     return Shading(
         np.zeros((height, width, 3), dtype=np.float32),
         vertex_replacements(),
-        shrm_fragment_replacements(0, height, width, per_pixel=False),
+        shrm_fragment_replacements(0, height, width, per_pixel=False, lights=lights),
         state=state,
+        **_light_parts(lights),
     )
 
 
 def distant_shading(shrm: SHRM, mesh: Mesh) -> Shading:
-    """Distant viewer (RH02 eq. 12): the per-frame map Σ B̃_pq Y^r_pq(Ṽ); state = (P, flat coefficients)."""
+    """Distant viewer (RH02 eq. 12): the per-frame map Σ B̃_pq Y^r_pq(Ṽ); state = (P, flat coefficients).
+    The SHRM's explicit lights are added per fragment with the pixel's own V (the map holds the
+    SHRM part only, ``SHRM.view_map``: a light's highlight is sharper than it resolves)."""
     n, h, w, _ = shrm.coeffs.shape
     flat = np.ascontiguousarray(shrm.coeffs.reshape(n, -1), dtype=np.float32)
-    return _view_map_shading(h, w, (shrm.P, flat))
+    return _view_map_shading(h, w, (shrm.P, flat), cached_light_shading(shrm))
 
 
 def distant_update(state: tuple[int, np.ndarray], view: np.ndarray, out: np.ndarray) -> None:
@@ -207,11 +242,13 @@ def perpixel_shading(shrm: SHRM, mesh: Mesh) -> Shading:
     cols, rows = atlas_layout(packed_tiles(n))
     hint = "use mode='distant' or a coarser SHRM"
     check_texture_size((rows * h, cols * w), f"SHRM with P={shrm.P} on {h}x{w}", hint)
+    lights = cached_light_shading(shrm)
     return Shading(
         packed_coefficient_atlas(shrm.coeffs),
         vertex_replacements(),
-        shrm_fragment_replacements(shrm.P, h, w, per_pixel=True),
-        deferred=shrm_fragment_replacements(shrm.P, h, w, per_pixel=True, screen=True),
+        shrm_fragment_replacements(shrm.P, h, w, per_pixel=True, lights=lights),
+        deferred=shrm_fragment_replacements(shrm.P, h, w, per_pixel=True, screen=True, lights=lights),
+        **_light_parts(lights),
     )
 
 
@@ -219,7 +256,8 @@ def rsibr_shading(model: RSIBRMaps | SHRM, mesh: Mesh) -> Shading:
     """Cabral et al. 1999: the twelve maps (made from an SHRM by ``rsibr_from_shrm`` when given one)."""
     maps = model if isinstance(model, RSIBRMaps) else rsibr_from_shrm(model)
     _, h, w, _ = maps.maps.shape
-    return _view_map_shading(h, w, maps)
+    # an SHRM's explicit lights are not in its maps: added per fragment, as in mode distant
+    return _view_map_shading(h, w, maps, None if isinstance(model, RSIBRMaps) else cached_light_shading(model))
 
 
 def rsibr_update(maps: RSIBRMaps, view: np.ndarray, out: np.ndarray) -> None:

@@ -97,6 +97,39 @@ def _float_texture(image: np.ndarray):  # -> (vtkTexture, vtkImageData, numpy bu
     return tex, data, buf
 
 
+def _set_uniforms(actor, uniforms: dict[str, tuple[str, list[float]]]) -> None:
+    """Set constant uniforms (``Shading.uniforms``: float, int, vec3, vec3[]) on the mapper's shader
+    program each time it is bound (its UpdateShaderEvent). The GLSL declares them (the shared
+    ``render/webgl`` files), so they are not VTK custom uniforms (VTK would declare those again),
+    and vtkUniforms cannot hold a vec3 array from Python."""
+    if not uniforms:
+        return
+    from vtkmodules.util.misc import calldata_type  # lazy: VTK
+    from vtkmodules.util.vtkConstants import VTK_OBJECT  # lazy: VTK
+    from vtkmodules.vtkCommonCore import vtkCommand  # lazy: VTK
+
+    calls = []
+    for name, (kind, values) in uniforms.items():
+        values = [float(v) for v in values]
+        if kind == "float":
+            calls.append(("SetUniformf", (name, values[0])))
+        elif kind == "int":
+            calls.append(("SetUniformi", (name, int(values[0]))))
+        elif kind == "vec3":
+            calls.append(("SetUniform3f", (name, values)))
+        elif kind == "vec3[]":
+            calls.append(("SetUniform3fv", (name, len(values) // 3, values)))
+        else:
+            raise ValueError(f"uniform {name}: unknown type {kind!r}")
+
+    @calldata_type(VTK_OBJECT)
+    def upload(_caller, _event, program) -> None:  # the vtkShaderProgram the mapper has bound
+        for method, args in calls:
+            getattr(program, method)(*args)
+
+    actor.GetMapper().AddObserver(vtkCommand.UpdateShaderEvent, upload)
+
+
 def _attribute_array(name: str) -> str:
     """Name of the point-data array that feeds the vertex attribute ``name``."""
     return f"{name}_data"
@@ -215,6 +248,7 @@ class SHRMRenderer:
         self._renderer.SetBackgroundAlpha(0.0)
         self._renderer.AutomaticLightCreationOff()
         self._objects: list[_Object] = []
+        self._textures: dict[int, tuple[Shading, dict[str, Any]]] = {}  # Shading.textures, kept alive
         if deferred is None:
             deferred = is_software_rasterizer(self._window)
         self._gbuffer = self._gbuffer_texture() if deferred else None
@@ -315,7 +349,9 @@ class SHRMRenderer:
         screen.GetMapper().AddObserver("StartEvent", self._screen_pass_state)
         screen.GetProperty().SetTexture("shrmTex", tex)
         screen.GetProperty().SetTexture("shrmGbuf", self._gbuffer)
-        self._shader(screen, shading.vertex, shading.deferred, scale)
+        for name, extra in self._extra_textures(shading).items():
+            screen.GetProperty().SetTexture(name, extra)
+        self._shader(screen, shading.vertex, shading.deferred, scale, shading.uniforms)
         self._renderer.AddActor(screen)
         gbuffer.SetVisibility(False)
         screen.SetVisibility(False)
@@ -337,8 +373,9 @@ class SHRMRenderer:
 
     @staticmethod
     def _shader(actor, vertex: list[tuple[str, str]], fragment: list[tuple[str, str]],
-                scale: float | None = None) -> None:
-        """Shader replacements and the uniforms every frame sets (``shrmGScale``: a deferred pass's tag)."""
+                scale: float | None = None, uniforms: dict[str, tuple[str, list[float]]] | None = None) -> None:
+        """Shader replacements, the uniforms every frame sets (``shrmGScale``: a deferred pass's tag)
+        and the shading's constant ``uniforms`` (``Shading.uniforms``: the lights and the BRDF)."""
         sp = actor.GetShaderProperty()
         for tag, text in vertex:
             sp.AddVertexShaderReplacement(tag, True, text, False)
@@ -350,6 +387,7 @@ class SHRMRenderer:
         uni.SetUniformi("shrmOrtho", 0)
         if scale is not None:
             uni.SetUniformf("shrmGScale", scale)
+        _set_uniforms(actor, uniforms or {})
 
     def _quad_corners(self, camera: Camera, far: float) -> np.ndarray:
         """(4, 3) world corners of a quad filling the view (with a margin) at depth far / 1.004."""
@@ -360,8 +398,16 @@ class SHRMRenderer:
         x, y = 1.25 * half_w * camera.right, 1.25 * half_h * camera.up
         return np.array([c - x - y, c + x - y, c + x + y, c - x + y])
 
-    @staticmethod
-    def _actor(mesh: Mesh, shading: Shading):  # -> (vtkActor, vtkTexture, vtkImageData, buffer)
+    def _extra_textures(self, shading: Shading) -> dict[str, Any]:
+        """The shading's further textures (``Shading.textures``), made once per Shading and kept
+        alive with their buffers for the renderer's lifetime."""
+        key = id(shading)
+        if key not in self._textures:
+            made = {name: _float_texture(image) for name, image in shading.textures.items()}
+            self._textures[key] = (shading, made)
+        return {name: parts[0] for name, parts in self._textures[key][1].items()}
+
+    def _actor(self, mesh: Mesh, shading: Shading):  # -> (vtkActor, vtkTexture, vtkImageData, buffer)
         """The one VTK set-up of every mode: mapper, actor, texture, shader replacements, uniforms."""
         from vtkmodules.vtkCommonDataModel import vtkDataObject  # lazy: VTK is loaded only when rendering
 
@@ -372,7 +418,9 @@ class SHRMRenderer:
                 name, _attribute_array(name), vtkDataObject.FIELD_ASSOCIATION_POINTS, -1
             )
         actor.GetProperty().SetTexture("shrmTex", tex)
-        SHRMRenderer._shader(actor, shading.vertex, shading.fragment)
+        for name, extra in self._extra_textures(shading).items():
+            actor.GetProperty().SetTexture(name, extra)
+        SHRMRenderer._shader(actor, shading.vertex, shading.fragment, uniforms=shading.uniforms)
         return actor, tex, data, buf
 
     def update_view_maps(self, camera: Camera) -> None:

@@ -1,0 +1,419 @@
+"""The BRDF in GLSL: one shader per model, for the lights beside the SHRM (DESIGN §5a).
+
+A scene's explicit lights (``analysis.lights``: samples ω_k with RGB power E_k) are shaded
+exactly per pixel, as :meth:`SHRM.radiance` does on the CPU:
+
+    B_lights(R, V) = Σ_k ρ̂(ω_k; V, N) E_k,    N = normalize(R + V),
+
+so every renderer needs the BRDF's ρ̂ in GLSL. Each model has **one** GLSL file in
+``render/webgl/`` (package data), used verbatim by the desktop VTK shaders (``render.shader``)
+and by the WebGL2 page (``render.webgl_page``, ``view.js``), as ``latlong.glsl`` is:
+
+==========================  ========================  =====================================
+model (``brdf_io.models``)  GLSL file                 parameters (uniforms / #defines)
+==========================  ========================  =====================================
+``PhongLobe``               ``brdf_phong.glsl``       ``shrmPhongS``, ``shrmPhongKs``
+``SimplifiedMicrofacet``    ``brdf_microfacet.glsl``  ``shrmMicrofacetSigma``, ``…Ks``
+``Lambert``                 ``brdf_lambert.glsl``     ``shrmLambertAlbedo``
+``Lafortune``               ``brdf_lafortune.glsl``   ``shrmLafKd``, per lobe ``shrmLafCxy[k]``,
+                                                      ``…Cz[k]``, ``…N[k]``, ``…Ks[k]``;
+                                                      ``SHRM_LAF_LOBES``
+``CookTorrance``            ``brdf_cook_torrance…``   ``shrmCtKd``, ``…Ks``, ``…F0``,
+                                                      ``shrmCtAlpha``; ``SHRM_CT_GGX``
+measured (kind ≠ analytic)  ``brdf_table.glsl``       the table texture ``shrmBrdfTex``,
+                                                      ``shrmBrdfScale``; ``SHRM_TAB_*``
+==========================  ========================  =====================================
+
+Each file defines ``vec3 shrm_brdf_rho_hat(vec3 N, vec3 L, vec3 V)`` for unit vectors in one
+frame (the z-up world frame); the models are isotropic, so only dot products of N, L, V enter
+and no tangent frame is built. ``brdf_common.glsl`` (helpers) comes first, ``lights.glsl`` (the
+sum over the samples: ``shrm_lights(R, V)``, uniforms ``shrmLightCount``, ``shrmLightDir[]``,
+``shrmLightPower[]``, array size ``SHRM_NLIGHTS``) last. The one table is :data:`BRDF_GLSL`
+(one :class:`BrdfShader` per model class); :func:`brdf_shader_for` picks the entry of a BRDF.
+
+Measured BRDFs (MERL ``.binary``, RGL ``.bsdf``, table ``.npz``, scattered data — every BRDF
+whose ``kind`` is not ``"analytic"``, and analytic models without an entry) are tabulated
+(:func:`tabulate_brdf`) into a float texture: ρ on a grid of Rusinkiewicz's half/difference
+angles, θ_h on MERL's square-root scale, φ_d folded by the mirror symmetry of an isotropic
+BRDF (ρ(φ_d) = ρ(−φ_d)), trilinear in the indices (``brdf_table.glsl``). The default grid
+(:data:`TABLE_GRID`, 91 × 91 × 181) puts texels on MERL's own samples, where a MERL file's
+trilinear interpolation is reproduced exactly; the table's error against the BRDF's own
+``eval`` is measured on the lights' reflection (:func:`table_error`) and reported.
+
+References: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
+SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611; S. Rusinkiewicz, "A New Change of Variables
+for Efficient BRDF Representation", EGWR 1998; W. Matusik et al., "A Data-Driven Reflectance
+Model", SIGGRAPH 2003 (MERL's table).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from importlib import resources
+from typing import Any
+
+import numpy as np
+
+from ..analysis.lights import LightSet, light_radiance
+from ..analysis.reference import local_frames
+from ..brdf_io.brdf import BRDF
+from ..brdf_io.errors import BadInputError
+from ..brdf_io.halfdiff import directions_to_halfdiff, halfdiff_to_directions
+from ..brdf_io.models import CookTorrance, Lafortune, Lambert, PhongLobe, SimplifiedMicrofacet
+
+__all__ = [
+    "BrdfShader",
+    "BRDF_GLSL",
+    "TABLE_SHADER",
+    "TABLE_GRID",
+    "BrdfTable",
+    "LightShading",
+    "brdf_shader_for",
+    "tabulate_brdf",
+    "table_lookup",
+    "table_error",
+    "light_shading",
+    "lights_glsl_parts",
+    "glsl_source",
+    "MAX_LIGHT_SAMPLES",
+]
+
+#: Uniform arrays are sized to the scene's samples, at most this many (``analysis.lights``:
+#: MAX_LIGHTS × MAX_SAMPLES_PER_LIGHT).
+MAX_LIGHT_SAMPLES = 128
+
+#: A uniform value: (GLSL type, flat float values); types "float", "vec3", "vec3[]", "int".
+Uniform = tuple[str, list[float]]
+
+_WEBGL_DIR = "webgl"
+
+
+def glsl_source(name: str) -> str:
+    """The text of ``render/webgl/<name>`` (package data)."""
+    return resources.files(__package__).joinpath(_WEBGL_DIR).joinpath(name).read_text(encoding="utf-8")
+
+
+def _rgb(a: Any) -> list[float]:
+    return [float(x) for x in np.broadcast_to(np.asarray(a, dtype=np.float64), (3,))]
+
+
+@dataclass(frozen=True)
+class BrdfShader:
+    """One row of the BRDF shader table.
+
+    Attributes
+    ----------
+    name
+        Short name (the JSON of the view page: ``lights.brdf.model``).
+    model
+        The BRDF class it shades (an exact type match).
+    source
+        File name in ``render/webgl/`` defining ``shrm_brdf_rho_hat``.
+    uniforms
+        brdf → {uniform name: (GLSL type, flat values)}.
+    defines
+        brdf → {macro: value}: what sizes arrays or selects a branch at compile time.
+    """
+
+    name: str
+    model: type | None
+    source: str
+    uniforms: Callable[[Any], dict[str, Uniform]]
+    defines: Callable[[Any], dict[str, int]] = field(default=lambda brdf: {})
+
+
+def _lafortune_uniforms(b: Lafortune) -> dict[str, Uniform]:
+    out: dict[str, Uniform] = {"shrmLafKd": ("vec3", _rgb(b.kd))}
+    lobes = b.lobes or ()
+    for key, attr in (("shrmLafCxy", "cxy"), ("shrmLafCz", "cz"), ("shrmLafN", "n"), ("shrmLafKs", "ks")):
+        # no lobes: one lobe of zero scale (arrays need a size >= 1)
+        values = [v for lobe in lobes for v in _rgb(getattr(lobe, attr))] if lobes else \
+            ([0.0, 0.0, 0.0] if attr == "ks" else [1.0, 1.0, 1.0])
+        out[key] = ("vec3[]", values)
+    return out
+
+
+#: The BRDF shader table: one entry per analytic model class (module docstring).
+BRDF_GLSL: dict[type, BrdfShader] = {
+    s.model: s
+    for s in (
+        BrdfShader("phong", PhongLobe, "brdf_phong.glsl",
+                   lambda b: {"shrmPhongS": ("float", [float(b.s)]), "shrmPhongKs": ("vec3", _rgb(b.ks))}),
+        BrdfShader("microfacet", SimplifiedMicrofacet, "brdf_microfacet.glsl",
+                   lambda b: {"shrmMicrofacetSigma": ("float", [float(b.sigma)]),
+                              "shrmMicrofacetKs": ("vec3", _rgb(b.ks))}),
+        BrdfShader("lambert", Lambert, "brdf_lambert.glsl",
+                   lambda b: {"shrmLambertAlbedo": ("vec3", _rgb(b.albedo))}),
+        BrdfShader("lafortune", Lafortune, "brdf_lafortune.glsl", _lafortune_uniforms,
+                   lambda b: {"SHRM_LAF_LOBES": max(1, len(b.lobes))}),
+        BrdfShader("cook-torrance", CookTorrance, "brdf_cook_torrance.glsl",
+                   lambda b: {"shrmCtKd": ("vec3", _rgb(b.kd)), "shrmCtKs": ("vec3", _rgb(b.ks)),
+                              "shrmCtF0": ("vec3", _rgb(b.f0)), "shrmCtAlpha": ("float", [float(b.alpha)])},
+                   lambda b: {"SHRM_CT_GGX": 1 if b.distribution == "ggx" else 0}),
+    )
+}
+
+#: Every other BRDF: a table texture (``brdf_table.glsl``; :func:`tabulate_brdf`).
+TABLE_SHADER = BrdfShader("table", None, "brdf_table.glsl", lambda t: {"shrmBrdfScale": ("float", [float(t.scale)])},
+                          lambda t: {"SHRM_TAB_NH": t.shape[0], "SHRM_TAB_ND": t.shape[1], "SHRM_TAB_NP": t.shape[2],
+                                     "SHRM_TAB_COLS": t.cols})
+
+
+def brdf_shader_for(brdf: BRDF) -> BrdfShader:
+    """The entry of :data:`BRDF_GLSL` for ``brdf``'s class, or :data:`TABLE_SHADER` for a BRDF
+    without one (measured data, and analytic models the table does not list)."""
+    return BRDF_GLSL.get(type(brdf), TABLE_SHADER)
+
+
+# ------------------------------------------------------------------------------------------
+# measured BRDFs: a table texture in half/difference angles
+# ------------------------------------------------------------------------------------------
+
+#: Default table grid (θ_h, θ_d, φ_d samples): MERL's spacing (90 θ_h steps on the square-root
+#: scale, 1° in θ_d and φ_d) with both ends of every axis, so MERL's samples are texels.
+TABLE_GRID = (91, 91, 181)
+
+
+@dataclass(frozen=True, eq=False)
+class BrdfTable:
+    """ρ of a BRDF on a half/difference grid, as the texture ``brdf_table.glsl`` reads.
+
+    Attributes
+    ----------
+    values
+        float32 (NH, ND, NP, 3): ρ (1/sr) at θ_h = (i/(NH−1))² π/2, θ_d = j/(ND−1) π/2,
+        φ_d = k/(NP−1) π. Samples where L or V is below the surface hold the nearest sample
+        above it along θ_d (the shader returns 0 there; this only keeps interpolation near the
+        horizon from blending in zeros).
+    scale
+        The texture holds ``values × scale`` (1 for float32 textures; a power of two for the
+        page's half floats).
+    missing
+        Grid samples the BRDF had no data for (``eval_counted``) or gave NaN (set to 0).
+    seconds
+        Time to tabulate.
+    """
+
+    values: np.ndarray
+    scale: float = 1.0
+    missing: int = 0
+    seconds: float = 0.0
+
+    @property
+    def shape(self) -> tuple[int, int, int]:
+        return tuple(int(n) for n in self.values.shape[:3])  # type: ignore[return-value]
+
+    @property
+    def cols(self) -> int:
+        """Tiles (θ_h slices) per row of the atlas: the atlas as square as it gets."""
+        nh, nd, npd = self.shape
+        return max(1, min(nh, round(math.sqrt(nh * nd / npd))))
+
+    def atlas(self) -> np.ndarray:
+        """float32 (rows·ND, cols·NP, 3): tile i (θ_h) at column (i mod cols)·NP, row (i div cols)·ND,
+        φ_d along x and θ_d along y; values × scale."""
+        nh, nd, npd = self.shape
+        cols = self.cols
+        rows = -(-nh // cols)
+        out = np.zeros((rows * nd, cols * npd, 3), np.float32)
+        for i in range(nh):
+            r, c = divmod(i, cols)
+            out[r * nd:(r + 1) * nd, c * npd:(c + 1) * npd] = self.values[i] * np.float32(self.scale)
+        return out
+
+    def with_values(self, values: np.ndarray, scale: float) -> BrdfTable:
+        return BrdfTable(np.asarray(values, np.float32), float(scale), self.missing, self.seconds)
+
+
+def table_angles(shape: tuple[int, int, int]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(θ_h, θ_d, φ_d) of the table's samples, 1-D arrays (radians)."""
+    nh, nd, npd = shape
+    return ((np.arange(nh) / max(nh - 1, 1)) ** 2 * (np.pi / 2), np.arange(nd) / max(nd - 1, 1) * (np.pi / 2),
+            np.arange(npd) / max(npd - 1, 1) * np.pi)
+
+
+def tabulate_brdf(brdf: BRDF, shape: tuple[int, int, int] = TABLE_GRID) -> BrdfTable:
+    """ρ of ``brdf`` (its own ``eval``) on the half/difference grid ``shape`` (:class:`BrdfTable`)."""
+    import time
+
+    nh, nd, npd = (int(n) for n in shape)
+    if min(nh, nd, npd) < 2:
+        raise BadInputError(getattr(brdf, "name", None), f"a BRDF table needs at least 2 samples an axis, got {shape}")
+    t0 = time.perf_counter()
+    th, td, pd = table_angles((nh, nd, npd))
+    values = np.zeros((nh, nd, npd, 3))
+    missing = 0
+    for i in range(nh):  # one θ_h slice at a time: (ND·NP) evaluations
+        L, V = halfdiff_to_directions(th[i], td[:, None], pd[None, :])
+        rho, none = brdf.eval_counted(L.reshape(-1, 3), V.reshape(-1, 3))
+        rho = np.asarray(rho, dtype=np.float64).reshape(nd, npd, 3)
+        bad = ~np.isfinite(rho)
+        missing += int(none) + int(np.any(bad, axis=-1).sum())
+        rho[bad] = 0.0
+        above = (L[..., 2] > 0.0) & (V[..., 2] > 0.0)
+        # below the surface: the nearest sample above it along θ_d (θ_d rises toward the horizon)
+        for k in range(npd):
+            ok = np.flatnonzero(above[:, k])
+            if ok.size and ok[-1] < nd - 1:
+                rho[ok[-1] + 1:, k] = rho[ok[-1], k]
+        values[i] = rho
+    return BrdfTable(values.astype(np.float32), 1.0, missing, time.perf_counter() - t0)
+
+
+def table_lookup(table: BrdfTable, L: np.ndarray, V: np.ndarray) -> np.ndarray:
+    """ρ̂ = ρ_table · max(L_z, 0) at local directions (..., 3) as ``brdf_table.glsl`` computes it
+    (trilinear in the indices, φ_d folded to |φ_d|; 0 unless L_z > 0 and V_z > 0), float64."""
+    L, V = np.broadcast_arrays(np.asarray(L, np.float64), np.asarray(V, np.float64))
+    nh, nd, npd = table.shape
+    th, td, pd = directions_to_halfdiff(L, V)
+    vals = np.asarray(table.values, np.float64)
+
+    def axis(x: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        x = np.clip(x, 0.0, n - 1)
+        i0 = np.minimum(np.floor(x), max(n - 2, 0)).astype(np.intp)
+        return i0, np.minimum(i0 + 1, n - 1), x - i0
+
+    i0, i1, fu = axis((nh - 1) * np.sqrt(np.clip(th / (np.pi / 2), 0.0, 1.0)), nh)
+    j0, j1, fv = axis((nd - 1) * td / (np.pi / 2), nd)
+    k0, k1, fw = axis((npd - 1) * np.abs(pd) / np.pi, npd)
+    fu, fv, fw = fu[..., None], fv[..., None], fw[..., None]
+
+    def lerp(a: np.ndarray, b: np.ndarray, t: np.ndarray) -> np.ndarray:
+        return a * (1.0 - t) + b * t
+
+    c00 = lerp(vals[i0, j0, k0], vals[i0, j0, k1], fw)
+    c01 = lerp(vals[i0, j1, k0], vals[i0, j1, k1], fw)
+    c10 = lerp(vals[i1, j0, k0], vals[i1, j0, k1], fw)
+    c11 = lerp(vals[i1, j1, k0], vals[i1, j1, k1], fw)
+    rho = lerp(lerp(c00, c01, fv), lerp(c10, c11, fv), fu)
+    above = (L[..., 2] > 0.0) & (V[..., 2] > 0.0)
+    return np.where(above[..., None], rho * np.maximum(L[..., 2], 0.0)[..., None], 0.0)
+
+
+def _table_light_radiance(table: BrdfTable, lights: LightSet, R: np.ndarray, V: np.ndarray) -> np.ndarray:
+    frames = local_frames(R + V)
+    L_loc = np.einsum("kij,nj->kni", frames, lights.directions)
+    V_loc = np.broadcast_to(np.einsum("kij,kj->ki", frames, V)[:, None, :], L_loc.shape)
+    return np.einsum("knc,nc->kc", table_lookup(table, L_loc, V_loc), lights.power)
+
+
+def table_error(table: BrdfTable, brdf: BRDF, lights: LightSet, *, max_view_deg: float = 80.0,
+                per_band: int = 64, seed: int = 0) -> dict[str, float]:
+    """The table's own error on the lights' reflection, against the BRDF's ``eval``.
+
+    On (R, V) pairs focused on the lights (``analysis.pairs.sample_pairs_focused``: R in caps
+    about the lights, θ_v uniform in angle in 10° bands up to ``max_view_deg``, importance
+    weights), the relative RMS of Σ_k ρ̂_table E_k − Σ_k ρ̂ E_k (``analysis.lights.light_radiance``)
+    over the RMS of the latter: ``rel_rms`` over all pairs and ``worst_band_rel_rms``, the
+    largest per band; ``pairs`` counts them.
+    """
+    from ..analysis.pairs import sample_pairs_focused  # same layer below; imported when measured
+
+    edges = np.linspace(0.0, float(max_view_deg), max(2, int(math.ceil(max_view_deg / 10.0)) + 1))
+    centres = np.array([light.direction for light in lights.lights]) if lights.lights else lights.directions
+    R, V, theta_v, w = sample_pairs_focused(per_band, edges, centre=centres, seed=seed)
+    exact = light_radiance(brdf, lights.directions, lights.power, R, V)
+    got = _table_light_radiance(table, lights, R, V)
+    err = w * ((got - exact) ** 2).sum(axis=1)
+    sig = w * (exact**2).sum(axis=1)
+    band = np.clip(np.searchsorted(np.radians(edges), theta_v, side="right") - 1, 0, len(edges) - 2)
+    per = [math.sqrt(err[band == b].sum() / sig[band == b].sum()) if sig[band == b].sum() > 0 else 0.0
+           for b in range(len(edges) - 1)]
+    total = math.sqrt(err.sum() / sig.sum()) if sig.sum() > 0 else 0.0
+    return {"rel_rms": total, "worst_band_rel_rms": max(per), "pairs": int(len(R)),
+            "max_view_deg": float(max_view_deg)}
+
+
+# ------------------------------------------------------------------------------------------
+# what a renderer needs: GLSL, uniforms, defines, the table texture
+# ------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class LightShading:
+    """The lights of one object on the GPU.
+
+    Attributes
+    ----------
+    shader
+        The BRDF's table entry.
+    count
+        Light samples (the uniform arrays' size, ``SHRM_NLIGHTS``).
+    uniforms
+        {name: (GLSL type, flat values)}: the samples (``shrmLightCount``, ``shrmLightDir``,
+        ``shrmLightPower``) and the BRDF's parameters.
+    defines
+        {macro: value} of the BRDF and ``SHRM_NLIGHTS``.
+    table
+        The BRDF table (measured BRDFs), bound as ``shrmBrdfTex``; else None.
+    table_error
+        :func:`table_error` of the table (None without one).
+    """
+
+    shader: BrdfShader
+    count: int
+    uniforms: dict[str, Uniform]
+    defines: dict[str, int]
+    table: BrdfTable | None = None
+    table_error: dict[str, float] | None = None
+
+    def glsl(self) -> str:
+        """The #defines and the GLSL of the BRDF and the light sum (desktop and WebGL alike)."""
+        return "\n".join([*(f"#define {k} {int(v)}" for k, v in self.defines.items()),
+                          *(glsl_source(name) for name in lights_glsl_parts(self.shader))])
+
+    def describe(self) -> str:
+        """One line: samples, BRDF shader, the table and its measured error."""
+        text = f"{self.count} light sample(s) shaded per pixel by {self.shader.source}"
+        if self.table is not None:
+            nh, nd, npd = self.table.shape
+            text += f" (BRDF table {nh}x{nd}x{npd} in theta_h, theta_d, phi_d"
+            if self.table_error is not None:
+                text += (f"; its error on the lights' reflection {100 * self.table_error['rel_rms']:.2g} % relative "
+                         f"RMS, worst view band {100 * self.table_error['worst_band_rel_rms']:.2g} %")
+            text += ")"
+        return text
+
+
+def lights_glsl_parts(shader: BrdfShader) -> tuple[str, ...]:
+    """The GLSL files of the lights, in order: helpers, the BRDF, the sum."""
+    return ("brdf_common.glsl", shader.source, "lights.glsl")
+
+
+def light_uniforms(lights: LightSet) -> dict[str, Uniform]:
+    """The samples as uniforms: count, unit directions (z-up frame), RGB powers."""
+    return {"shrmLightCount": ("int", [float(len(lights))]),
+            "shrmLightDir": ("vec3[]", [float(x) for x in lights.directions.reshape(-1)]),
+            "shrmLightPower": ("vec3[]", [float(x) for x in lights.power.reshape(-1)])}
+
+
+def light_shading(shrm: Any, *, table_shape: tuple[int, int, int] = TABLE_GRID,
+                  table: BrdfTable | None = None, measure: bool = True) -> LightShading | None:
+    """The :class:`LightShading` of an SHRM's lights, or None when it has none (then the shaders
+    hold no light code at all: no cost).
+
+    A BRDF without a GLSL model (:func:`brdf_shader_for`) is tabulated on ``table_shape``
+    (or ``table`` given) and, with ``measure``, its error measured (:func:`table_error`).
+    """
+    if not getattr(shrm, "has_lights", False):
+        return None
+    lights: LightSet = shrm.lights
+    if len(lights) > MAX_LIGHT_SAMPLES:
+        raise BadInputError(None, f"{len(lights)} light samples: the shaders take at most {MAX_LIGHT_SAMPLES}")
+    brdf = shrm.lights_brdf()
+    shader = brdf_shader_for(brdf)
+    uniforms = light_uniforms(lights)
+    error = None
+    if shader is TABLE_SHADER:
+        table = tabulate_brdf(brdf, table_shape) if table is None else table
+        if measure:
+            error = table_error(table, brdf, lights, max_view_deg=float(shrm.meta.get("max_view_deg", 80.0)))
+        uniforms.update(shader.uniforms(table))
+        defines = shader.defines(table)
+    else:
+        table = None
+        uniforms.update(shader.uniforms(brdf))
+        defines = shader.defines(brdf)
+    return LightShading(shader, len(lights), uniforms, {**defines, "SHRM_NLIGHTS": len(lights)}, table, error)
