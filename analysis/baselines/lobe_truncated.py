@@ -255,6 +255,12 @@ class LobeTruncatedSum:
     emitted
         (H·W, 3) float64 L_p Ω_p of every pixel (radiance × exact solid angle; 0 for black
         pixels, which are skipped).
+    directions
+        (H·W, 3) float64 unit directions of the pixel centres (``pixel_directions``).
+    lit
+        (H·W,) bool: the pixels with some non-zero radiance (the only ones summed).
+    flux
+        (3,) Σ_p L_p Ω_p over the whole map (for the bound on the dropped part).
     query
         The cone query (:func:`cone_pixels`).
     tree
