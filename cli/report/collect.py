@@ -202,10 +202,13 @@ def _orders(brdf: BRDF, options: ReportOptions) -> tuple[list[dict[str, Any]], d
             "message": choice.message,
             "orders_seconds": choice.seconds,
         })
-    # the tightest tolerance has the largest grid; keep F up to a little beyond the largest choice
+    # the tightest tolerance has the largest grid; keep F up to a little beyond the largest choice, and
+    # P up to four beyond it (each column of the bands rule is a view fit: the rest are not computed)
     finest = choices[-1]
     F_keep = int(min(finest.F0, max(2 * max(c.F for c in choices) + 8, 32)))
-    table = finest.table[: F_keep + 1]
+    P_keep = int(min(finest.P0, max(c.P for c in choices) + 4))
+    table = np.stack([finest.searched_table[: F_keep + 1, p] if not np.isnan(finest.searched_table[0, p])
+                      else finest.source.column(p)[: F_keep + 1] for p in range(P_keep + 1)], axis=1)
     eps_table = {"tolerance": finest.tolerance, "F0": finest.F0, "P0": finest.P0, "eps": table}
     return rows, eps_table, choices
 
