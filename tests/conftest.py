@@ -1,5 +1,13 @@
 """Shared fixtures: the real data in ../shared/data (skipped with a clear message if absent), the
-offscreen OpenGL probe, and headless chromium for the WebGL2 pages.
+offscreen OpenGL probe, one ``shrm demo`` run, and headless chromium for the WebGL2 pages.
+
+Under pytest-xdist (``-n 2``, its default ``--dist load``) a test **class** is one unit of work:
+its tests run one after the other on one worker, so a costly module-scoped fixture they share (a
+batch of reports, a browser) is made once instead of once per worker (and again whenever a
+worker's tests of that module are interleaved with other modules'). Every test outside a class
+is its own unit, handed out one by one as with ``--dist load``. (``--dist loadgroup`` would be
+the marker way, but with pytest 9.2 and xdist 3.8 it silently groups nothing: pytest-xdist
+issue #1386.)
 
 The browser driver: Debian's ``chromium`` (headless, SwiftShader WebGL2 through ANGLE),
 commands on a pipe (``--remote-debugging-pipe``, fds 3 and 4, NUL-separated JSON), no extra
@@ -11,6 +19,7 @@ it: ``.ci/apt-packages.txt``). Test modules cannot import a conftest: they get t
 from __future__ import annotations
 
 import base64
+import contextlib
 import fcntl
 import io
 import json
@@ -21,6 +30,7 @@ import subprocess
 import threading
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -30,6 +40,26 @@ from PIL import Image
 from shrmkit.render.offscreen import probe_offscreen
 
 SHARED_DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config, log):
+    """xdist's ``load`` distribution with a test class as one unit of work (module docstring)."""
+    if config.getvalue("dist") != "load":
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    class ClassScheduling(LoadScopeScheduling):
+        """Units: ``path::Class`` for the tests of a class, the node id itself for any other
+        test. Larger units are handed out first (xdist's ``loadscope`` order), then single
+        tests in collection order."""
+
+        def _split_scope(self, nodeid: str) -> str:
+            path, _, rest = nodeid.partition("::")
+            names = rest.split("[", 1)[0].split("::")
+            return f"{path}::{names[0]}" if len(names) > 1 else nodeid
+
+    return ClassScheduling(config, log)
 
 
 @pytest.fixture(scope="session")
@@ -78,6 +108,59 @@ def finishes() -> Callable[..., tuple[bool, BaseException | None]]:
     """``finishes(call, seconds=10)``: run ``call`` in a thread with a time limit, (finished,
     exception or None) — for readers that must refuse special files at once."""
     return _finishes
+
+
+# ------------------------------------------------------------------------------------------
+# one `shrm demo` run for the tests that check its outputs
+# ------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class DemoRun:
+    """``shrm demo --no-progress --size 64`` run by :func:`main` in the clean folder ``cwd`` (its
+    default ``--out``, ./shrm-demo): exit code and what it printed on stdout."""
+
+    cwd: Path
+    code: int
+    printed: str
+
+    @property
+    def out(self) -> Path:
+        return self.cwd / "shrm-demo"
+
+
+def _run_demo(cwd: Path) -> DemoRun:
+    from shrmkit.cli.main import main
+
+    cwd.mkdir(parents=True, exist_ok=True)
+    printed = io.StringIO()
+    with pytest.MonkeyPatch.context() as patch, contextlib.redirect_stdout(printed):
+        patch.chdir(cwd)
+        code = main(["demo", "--no-progress", "--size", "64"])
+    return DemoRun(cwd, code, printed.getvalue())
+
+
+@pytest.fixture(scope="session")
+def demo_run(tmp_path_factory) -> DemoRun:
+    """The demo, run once per test session for every test that reads its outputs: under xdist
+    the first worker to ask runs it under a file lock in the folder all workers of this run
+    share, the others read what it wrote (xdist's documented pattern for session fixtures)."""
+    worker = os.environ.get("PYTEST_XDIST_WORKER")
+    if worker is None:
+        return _run_demo(tmp_path_factory.mktemp("demo"))
+    shared = tmp_path_factory.getbasetemp().parent / f"demo-{os.environ.get('PYTEST_XDIST_TESTRUNUID', 'run')}"
+    shared.mkdir(exist_ok=True)
+    record = shared / "run.json"
+    with open(shared / "lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        try:
+            if not record.exists():
+                run = _run_demo(shared / "cwd")
+                record.write_text(json.dumps({"code": run.code, "printed": run.printed, "by": worker}))
+            saved = json.loads(record.read_text())
+        finally:
+            fcntl.flock(lock, fcntl.LOCK_UN)
+    return DemoRun(shared / "cwd", saved["code"], saved["printed"])
 
 
 # ------------------------------------------------------------------------------------------

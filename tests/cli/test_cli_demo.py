@@ -3,27 +3,27 @@
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 import shrmkit
-from shrmkit.cli.main import main
 from shrmkit.cli.report.demo import DEMO_MATERIALS
 
 
 @pytest.mark.slow
-def test_demo_end_to_end(tmp_path, capsys, monkeypatch):
-    monkeypatch.chdir(tmp_path)
-    assert main(["demo", "--no-progress", "--size", "96"]) == 0
-    out = tmp_path / "shrm-demo"
-    printed = capsys.readouterr().out
+def test_demo_end_to_end(demo_run):
+    """`shrm demo` from a clean folder (the run of the demo_run fixture of tests/conftest.py,
+    which tests/cli/report/test_live_preview.py opens in a browser too)."""
+    assert demo_run.code == 0
+    out = demo_run.out
+    printed = demo_run.printed
     for step in ("MERL files", "orders", "fit", "prefilter", "render", "reports"):
         assert f"{step}:" in printed
-    # every path printed exists
+    # every path printed exists (relative to the folder the demo ran in)
     paths = [line.strip() for line in printed.splitlines() if line.startswith("    ")]
-    assert paths and all(Path(p).exists() for p in paths)
+    assert paths and all((demo_run.cwd / p).exists() for p in paths)
+    assert all((demo_run.cwd / p).resolve().is_relative_to(out.resolve()) for p in paths)
     # the MERL files hold the analytic materials: compare with direct evaluation of the spec
     rng = np.random.default_rng(1)
     L = rng.normal(size=(200, 3))

@@ -131,63 +131,77 @@ def relative_rms(image: np.ndarray, reference: np.ndarray, mask: np.ndarray) -> 
 # ------------------------------------------------------------------------------------------
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("mode", ["distant", "perpixel"])
-@pytest.mark.parametrize("material", MATERIALS)
-def test_screenshots_match_cpu_reference(browser, material_pages, material, mode) -> None:
-    """Three views (orbit, exposure, zoom from the URL hash) of the page in chromium against the
-    CPU reference renderer of the same SHRM and camera: relative RMS of the 8-bit image ≤
-    REL_RMS_MAX, on the whole image and on the object, the one-pixel silhouette band left out
-    (the page draws an icosphere of 5120 triangles, the reference the analytic sphere); and
-    the object is at least twice as far from the other mode's reference."""
-    shrm, page, url = material_pages[material]
-    assert _open(browser, url + "#ui=0") == "ready"
-    base = page.data["view"]["exposure"]
-    errors = []
-    for az, el, zoom, dexp in VIEWS:
-        exposure = base + dexp
-        shot = _screenshot(browser, f"azimuth={az}&elevation={el}&zoom={zoom}&exposure={exposure}&mode={mode}&ui=0")
-        ref, hit = reference_image(shrm, page, mode, az, el, zoom, exposure)
-        other, _ = reference_image(shrm, page, OTHER_MODE[mode], az, el, zoom, exposure)
-        band = binary_dilation(hit) & ~binary_erosion(hit)
-        inner = binary_erosion(hit)
-        whole, inside = relative_rms(shot, ref, ~band), relative_rms(shot, ref, inner)
-        errors.append((az, el, zoom, round(whole, 4), round(inside, 4), round(relative_rms(shot, other, inner), 4)))
-    # within the threshold, and the mode drawn is the one asked for (the other mode's image is
-    # 2.8-12 % away from it on these views)
-    assert all(w <= REL_RMS_MAX and i <= REL_RMS_MAX and 2.0 * i < o for *_, w, i, o in errors), errors
+class TestInBrowser:
+    """The tests of the browser and material_pages fixtures: one unit of work under xdist
+    (tests/conftest.py), one chromium and one set of pages."""
 
+    @pytest.mark.slow
+    @pytest.mark.parametrize("mode", ["distant", "perpixel"])
+    @pytest.mark.parametrize("material", MATERIALS)
+    def test_screenshots_match_cpu_reference(self, browser, material_pages, material, mode) -> None:
+        """Three views (orbit, exposure, zoom from the URL hash) of the page in chromium against the
+        CPU reference renderer of the same SHRM and camera: relative RMS of the 8-bit image ≤
+        REL_RMS_MAX, on the whole image and on the object, the one-pixel silhouette band left out
+        (the page draws an icosphere of 5120 triangles, the reference the analytic sphere); and
+        the object is at least twice as far from the other mode's reference."""
+        shrm, page, url = material_pages[material]
+        assert _open(browser, url + "#ui=0") == "ready"
+        base = page.data["view"]["exposure"]
+        errors = []
+        for az, el, zoom, dexp in VIEWS:
+            exposure = base + dexp
+            shot = _screenshot(browser, f"azimuth={az}&elevation={el}&zoom={zoom}&exposure={exposure}&mode={mode}&ui=0")
+            ref, hit = reference_image(shrm, page, mode, az, el, zoom, exposure)
+            other, _ = reference_image(shrm, page, OTHER_MODE[mode], az, el, zoom, exposure)
+            band = binary_dilation(hit) & ~binary_erosion(hit)
+            inner = binary_erosion(hit)
+            whole, inside = relative_rms(shot, ref, ~band), relative_rms(shot, ref, inner)
+            errors.append((az, el, zoom, round(whole, 4), round(inside, 4), round(relative_rms(shot, other, inner), 4)))
+        # within the threshold, and the mode drawn is the one asked for (the other mode's image is
+        # 2.8-12 % away from it on these views)
+        assert all(w <= REL_RMS_MAX and i <= REL_RMS_MAX and 2.0 * i < o for *_, w, i, o in errors), errors
 
-@pytest.mark.slow
-@pytest.mark.parametrize("mode", ["distant", "perpixel"])
-def test_spot_on_plus_x_lights_the_right_half_seen_from_minus_y(browser, tmp_path, mode) -> None:
-    """Orientation: builtin:spot at +x seen from −y (azimuth −90°) lights the right half of the
-    screenshot (image right = +x), as in the VTK renderer's test; the page agrees with the CPU
-    reference there."""
-    env = shrmkit.load_env("builtin:spot,dir=x", height=32)
-    shrm = shrmkit.prefilter(env, "microfacet:sigma=0.2", eps=0.05, size=32)
-    page = build_view(shrm, env, still="none", exposure=0.0)
-    url = write_view(tmp_path / "spot.html", page_html(page)).resolve().as_uri()
-    assert _open(browser, url + "#ui=0") == "ready"
-    shot = _screenshot(browser, f"azimuth=-90&elevation=0&mode={mode}&background=0&ui=0")
-    lum = shot.astype(np.float64).sum(axis=-1)
-    half = SIZE // 2
-    assert lum[:, half:].sum() > 5.0 * lum[:, :half].sum()
-    ref, hit = reference_image(shrm, page, mode, -90.0, 0.0, 1.0, 0.0, background=False)
-    assert relative_rms(shot, ref, binary_erosion(hit)) <= REL_RMS_MAX
+    @pytest.mark.slow
+    @pytest.mark.parametrize("mode", ["distant", "perpixel"])
+    def test_spot_on_plus_x_lights_the_right_half_seen_from_minus_y(self, browser, tmp_path, mode) -> None:
+        """Orientation: builtin:spot at +x seen from −y (azimuth −90°) lights the right half of the
+        screenshot (image right = +x), as in the VTK renderer's test; the page agrees with the CPU
+        reference there."""
+        env = shrmkit.load_env("builtin:spot,dir=x", height=32)
+        shrm = shrmkit.prefilter(env, "microfacet:sigma=0.2", eps=0.05, size=32)
+        page = build_view(shrm, env, still="none", exposure=0.0)
+        url = write_view(tmp_path / "spot.html", page_html(page)).resolve().as_uri()
+        assert _open(browser, url + "#ui=0") == "ready"
+        shot = _screenshot(browser, f"azimuth=-90&elevation=0&mode={mode}&background=0&ui=0")
+        lum = shot.astype(np.float64).sum(axis=-1)
+        half = SIZE // 2
+        assert lum[:, half:].sum() > 5.0 * lum[:, :half].sum()
+        ref, hit = reference_image(shrm, page, mode, -90.0, 0.0, 1.0, 0.0, background=False)
+        assert relative_rms(shot, ref, binary_erosion(hit)) <= REL_RMS_MAX
 
+    @pytest.mark.slow
+    def test_javascript_sh_match_analysis_sh(self, browser, material_pages) -> None:
+        """ShrmView.realSH (the recurrence the shaders use) equals analysis.sh.real_sph_harm to 1e-12 up to P = 20."""
+        _, _, url = material_pages[MATERIALS[0]]
+        _open(browser, url + "#ui=0")
+        rng = np.random.default_rng(3)
+        v = rng.normal(size=(6, 3))
+        v /= np.linalg.norm(v, axis=1, keepdims=True)
+        v[0] = (0.0, 0.0, 1.0)  # a pole
+        got = np.array(browser.evaluate(f"{json.dumps(v.tolist())}"
+                                        ".map(d => Array.from(window.ShrmView.realSH(20, d)))"))
+        assert np.abs(got - real_sph_harm(20, v)).max() < 1e-12
 
-@pytest.mark.slow
-def test_javascript_sh_match_analysis_sh(browser, material_pages) -> None:
-    """ShrmView.realSH (the recurrence the shaders use) equals analysis.sh.real_sph_harm to 1e-12 up to P = 20."""
-    _, _, url = material_pages[MATERIALS[0]]
-    _open(browser, url + "#ui=0")
-    rng = np.random.default_rng(3)
-    v = rng.normal(size=(6, 3))
-    v /= np.linalg.norm(v, axis=1, keepdims=True)
-    v[0] = (0.0, 0.0, 1.0)  # a pole
-    got = np.array(browser.evaluate(f"{json.dumps(v.tolist())}.map(d => Array.from(window.ShrmView.realSH(20, d)))"))
-    assert np.abs(got - real_sph_harm(20, v)).max() < 1e-12
+    @pytest.mark.slow
+    def test_first_frame_fills_the_canvas_without_interaction(self, browser, material_pages) -> None:
+        """A page opened as is (no hash change, no resize, no input) draws at the canvas's laid-out
+        size: the first frame used to be drawn while the canvas was hidden, leaving it 1 × 1."""
+        _, _, url = material_pages[MATERIALS[0]]
+        assert _open(browser, url) == "ready"
+        browser.evaluate("new Promise(r => setTimeout(() => requestAnimationFrame(r), 300))", await_promise=True)
+        width, height = browser.evaluate(
+            "(() => { const c = document.querySelector('#shrm-view canvas'); return [c.width, c.height]; })()")
+        assert width >= SIZE // 2 and height >= SIZE // 2, (width, height)
 
 
 @pytest.mark.slow
@@ -331,14 +345,3 @@ def test_cli_view_bad_input(tmp_path: Path, capsys) -> None:
         main(["view", "phong:s=32", "--elevation", "120", "-o", str(tmp_path / "v.html")])
 
 
-
-@pytest.mark.slow
-def test_first_frame_fills_the_canvas_without_interaction(browser, material_pages) -> None:
-    """A page opened as is (no hash change, no resize, no input) draws at the canvas's laid-out
-    size: the first frame used to be drawn while the canvas was hidden, leaving it 1 × 1."""
-    _, _, url = material_pages[MATERIALS[0]]
-    assert _open(browser, url) == "ready"
-    browser.evaluate("new Promise(r => setTimeout(() => requestAnimationFrame(r), 300))", await_promise=True)
-    width, height = browser.evaluate(
-        "(() => { const c = document.querySelector('#shrm-view canvas'); return [c.width, c.height]; })()")
-    assert width >= SIZE // 2 and height >= SIZE // 2, (width, height)

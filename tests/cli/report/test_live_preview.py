@@ -33,7 +33,6 @@ from scipy.ndimage import binary_dilation, binary_erosion
 from shrmkit.analysis.shrm import SHRM
 from shrmkit.brdf_io.latlong import bilinear_lookup
 from shrmkit.cli.report.collect import collect_report
-from shrmkit.cli.report.demo import run_demo
 from shrmkit.cli.report.explorer import LIVE_VIEW_BUDGET_BYTES, LiveView, preview_view_angles
 from shrmkit.cli.report.html import _viewer_once, report_html
 from shrmkit.cli.report.options import profile
@@ -124,49 +123,99 @@ def _still_of(html: str, element_id: str) -> bytes:
 # ------------------------------------------------------------------------------------------
 
 
-def test_live_previews_are_embedded_once_per_environment_within_budget(report) -> None:
-    doc, html = report["doc"], report["html"]
-    live = doc["live_preview"]
-    assert live["budget_bytes"] == LIVE_VIEW_BUDGET_BYTES == 3 << 20 and live["notes"] == []
-    assert [v["env"] for v in live["views"]] == [e["name"] for e in doc["environments"]] == ["sky", "studio"]
-    views = [x for x in report["extras"] if isinstance(x, LiveView)]
-    assert [v.element_id for v in views] == [v["element_id"] for v in live["views"]]
-    for entry, view in zip(live["views"], views, strict=True):
-        assert entry["html_bytes"] == len(view.html.encode("utf-8")) <= LIVE_VIEW_BUDGET_BYTES
-        assert f'<div class="shrm-view" id="{entry["element_id"]}"' in html
-        assert f"<!-- live-view {entry['element_id']} -->" not in html  # the mark was replaced
-        data = page_document(html, entry["element_id"])
-        assert data["shrm"]["P"] == entry["P"] and [data["shrm"]["height"], data["shrm"]["width"]] == entry["maps"]
-        # the SHRM at the main tolerance of that environment
-        env = next(e for e in doc["environments"] if e["name"] == entry["env"])
-        assert (entry["F"], entry["source_P"]) == (env["F_B"], env["P_B"])
-    # the viewer, its shaders and style are in the page once; nothing is fetched
-    sources = webgl_sources()
-    assert html.count(sources["view.js"]) == 1 and html.count(sources["view.css"]) == 1
-    assert html.count("window.ShrmViewShaders = window.ShrmViewShaders ||") == 1
-    assert "http://" not in html and "https://" not in html and re.search(r"<script[^>]+src=", html) is None
-    # report.md says where the live preview is, report.json holds no HTML
-    md = (report["folder"] / "report.md").read_text(encoding="utf-8")
-    assert "**Live preview** under sky" in md and "<!-- live-view live-view-0-sky -->" in md
-    assert "<script" not in (report["folder"] / "report.json").read_text(encoding="utf-8")
+class TestReport:
+    """The tests of the report fixture: one unit of work under xdist (tests/conftest.py), one report."""
 
+    def test_live_previews_are_embedded_once_per_environment_within_budget(self, report) -> None:
+        doc, html = report["doc"], report["html"]
+        live = doc["live_preview"]
+        assert live["budget_bytes"] == LIVE_VIEW_BUDGET_BYTES == 3 << 20 and live["notes"] == []
+        assert [v["env"] for v in live["views"]] == [e["name"] for e in doc["environments"]] == ["sky", "studio"]
+        views = [x for x in report["extras"] if isinstance(x, LiveView)]
+        assert [v.element_id for v in views] == [v["element_id"] for v in live["views"]]
+        for entry, view in zip(live["views"], views, strict=True):
+            assert entry["html_bytes"] == len(view.html.encode("utf-8")) <= LIVE_VIEW_BUDGET_BYTES
+            assert f'<div class="shrm-view" id="{entry["element_id"]}"' in html
+            assert f"<!-- live-view {entry['element_id']} -->" not in html  # the mark was replaced
+            data = page_document(html, entry["element_id"])
+            assert data["shrm"]["P"] == entry["P"] and [data["shrm"]["height"], data["shrm"]["width"]] == entry["maps"]
+            # the SHRM at the main tolerance of that environment
+            env = next(e for e in doc["environments"] if e["name"] == entry["env"])
+            assert (entry["F"], entry["source_P"]) == (env["F_B"], env["P_B"])
+        # the viewer, its shaders and style are in the page once; nothing is fetched
+        sources = webgl_sources()
+        assert html.count(sources["view.js"]) == 1 and html.count(sources["view.css"]) == 1
+        assert html.count("window.ShrmViewShaders = window.ShrmViewShaders ||") == 1
+        assert "http://" not in html and "https://" not in html and re.search(r"<script[^>]+src=", html) is None
+        # report.md says where the live preview is, report.json holds no HTML
+        md = (report["folder"] / "report.md").read_text(encoding="utf-8")
+        assert "**Live preview** under sky" in md and "<!-- live-view live-view-0-sky -->" in md
+        assert "<script" not in (report["folder"] / "report.json").read_text(encoding="utf-8")
 
-def test_still_image_is_the_report_preview_and_the_camera_matches_it(report) -> None:
-    """The first view's fallback is preview_sphere.png byte for byte; the others get a CPU still;
-    the page's initial camera is the preview camera (same rays)."""
-    html, folder = report["html"], report["folder"]
-    first, second = (v["element_id"] for v in report["doc"]["live_preview"]["views"])
-    assert _still_of(html, first) == (folder / "preview_sphere.png").read_bytes()
-    assert report["doc"]["live_preview"]["views"][0]["still"] == "preview_sphere.png"
-    assert report["doc"]["live_preview"]["views"][1]["still"] == "cpu-reference"
-    still = np.asarray(Image.open(io.BytesIO(_still_of(html, second))))
-    assert still.shape == (128, 128, 3) and still.std() > 5.0
-    az, el = preview_view_angles()
-    view = page_document(html, first)["view"]
-    assert (view["azimuth"], view["elevation"], view["zoom"]) == pytest.approx((az, el, 1.0), abs=1e-6)
-    ref = Camera.looking_at(view=np.array(PREVIEW_VIEW), up=(0.0, 0.0, 1.0), margin=1.15)
-    for a, b in zip(page_camera(az, el, 1.0, 16, 16).rays(16, 16), ref.rays(16, 16), strict=True):
-        assert np.allclose(a, b, atol=1e-12)
+    def test_still_image_is_the_report_preview_and_the_camera_matches_it(self, report) -> None:
+        """The first view's fallback is preview_sphere.png byte for byte; the others get a CPU still;
+        the page's initial camera is the preview camera (same rays)."""
+        html, folder = report["html"], report["folder"]
+        first, second = (v["element_id"] for v in report["doc"]["live_preview"]["views"])
+        assert _still_of(html, first) == (folder / "preview_sphere.png").read_bytes()
+        assert report["doc"]["live_preview"]["views"][0]["still"] == "preview_sphere.png"
+        assert report["doc"]["live_preview"]["views"][1]["still"] == "cpu-reference"
+        still = np.asarray(Image.open(io.BytesIO(_still_of(html, second))))
+        assert still.shape == (128, 128, 3) and still.std() > 5.0
+        az, el = preview_view_angles()
+        view = page_document(html, first)["view"]
+        assert (view["azimuth"], view["elevation"], view["zoom"]) == pytest.approx((az, el, 1.0), abs=1e-6)
+        ref = Camera.looking_at(view=np.array(PREVIEW_VIEW), up=(0.0, 0.0, 1.0), margin=1.15)
+        for a, b in zip(page_camera(az, el, 1.0, 16, 16).rays(16, 16), ref.rays(16, 16), strict=True):
+            assert np.allclose(a, b, atol=1e-12)
+
+    @pytest.mark.slow
+    def test_live_previews_render_from_file_url_like_the_cpu_reference(self, chromium, browser_class, report) -> None:
+        """Every live view of report.html (file://) draws; its canvas is not blank, matches the CPU
+        reference of the data it holds within REL_RMS_MAX and the still preview within
+        STILL_REL_RMS_MAX (after downsampling to the still's size)."""
+        html = report["html"]
+        ids = [v["element_id"] for v in report["doc"]["live_preview"]["views"]]
+        browser = browser_class(chromium, WINDOW, WINDOW)
+        try:
+            assert browser.open(report["url"], ids) == {i: "ready" for i in ids}
+            errors = []
+            for k, element_id in enumerate(ids):
+                browser.wait(_canvas_sized(element_id), f"a canvas of the laid-out size in {element_id}")
+                readme = os.environ.get("SHRM_README_SCREENSHOT")
+                if k == 0 and readme:
+                    _write_readme_screenshot(browser.screenshot(f"#{element_id}"), Path(readme))
+                browser.evaluate(f"document.querySelectorAll('#{element_id} .shrm-view-info, "
+                                 f"#{element_id} .shrm-view-ui').forEach(e => e.style.display = 'none')")
+                shot = browser.screenshot(f"#{element_id} canvas")
+                h, w = shot.shape[:2]
+                assert min(h, w) >= 200 and shot.std() > 10.0  # drawn at its laid-out size, not blank
+                data = page_document(html, element_id)
+                ref, hit = reference_image(data, w, h)
+                band = binary_dilation(hit) & ~binary_erosion(hit)
+                # the object differs from the background: the sphere is drawn, not just the environment
+                assert np.abs(shot[binary_erosion(hit, iterations=3)].mean() - shot[~binary_dilation(hit)].mean()) > 3.0
+                whole, inside = relative_rms(shot, ref, ~band), relative_rms(shot, ref, binary_erosion(hit))
+                still = np.asarray(Image.open(io.BytesIO(_still_of(html, element_id))).convert("RGB"))
+                small = np.asarray(Image.fromarray(shot).resize(still.shape[1::-1], Image.Resampling.BOX))
+                errors.append((element_id, round(whole, 4), round(inside, 4), round(relative_rms(small, still), 4)))
+        finally:
+            browser.close()
+        assert all(w <= REL_RMS_MAX and i <= REL_RMS_MAX and s <= STILL_REL_RMS_MAX for _, w, i, s in errors), errors
+
+    @pytest.mark.slow
+    def test_without_webgl_the_report_shows_the_still_images(self, chromium, report) -> None:
+        """With the 3D APIs disabled every viewer of report.html falls back to its still PNG, the
+        first one being preview_sphere.png (DOM after the scripts ran)."""
+        dom = subprocess.run([chromium, "--headless=new", "--no-sandbox", *NO_WEBGL_FLAGS, "--dump-dom", report["url"]],
+                             capture_output=True, text=True, timeout=120).stdout
+        ids = [v["element_id"] for v in report["doc"]["live_preview"]["views"]]
+        for element_id in ids:
+            root = re.search(rf'<div class="shrm-view[^"]*" id="{element_id}"[^>]*>', dom)
+            assert root is not None, dom[:500]
+            assert 'data-state="fallback"' in root.group(0) and "WebGL2" in root.group(0)
+        assert _still_of(dom, ids[0]) == (report["folder"] / "preview_sphere.png").read_bytes()
+        assert dom.count("Showing a still image") >= len(ids)
 
 
 def test_preview_none_makes_no_live_view() -> None:
@@ -200,60 +249,11 @@ def _canvas_sized(element_id: str) -> str:
 
 
 @pytest.mark.slow
-def test_live_previews_render_from_file_url_like_the_cpu_reference(chromium, browser_class, report) -> None:
-    """Every live view of report.html (file://) draws; its canvas is not blank, matches the CPU
-    reference of the data it holds within REL_RMS_MAX and the still preview within
-    STILL_REL_RMS_MAX (after downsampling to the still's size)."""
-    html = report["html"]
-    ids = [v["element_id"] for v in report["doc"]["live_preview"]["views"]]
-    browser = browser_class(chromium, WINDOW, WINDOW)
-    try:
-        assert browser.open(report["url"], ids) == {i: "ready" for i in ids}
-        errors = []
-        for k, element_id in enumerate(ids):
-            browser.wait(_canvas_sized(element_id), f"a canvas of the laid-out size in {element_id}")
-            readme = os.environ.get("SHRM_README_SCREENSHOT")
-            if k == 0 and readme:
-                _write_readme_screenshot(browser.screenshot(f"#{element_id}"), Path(readme))
-            browser.evaluate(f"document.querySelectorAll('#{element_id} .shrm-view-info, #{element_id} .shrm-view-ui')"
-                             ".forEach(e => e.style.display = 'none')")
-            shot = browser.screenshot(f"#{element_id} canvas")
-            h, w = shot.shape[:2]
-            assert min(h, w) >= 200 and shot.std() > 10.0  # drawn at its laid-out size, not blank
-            data = page_document(html, element_id)
-            ref, hit = reference_image(data, w, h)
-            band = binary_dilation(hit) & ~binary_erosion(hit)
-            # the object differs from the background: the sphere is drawn, not just the environment
-            assert np.abs(shot[binary_erosion(hit, iterations=3)].mean() - shot[~binary_dilation(hit)].mean()) > 3.0
-            whole, inside = relative_rms(shot, ref, ~band), relative_rms(shot, ref, binary_erosion(hit))
-            still = np.asarray(Image.open(io.BytesIO(_still_of(html, element_id))).convert("RGB"))
-            small = np.asarray(Image.fromarray(shot).resize(still.shape[1::-1], Image.Resampling.BOX))
-            errors.append((element_id, round(whole, 4), round(inside, 4), round(relative_rms(small, still), 4)))
-    finally:
-        browser.close()
-    assert all(w <= REL_RMS_MAX and i <= REL_RMS_MAX and s <= STILL_REL_RMS_MAX for _, w, i, s in errors), errors
-
-
-@pytest.mark.slow
-def test_without_webgl_the_report_shows_the_still_images(chromium, report) -> None:
-    """With the 3D APIs disabled every viewer of report.html falls back to its still PNG, the
-    first one being preview_sphere.png (DOM after the scripts ran)."""
-    dom = subprocess.run([chromium, "--headless=new", "--no-sandbox", *NO_WEBGL_FLAGS, "--dump-dom", report["url"]],
-                         capture_output=True, text=True, timeout=120).stdout
-    ids = [v["element_id"] for v in report["doc"]["live_preview"]["views"]]
-    for element_id in ids:
-        root = re.search(rf'<div class="shrm-view[^"]*" id="{element_id}"[^>]*>', dom)
-        assert root is not None, dom[:500]
-        assert 'data-state="fallback"' in root.group(0) and "WebGL2" in root.group(0)
-    assert _still_of(dom, ids[0]) == (report["folder"] / "preview_sphere.png").read_bytes()
-    assert dom.count("Showing a still image") >= len(ids)
-
-
-@pytest.mark.slow
-def test_demo_reports_preview_live_from_file_url(chromium, browser_class, tmp_path) -> None:
-    """``shrm demo``: both reports (tabulated MERL files) draw their live preview from file://."""
-    steps = run_demo(tmp_path / "demo", size=64)
-    pages = [p for s in steps if s.step == "reports" for p in s.paths if p.name == "report.html"]
+def test_demo_reports_preview_live_from_file_url(chromium, browser_class, demo_run) -> None:
+    """``shrm demo``: both reports (tabulated MERL files) draw their live preview from file://
+    (the demo run of tests/conftest.py's demo_run, shared with tests/cli/test_cli_demo.py)."""
+    assert demo_run.code == 0
+    pages = sorted((demo_run.out / "report").glob("*/report.html"))
     assert len(pages) == 2
     browser = browser_class(chromium, WINDOW, WINDOW)
     try:

@@ -128,75 +128,74 @@ def phong_report():
     return doc, previews, options
 
 
-def test_report_matches_documented_schema(phong_report):
-    doc, previews, _ = phong_report
-    assert validate(doc, OK_SCHEMA) == []
-    assert doc["format"] == "shrmkit-report" and doc["format_version"] == 1 and doc["status"] == "ok"
-    assert {w["code"] for w in doc["warnings"]} <= WARNING_CODES
-    # strict JSON: no NaN/Inf survives
-    json.dumps(doc, allow_nan=False)
-    # the preview image file named in the JSON is a PNG that was produced
-    # (beside the preview images come the explorer's lit sphere and the live views: explorer.py)
-    previews = [p for p in previews if isinstance(p, PreviewImage)]
-    assert [img["key"] for img in doc["preview"]["images"]] == [p.key for p in previews] == ["sphere"]
-    assert previews[0].png[:8] == b"\x89PNG\r\n\x1a\n"
+class TestPhongReport:
+    """The tests of the phong_report fixture: one unit of work under xdist (tests/conftest.py), one report."""
 
+    def test_report_matches_documented_schema(self, phong_report):
+        doc, previews, _ = phong_report
+        assert validate(doc, OK_SCHEMA) == []
+        assert doc["format"] == "shrmkit-report" and doc["format_version"] == 1 and doc["status"] == "ok"
+        assert {w["code"] for w in doc["warnings"]} <= WARNING_CODES
+        # strict JSON: no NaN/Inf survives
+        json.dumps(doc, allow_nan=False)
+        # the preview image file named in the JSON is a PNG that was produced
+        # (beside the preview images come the explorer's lit sphere and the live views: explorer.py)
+        previews = [p for p in previews if isinstance(p, PreviewImage)]
+        assert [img["key"] for img in doc["preview"]["images"]] == [p.key for p in previews] == ["sphere"]
+        assert previews[0].png[:8] == b"\x89PNG\r\n\x1a\n"
 
-def test_phong_orders_follow_rh02_appendix_d(phong_report):
-    """F ≈ sqrt(−s ln ε) and P = 0 for Phong (RH02 Appendix D), at every tolerance of the report."""
-    doc, _, options = phong_report
-    assert [o["tolerance"] for o in doc["orders"]] == [0.1, 0.03, 0.01]
-    for o in doc["orders"]:
-        expected = math.sqrt(-32.0 * math.log(o["tolerance"]))
-        assert abs(o["F"] - expected) <= 1.5, (o, expected)
-        assert o["P"] == 0
-        assert o["eps"] <= o["tolerance"]
-    table = np.array(doc["eps_table"]["eps"])
-    # the table is ε: 1 at F = 0 minus the l = 0 energy, decreasing in F and in P
-    assert np.all(np.diff(table, axis=0) <= 1e-12) and np.all(np.diff(table, axis=1) <= 1e-12)
+    def test_phong_orders_follow_rh02_appendix_d(self, phong_report):
+        """F ≈ sqrt(−s ln ε) and P = 0 for Phong (RH02 Appendix D), at every tolerance of the report."""
+        doc, _, options = phong_report
+        assert [o["tolerance"] for o in doc["orders"]] == [0.1, 0.03, 0.01]
+        for o in doc["orders"]:
+            expected = math.sqrt(-32.0 * math.log(o["tolerance"]))
+            assert abs(o["F"] - expected) <= 1.5, (o, expected)
+            assert o["P"] == 0
+            assert o["eps"] <= o["tolerance"]
+        table = np.array(doc["eps_table"]["eps"])
+        # the table is ε: 1 at F = 0 minus the l = 0 energy, decreasing in F and in P
+        assert np.all(np.diff(table, axis=0) <= 1e-12) and np.all(np.diff(table, axis=1) <= 1e-12)
 
+    def test_phong_is_flagged_non_reciprocal_and_albedo_is_one_at_normal_view(self, phong_report):
+        """Phong defines ρ̂ = (s+1)/(2π) cos^s about the mirror direction: at normal view the lobe is
+        the whole upper hemisphere and ∫ρ̂ dω = 1 exactly; ρ = ρ̂/cos θ_i is not reciprocal."""
+        doc, _, _ = phong_report
+        checks = doc["data_checks"]
+        assert checks["albedo"]["views_deg"][0] == 0.0
+        np.testing.assert_allclose(checks["albedo"]["rgb"][0], [1.0, 1.0, 1.0], rtol=1e-6)
+        assert checks["reciprocity"]["max_rel"] > 1e-2
+        codes = [w["code"] for w in doc["warnings"]]
+        assert "non_reciprocal" in codes
+        assert "energy_gain" not in codes
 
-def test_phong_is_flagged_non_reciprocal_and_albedo_is_one_at_normal_view(phong_report):
-    """Phong defines ρ̂ = (s+1)/(2π) cos^s about the mirror direction: at normal view the lobe is
-    the whole upper hemisphere and ∫ρ̂ dω = 1 exactly; ρ = ρ̂/cos θ_i is not reciprocal."""
-    doc, _, _ = phong_report
-    checks = doc["data_checks"]
-    assert checks["albedo"]["views_deg"][0] == 0.0
-    np.testing.assert_allclose(checks["albedo"]["rgb"][0], [1.0, 1.0, 1.0], rtol=1e-6)
-    assert checks["reciprocity"]["max_rel"] > 1e-2
-    codes = [w["code"] for w in doc["warnings"]]
-    assert "non_reciprocal" in codes
-    assert "energy_gain" not in codes
+    def test_measured_error_matches_predicted_energy_error(self, phong_report):
+        """The predicted relative RMS per view band is the expected squared error of the SHRM over
+        uniform R (analysis.view_bands); the brute-force angular reference (RH02 eq. 2) on the
+        report's pairs measures it within its Monte Carlo error, and the bound is in the same units.
+        Phong's ρ̂ does not depend on the view: every band states the same error."""
+        doc, _, _ = phong_report
+        rows = sorted(doc["speed_vs_error"], key=lambda r: -r["tolerance"])
+        for r in rows:
+            assert 0.7 * r["predicted_rel_rms"] <= r["measured_rel_rms"] <= 1.3 * r["bound_rel_rms"], r
+            assert r["predicted_rel_rms"] <= r["bound_rel_rms"] and r["P_B"] == r["P_rho"] == 0
+            assert r["bound"] >= r["eps_B"] - 1e-12  # energy bound (all views) never below the prediction
+            predicted = [b["predicted_rel_rms"] for b in r["view_bands"]]
+            assert max(predicted) - min(predicted) < 1e-3 * max(predicted)
+            for b in r["view_bands"]:
+                assert b["measured_rel_rms"] - 3 * b["measured_stderr"] <= b["bound_rel_rms"], b
+        assert rows[-1]["measured_rel_rms"] < rows[0]["measured_rel_rms"]
 
-
-def test_measured_error_matches_predicted_energy_error(phong_report):
-    """The predicted relative RMS per view band is the expected squared error of the SHRM over
-    uniform R (analysis.view_bands); the brute-force angular reference (RH02 eq. 2) on the
-    report's pairs measures it within its Monte Carlo error, and the bound is in the same units.
-    Phong's ρ̂ does not depend on the view: every band states the same error."""
-    doc, _, _ = phong_report
-    rows = sorted(doc["speed_vs_error"], key=lambda r: -r["tolerance"])
-    for r in rows:
-        assert 0.7 * r["predicted_rel_rms"] <= r["measured_rel_rms"] <= 1.3 * r["bound_rel_rms"], r
-        assert r["predicted_rel_rms"] <= r["bound_rel_rms"] and r["P_B"] == r["P_rho"] == 0
-        assert r["bound"] >= r["eps_B"] - 1e-12  # energy bound (all views) never below the prediction
-        predicted = [b["predicted_rel_rms"] for b in r["view_bands"]]
-        assert max(predicted) - min(predicted) < 1e-3 * max(predicted)
-        for b in r["view_bands"]:
-            assert b["measured_rel_rms"] - 3 * b["measured_stderr"] <= b["bound_rel_rms"], b
-    assert rows[-1]["measured_rel_rms"] < rows[0]["measured_rel_rms"]
-
-
-def test_fit_slice_of_phong_peaks_at_the_mirror_direction(phong_report):
-    """Measured slice = the BRDF on the plane of incidence: Phong's ρ̂ = ρ cos θ_i is
-    (s+1)/(2π) cos^s of the angle to the mirror direction θ_i = −θ_o (closed form)."""
-    doc, _, _ = phong_report
-    slices = doc["fit_slices"]
-    theta = np.array(slices["theta_deg"])
-    for view in slices["views"]:
-        rho_hat = np.array(view["measured_rgb"])[:, 1] * np.cos(np.radians(theta))
-        expected = 33.0 / (2.0 * np.pi) * np.cos(np.radians(theta + view["view_deg"])).clip(0.0) ** 32
-        np.testing.assert_allclose(rho_hat, expected, rtol=1e-6, atol=1e-12)
+    def test_fit_slice_of_phong_peaks_at_the_mirror_direction(self, phong_report):
+        """Measured slice = the BRDF on the plane of incidence: Phong's ρ̂ = ρ cos θ_i is
+        (s+1)/(2π) cos^s of the angle to the mirror direction θ_i = −θ_o (closed form)."""
+        doc, _, _ = phong_report
+        slices = doc["fit_slices"]
+        theta = np.array(slices["theta_deg"])
+        for view in slices["views"]:
+            rho_hat = np.array(view["measured_rgb"])[:, 1] * np.cos(np.radians(theta))
+            expected = 33.0 / (2.0 * np.pi) * np.cos(np.radians(theta + view["view_deg"])).clip(0.0) ** 32
+            np.testing.assert_allclose(rho_hat, expected, rtol=1e-6, atol=1e-12)
 
 
 def test_report_is_reproducible_except_timings():
@@ -261,12 +260,15 @@ def test_options_are_validated():
 def test_scattered_cornell_report_uses_the_fit(shared_data):
     """Cornell krylon_blue (real scattered measurements, /work/shared/data): the analysis runs
     on the fitted model; out-of-gamut components clamped on input are reported; the measured
-    slices come from the file's samples (1439 rows, θ_i in 10°…80°)."""
+    slices come from the file's samples (1439 rows, θ_i in 10°…80°). The orders are capped at
+    F = 16, P = 1 (the fit's lobe would take F = 96, the quick cap, and most of the time): the
+    report states the cap (``orders_capped``), and none of the checks here is about the orders."""
     from shrmkit.brdf_io.cornell import read_cornell
 
     path = shared_data / "brdf" / "cornell" / "krylon_blue.brdf"
     raw = read_cornell(path)
-    options = profile("quick", preview="none", models=("lafortune",), tolerances=(0.1,), eps=0.1, n_pairs=50)
+    options = profile("quick", preview="none", models=("lafortune",), tolerances=(0.1,), eps=0.1, n_pairs=50,
+                      max_F=16, max_P=1)
     doc, _ = collect_report(path, options)
     assert validate(doc, OK_SCHEMA) == []
     assert doc["brdf"]["kind"] == "scattered" and doc["brdf"]["analysis_of"] == "fit:lafortune"
