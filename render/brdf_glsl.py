@@ -72,6 +72,11 @@ __all__ = [
     "LightShading",
     "brdf_shader_for",
     "tabulate_brdf",
+    "table_grid_for",
+    "choose_table",
+    "scaled_grid",
+    "TABLE_TARGET_REL_RMS",
+    "TABLE_FACTORS",
     "table_lookup",
     "table_error",
     "light_shading",
@@ -158,7 +163,7 @@ BRDF_GLSL: dict[type, BrdfShader] = {
 #: Every other BRDF: a table texture (``brdf_table.glsl``; :func:`tabulate_brdf`).
 TABLE_SHADER = BrdfShader("table", None, "brdf_table.glsl", lambda t: {"shrmBrdfScale": ("float", [float(t.scale)])},
                           lambda t: {"SHRM_TAB_NH": t.shape[0], "SHRM_TAB_ND": t.shape[1], "SHRM_TAB_NP": t.shape[2],
-                                     "SHRM_TAB_COLS": t.cols})
+                                     "SHRM_TAB_COLS": t.cols, "SHRM_TAB_PERIODIC": int(t.periodic)})
 
 
 def brdf_shader_for(brdf: BRDF) -> BrdfShader:
@@ -183,10 +188,14 @@ class BrdfTable:
     Attributes
     ----------
     values
-        float32 (NH, ND, NP, 3): ρ (1/sr) at θ_h = (i/(NH−1))² π/2, θ_d = j/(ND−1) π/2,
-        φ_d = k/(NP−1) π. Samples where L or V is below the surface hold the nearest sample
-        above it along θ_d (the shader returns 0 there; this only keeps interpolation near the
-        horizon from blending in zeros).
+        float32 (NH, ND, NP, 3): ρ (1/sr) at θ_h = (i/(NH−1))² π/2, θ_d = j/(ND−1) π/2 and
+        φ_d = k/(NP−1) π — or, ``periodic``, φ_d = k π/NP. Samples where L or V is below the
+        surface hold the nearest sample above it along θ_d (the shader returns 0 there; this only
+        keeps interpolation near the horizon from blending in zeros).
+    periodic
+        φ_d folded into [0, π) by reciprocity, periodic (MERL's convention, ρ(φ_d) = ρ(φ_d + π):
+        for MERL files, whose reader folds so); else into [0, π] by the mirror symmetry of an
+        isotropic BRDF, |φ_d|, clamped.
     scale
         The texture holds ``values × scale`` (1 for float32 textures; a power of two for the
         page's half floats).
@@ -200,6 +209,7 @@ class BrdfTable:
     scale: float = 1.0
     missing: int = 0
     seconds: float = 0.0
+    periodic: bool = False
 
     @property
     def shape(self) -> tuple[int, int, int]:
@@ -224,25 +234,40 @@ class BrdfTable:
         return out
 
     def with_values(self, values: np.ndarray, scale: float) -> BrdfTable:
-        return BrdfTable(np.asarray(values, np.float32), float(scale), self.missing, self.seconds)
+        return BrdfTable(np.asarray(values, np.float32), float(scale), self.missing, self.seconds, self.periodic)
 
 
-def table_angles(shape: tuple[int, int, int]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def table_angles(shape: tuple[int, int, int], periodic: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(θ_h, θ_d, φ_d) of the table's samples, 1-D arrays (radians)."""
     nh, nd, npd = shape
-    return ((np.arange(nh) / max(nh - 1, 1)) ** 2 * (np.pi / 2), np.arange(nd) / max(nd - 1, 1) * (np.pi / 2),
-            np.arange(npd) / max(npd - 1, 1) * np.pi)
+    phi = np.arange(npd) * (np.pi / npd) if periodic else np.arange(npd) / max(npd - 1, 1) * np.pi
+    return (np.arange(nh) / max(nh - 1, 1)) ** 2 * (np.pi / 2), np.arange(nd) / max(nd - 1, 1) * (np.pi / 2), phi
 
 
-def tabulate_brdf(brdf: BRDF, shape: tuple[int, int, int] = TABLE_GRID) -> BrdfTable:
-    """ρ of ``brdf`` (its own ``eval``) on the half/difference grid ``shape`` (:class:`BrdfTable`)."""
+def table_grid_for(brdf: BRDF) -> tuple[tuple[int, int, int], bool]:
+    """The default grid and φ_d fold of ``brdf``'s table: MERL's own samples for a MERL file
+    (91 × 91 × 180, periodic: every sample of the file is a texel and the reader's trilinear
+    interpolation is reproduced), :data:`TABLE_GRID` with the mirror fold otherwise."""
+    from ..brdf_io.merl import MerlBRDF  # same layer
+
+    if isinstance(brdf, MerlBRDF):
+        return (TABLE_GRID[0], TABLE_GRID[1], TABLE_GRID[2] - 1), True
+    return TABLE_GRID, False
+
+
+def tabulate_brdf(brdf: BRDF, shape: tuple[int, int, int] | None = None, periodic: bool | None = None) -> BrdfTable:
+    """ρ of ``brdf`` (its own ``eval``) on a half/difference grid (:class:`BrdfTable`); ``shape`` and
+    ``periodic`` default to :func:`table_grid_for`."""
     import time
 
+    default_shape, default_periodic = table_grid_for(brdf)
+    shape = default_shape if shape is None else shape
+    periodic = default_periodic if periodic is None else bool(periodic)
     nh, nd, npd = (int(n) for n in shape)
     if min(nh, nd, npd) < 2:
         raise BadInputError(getattr(brdf, "name", None), f"a BRDF table needs at least 2 samples an axis, got {shape}")
     t0 = time.perf_counter()
-    th, td, pd = table_angles((nh, nd, npd))
+    th, td, pd = table_angles((nh, nd, npd), periodic)
     values = np.zeros((nh, nd, npd, 3))
     missing = 0
     for i in range(nh):  # one θ_h slice at a time: (ND·NP) evaluations
@@ -259,12 +284,12 @@ def tabulate_brdf(brdf: BRDF, shape: tuple[int, int, int] = TABLE_GRID) -> BrdfT
             if ok.size and ok[-1] < nd - 1:
                 rho[ok[-1] + 1:, k] = rho[ok[-1], k]
         values[i] = rho
-    return BrdfTable(values.astype(np.float32), 1.0, missing, time.perf_counter() - t0)
+    return BrdfTable(values.astype(np.float32), 1.0, missing, time.perf_counter() - t0, periodic)
 
 
 def table_lookup(table: BrdfTable, L: np.ndarray, V: np.ndarray) -> np.ndarray:
     """ρ̂ = ρ_table · max(L_z, 0) at local directions (..., 3) as ``brdf_table.glsl`` computes it
-    (trilinear in the indices, φ_d folded to |φ_d|; 0 unless L_z > 0 and V_z > 0), float64."""
+    (trilinear in the indices, φ_d folded as the table says; 0 unless L_z > 0 and V_z > 0), float64."""
     L, V = np.broadcast_arrays(np.asarray(L, np.float64), np.asarray(V, np.float64))
     nh, nd, npd = table.shape
     th, td, pd = directions_to_halfdiff(L, V)
@@ -277,7 +302,12 @@ def table_lookup(table: BrdfTable, L: np.ndarray, V: np.ndarray) -> np.ndarray:
 
     i0, i1, fu = axis((nh - 1) * np.sqrt(np.clip(th / (np.pi / 2), 0.0, 1.0)), nh)
     j0, j1, fv = axis((nd - 1) * td / (np.pi / 2), nd)
-    k0, k1, fw = axis((npd - 1) * np.abs(pd) / np.pi, npd)
+    if table.periodic:
+        w = np.mod(pd, np.pi) * (npd / np.pi)
+        k0 = np.minimum(np.floor(w).astype(np.intp), npd - 1)
+        k1, fw = (k0 + 1) % npd, w - k0
+    else:
+        k0, k1, fw = axis((npd - 1) * np.abs(pd) / np.pi, npd)
     fu, fv, fw = fu[..., None], fv[..., None], fw[..., None]
 
     def lerp(a: np.ndarray, b: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -290,6 +320,52 @@ def table_lookup(table: BrdfTable, L: np.ndarray, V: np.ndarray) -> np.ndarray:
     rho = lerp(lerp(c00, c01, fv), lerp(c10, c11, fv), fu)
     above = (L[..., 2] > 0.0) & (V[..., 2] > 0.0)
     return np.where(above[..., None], rho * np.maximum(L[..., 2], 0.0)[..., None], 0.0)
+
+
+#: The table's resolution is chosen by its error: the coarsest of the grids :data:`TABLE_FACTORS` ×
+#: the default whose error on the lights' reflection (:func:`table_error`) is at most this in every
+#: view band; the finest when none is.
+TABLE_TARGET_REL_RMS = 0.01
+#: Fractions of the default grid's spacing tried, coarse to fine (1: :func:`table_grid_for`).
+TABLE_FACTORS = (1.0 / 3.0, 0.5, 2.0 / 3.0, 1.0)
+
+
+def scaled_grid(shape: tuple[int, int, int], factor: float, periodic: bool) -> tuple[int, int, int]:
+    """``shape`` with ``factor`` × the samples per axis (both ends kept; a periodic φ_d axis scales
+    its count)."""
+    nh, nd, npd = shape
+    clamp = [max(2, round((n - 1) * factor) + 1) for n in (nh, nd)]
+    last = max(2, round(npd * factor)) if periodic else max(2, round((npd - 1) * factor) + 1)
+    return clamp[0], clamp[1], last
+
+
+def choose_table(brdf: BRDF, lights: LightSet, *, max_view_deg: float = 80.0, max_texels: int | None = None,
+                 target: float = TABLE_TARGET_REL_RMS, shape: tuple[int, int, int] | None = None,
+                 store: Callable[[BrdfTable], BrdfTable] | None = None) -> tuple[BrdfTable, dict[str, Any]]:
+    """The table of ``brdf`` for ``lights`` and its measured error (:func:`table_error`).
+
+    Grids :data:`TABLE_FACTORS` × the default (:func:`table_grid_for`) are tried coarse to fine,
+    those over ``max_texels`` left out (the coarsest kept if none fits), and the first whose
+    worst view band is within ``target`` is taken, else the finest tried; ``shape`` forces one grid.
+    ``store`` maps a table to what the texture will hold (e.g. half-float rounding) before its
+    error is measured. The error dict adds ``target`` and ``grids_tried``.
+    """
+    base, periodic = table_grid_for(brdf)
+    grids = [tuple(shape)] if shape is not None else list(dict.fromkeys(
+        scaled_grid(base, f, periodic) for f in TABLE_FACTORS))
+    if max_texels is not None and shape is None:
+        fitting = [g for g in grids if g[0] * g[1] * g[2] <= max_texels]
+        grids = fitting or [grids[0]]
+    tried = []
+    for grid in grids:
+        table = tabulate_brdf(brdf, grid, periodic)
+        if store is not None:
+            table = store(table)
+        error = table_error(table, brdf, lights, max_view_deg=max_view_deg)
+        tried.append(list(grid))
+        if error["worst_band_rel_rms"] <= target:
+            break
+    return table, {**error, "target": float(target), "grids_tried": tried}
 
 
 def _table_light_radiance(table: BrdfTable, lights: LightSet, R: np.ndarray, V: np.ndarray) -> np.ndarray:
@@ -359,9 +435,11 @@ class LightShading:
     table: BrdfTable | None = None
     table_error: dict[str, float] | None = None
 
-    def glsl(self) -> str:
-        """The #defines and the GLSL of the BRDF and the light sum (desktop and WebGL alike)."""
-        return "\n".join([*(f"#define {k} {int(v)}" for k, v in self.defines.items()),
+    def glsl(self, *, vtk: bool = True) -> str:
+        """The #defines and the GLSL of the BRDF and the light sum, for the VTK shaders
+        (``SHRM_VTK``: VTK declares the samplers of the textures it binds)."""
+        return "\n".join([*(["#define SHRM_VTK 1"] if vtk else []),
+                          *(f"#define {k} {int(v)}" for k, v in self.defines.items()),
                           *(glsl_source(name) for name in lights_glsl_parts(self.shader))])
 
     def describe(self) -> str:
@@ -389,13 +467,14 @@ def light_uniforms(lights: LightSet) -> dict[str, Uniform]:
             "shrmLightPower": ("vec3[]", [float(x) for x in lights.power.reshape(-1)])}
 
 
-def light_shading(shrm: Any, *, table_shape: tuple[int, int, int] = TABLE_GRID,
+def light_shading(shrm: Any, *, table_shape: tuple[int, int, int] | None = None,
                   table: BrdfTable | None = None, measure: bool = True) -> LightShading | None:
     """The :class:`LightShading` of an SHRM's lights, or None when it has none (then the shaders
     hold no light code at all: no cost).
 
-    A BRDF without a GLSL model (:func:`brdf_shader_for`) is tabulated on ``table_shape``
-    (or ``table`` given) and, with ``measure``, its error measured (:func:`table_error`).
+    A BRDF without a GLSL model (:func:`brdf_shader_for`) is tabulated at the resolution its error
+    needs (:func:`choose_table`; on ``table_shape`` if given), or ``table`` is used (its error
+    measured with ``measure``).
     """
     if not getattr(shrm, "has_lights", False):
         return None
@@ -407,9 +486,11 @@ def light_shading(shrm: Any, *, table_shape: tuple[int, int, int] = TABLE_GRID,
     uniforms = light_uniforms(lights)
     error = None
     if shader is TABLE_SHADER:
-        table = tabulate_brdf(brdf, table_shape) if table is None else table
-        if measure:
-            error = table_error(table, brdf, lights, max_view_deg=float(shrm.meta.get("max_view_deg", 80.0)))
+        max_view = float(shrm.meta.get("max_view_deg", 80.0))
+        if table is None:
+            table, error = choose_table(brdf, lights, max_view_deg=max_view, shape=table_shape)
+        elif measure:
+            error = table_error(table, brdf, lights, max_view_deg=max_view)
         uniforms.update(shader.uniforms(table))
         defines = shader.defines(table)
     else:

@@ -100,7 +100,7 @@ class RenderOptions:
         The SHRM modes' explicit lights (``prefilter(lights=)``: ``"auto"``, ``"none"`` or at most
         N lights; validated by :func:`~shrmkit.analysis.lights.check_lights`): the compact bright
         regions of the map are taken out and shaded exactly per pixel (``render.brdf_glsl``).
-        ``rsibr`` always prefilters with ``"none"``: Cabral et al.'s maps hold the whole map.
+        ``rsibr`` reflects them into its twelve maps instead (Cabral et al.'s maps hold everything).
     """
 
     lobes: int = 3
@@ -190,41 +190,43 @@ WINDOW_INFO_KEYS = ("window", "window_requested", "window_strength", "window_rea
                     "negative_after", "negative_fraction_after")
 
 
-def lights_info(shrm: SHRM) -> tuple[dict[str, Any], str]:
+def lights_info(shrm: SHRM, *, per_pixel: bool = True) -> tuple[dict[str, Any], str]:
     """``BuiltModel.info["lights"]`` and the ``lights:`` line of an SHRM's explicit lights: the
-    lights (``SHRM.meta["lights"]``), their sample count and how the renderers shade them
-    (``render.brdf_glsl``: the BRDF's GLSL; a measured BRDF's table with its measured error)."""
+    lights (``SHRM.meta["lights"]``), their sample count and how they are shaded: per pixel by the
+    BRDF's GLSL (``render.brdf_glsl``; a measured BRDF's table with its measured error), or
+    (``per_pixel=False``, rsibr) reflected into the mode's maps."""
     meta = shrm.meta
     requested = meta.get("lights_requested", "none")
     if not shrm.has_lights:
         return ({"requested": requested, "count": 0, "samples": 0, "lights": []},
                 f"lights: none ({'none requested' if requested == 'none' else 'no compact bright region'})")
-    shading = cached_light_shading(shrm)
     lights = list(meta.get("lights", []))
+    share = meta.get("lights_flux_share") or 0.0
     info: dict[str, Any] = {
-        "requested": requested, "count": len(lights), "samples": len(shrm.lights),
-        "flux_share": meta.get("lights_flux_share"), "left_in_map": meta.get("lights_left_in_map"),
-        "brdf_glsl": shading.shader.source, "lights": lights,
+        "requested": requested, "count": len(lights), "samples": len(shrm.lights), "flux_share": share,
+        "left_in_map": meta.get("lights_left_in_map"), "lights": lights,
     }
+    line = f"lights: {len(lights)} ({len(shrm.lights)} samples, {100 * share:.3g} % of the map's flux), "
+    if not per_pixel:
+        info["shaded"] = "maps"
+        return info, line + "reflected into the twelve maps at their resolution"
+    shading = cached_light_shading(shrm)
+    info.update({"shaded": "per pixel", "brdf_glsl": shading.shader.source})
     if shading.table is not None:
         info["brdf_table"] = {"shape": list(shading.table.shape), "missing": shading.table.missing,
                               "seconds": shading.table.seconds, **(shading.table_error or {})}
-    share = meta.get("lights_flux_share") or 0.0
-    line = (f"lights: {len(lights)} ({len(shrm.lights)} samples, {100 * share:.3g} % of the map's flux), "
-            + shading.describe())
-    return info, line
+    return info, line + shading.describe()
 
 
 def _prefiltered(
     env: EnvironmentMap, brdf: BRDF, eps: float, options: RenderOptions, *, azimuth_free: bool = False,
-    lights: str | int | None = None,
+    per_pixel_lights: bool = True,
 ) -> BuiltModel:
     t0 = time.perf_counter()
     shrm = prefilter(env, brdf, eps=eps, azimuth_free=azimuth_free, window=options.window,
-                     criterion=options.criterion, max_view_deg=options.max_view_deg,
-                     lights=options.lights if lights is None else lights)
+                     criterion=options.criterion, max_view_deg=options.max_view_deg, lights=options.lights)
     seconds = time.perf_counter() - t0
-    light_info, light_line = lights_info(shrm)
+    light_info, light_line = lights_info(shrm, per_pixel=per_pixel_lights)
     info = {"F": shrm.F, "P": shrm.P, "height": shrm.height, "width": shrm.width, "eps": eps,
             "achieved_eps": dict(shrm.eps), "azimuth_free": azimuth_free, "prefilter_seconds": seconds,
             "criterion": shrm.meta["criterion"], "max_view_deg": shrm.meta["max_view_deg"],
@@ -251,14 +253,12 @@ def build_kautz_mccool(
 
 
 def build_rsibr(env: EnvironmentMap, brdf: BRDF, mesh: Mesh, *, eps: float, options: RenderOptions) -> BuiltModel:
-    """Cabral et al. 1999: the SHRM, then its twelve maps at the icosahedron's vertices. The SHRM is
-    prefiltered without explicit lights (``lights="none"``, whatever ``options.lights``): the
-    method's maps hold the whole environment, sun included."""
-    built = _prefiltered(env, brdf, eps, options, lights="none")
+    """Cabral et al. 1999: the SHRM, then its twelve maps at the icosahedron's vertices; the SHRM's
+    explicit lights are reflected into the maps (``rsibr_from_shrm``: the method's maps hold the
+    whole radiance, at their own resolution), not shaded per pixel."""
+    built = _prefiltered(env, brdf, eps, options, per_pixel_lights=False)
     maps = rsibr_from_shrm(built.model)
-    lines = tuple("lights: none (rsibr: the maps hold the whole environment, bright lights included)"
-                  if line.startswith("lights:") else line for line in built.description)
-    return BuiltModel(maps, {**built.info, "rsibr_seconds": float(maps.meta["seconds"])}, lines)
+    return BuiltModel(maps, {**built.info, "rsibr_seconds": float(maps.meta["seconds"])}, built.description)
 
 
 def build_gaussian_lobes(

@@ -256,8 +256,8 @@ def rsibr_shading(model: RSIBRMaps | SHRM, mesh: Mesh) -> Shading:
     """Cabral et al. 1999: the twelve maps (made from an SHRM by ``rsibr_from_shrm`` when given one)."""
     maps = model if isinstance(model, RSIBRMaps) else rsibr_from_shrm(model)
     _, h, w, _ = maps.maps.shape
-    # an SHRM's explicit lights are not in its maps: added per fragment, as in mode distant
-    return _view_map_shading(h, w, maps, None if isinstance(model, RSIBRMaps) else cached_light_shading(model))
+    # an SHRM's explicit lights are in the maps rsibr_from_shrm makes (Cabral's maps hold everything)
+    return _view_map_shading(h, w, maps)
 
 
 def rsibr_update(maps: RSIBRMaps, view: np.ndarray, out: np.ndarray) -> None:
