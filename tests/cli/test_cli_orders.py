@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -12,8 +10,14 @@ import pytest
 from shrmkit.cli.main import main
 
 
-def run_cli(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "shrmkit.cli.main", *args], capture_output=True, text=True)
+def run_main(capsys, *args: str) -> tuple[int, str]:
+    """`shrm ARGS` in this process (the process path is tests/cli/test_cli_main.py's): exit code
+    and stderr; a usage error exits through argparse's SystemExit."""
+    try:
+        code = main(list(args))
+    except SystemExit as stop:
+        code = stop.code
+    return code, capsys.readouterr().err
 
 
 def test_orders_json(capsys):
@@ -50,10 +54,10 @@ def test_orders_bands_json_states_every_view_band(capsys):
     assert doc["bound_units"].startswith("relative RMS")
 
 
-def test_max_view_angle_and_criterion_are_validated():
+def test_max_view_angle_and_criterion_are_validated(capsys):
     for args in (["--max-view-angle", "95"], ["--max-view-angle", "0"], ["--criterion", "rh03"]):
-        proc = run_cli("orders", "phong:s=8", *args)
-        assert proc.returncode == 2 and ("max-view-angle" in proc.stderr or "criterion" in proc.stderr)
+        code, err = run_main(capsys, "orders", "phong:s=8", *args)
+        assert code == 2 and ("max-view-angle" in err or "criterion" in err)
 
 
 def test_orders_table_output(capsys):
@@ -62,11 +66,12 @@ def test_orders_table_output(capsys):
     assert "eps(F, P)" in out and "orders for microfacet:sigma=0.4" in out
 
 
-def test_bad_input_exit_2_one_line():
+def test_bad_input_exit_2_one_line(capsys):
     for args in (["orders", "nosuch:a=1"], ["orders", "phong:s=8", "--eps", "2"], ["orders", "/no/file.binary"]):
-        proc = run_cli(*args)
-        assert proc.returncode == 2, args
-        assert proc.stderr.strip().count("\n") == 0 or "usage" in proc.stderr
+        code, err = run_main(capsys, *args)
+        assert code == 2, args
+        assert err.strip().count("\n") == 0 or "usage" in err
+        assert err.startswith(("shrm orders: error:", "usage: shrm orders")), err
 
 
 def test_env_orientation_options_reach_the_loader(capsys):

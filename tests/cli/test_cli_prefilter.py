@@ -2,15 +2,18 @@
 
 from __future__ import annotations
 
-import subprocess
-import sys
-
 import shrmkit
 from shrmkit.cli.main import main
 
 
-def run_cli(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "shrmkit.cli.main", *args], capture_output=True, text=True)
+def run_main(capsys, *args: str) -> tuple[int, str]:
+    """`shrm ARGS` in this process (the process path is tests/cli/test_cli_main.py's): exit code
+    and stderr; a usage error exits through argparse's SystemExit."""
+    try:
+        code = main(list(args))
+    except SystemExit as stop:
+        code = stop.code
+    return code, capsys.readouterr().err
 
 
 def test_prefilter_writes_loadable_file(tmp_path, capsys):
@@ -23,18 +26,20 @@ def test_prefilter_writes_loadable_file(tmp_path, capsys):
     assert "wrote" in capsys.readouterr().out
 
 
-def test_prefilter_bad_input_leaves_no_file(tmp_path):
+def test_prefilter_bad_input_leaves_no_file(tmp_path, capsys):
     out = tmp_path / "bad.shrm.npz"
-    proc = run_cli("prefilter", "--env", str(tmp_path / "missing.exr"), "--brdf", "phong:s=8", "-o", str(out))
-    assert proc.returncode == 2 and "missing.exr" in proc.stderr
-    proc = run_cli("prefilter", "--env", "builtin:sky", "--brdf", "lambert:albedo=0", "-o", str(out))
-    assert proc.returncode == 2 and "zero everywhere" in proc.stderr
+    code, err = run_main(capsys, "prefilter", "--env", str(tmp_path / "missing.exr"), "--brdf", "phong:s=8",
+                         "-o", str(out))
+    assert code == 2 and "missing.exr" in err
+    code, err = run_main(capsys, "prefilter", "--env", "builtin:sky", "--brdf", "lambert:albedo=0", "-o", str(out))
+    assert code == 2 and "zero everywhere" in err
     assert not out.exists() and not list(tmp_path.iterdir())
 
 
 def test_prefilter_eps_is_validated_by_the_one_rule(tmp_path, capsys):
     """--eps outside (0, 1) is a usage error (exit 2) with check_eps's message; no file is written."""
     out = tmp_path / "m.shrm.npz"
-    proc = run_cli("prefilter", "--env", "builtin:sky,height=16", "--brdf", "phong:s=8", "--eps", "1.5", "-o", str(out))
-    assert proc.returncode == 2 and "eps must be in (0, 1), got 1.5" in proc.stderr
+    code, err = run_main(capsys, "prefilter", "--env", "builtin:sky,height=16", "--brdf", "phong:s=8", "--eps", "1.5",
+                         "-o", str(out))
+    assert code == 2 and "eps must be in (0, 1), got 1.5" in err
     assert not out.exists()
