@@ -544,13 +544,13 @@ def targets_table(args: argparse.Namespace) -> list[Target]:
     rows: list[Target] = []
     analytic = ["microfacet:sigma=0.1", "cook-torrance:alpha=0.1,dist=ggx"] if args.quick else BRDFS
     for spec in analytic:
-        rows.append(target_orders(spec, f"analytic {spec}", ANALYTIC_TARGET_S, repeats, False))
+        rows.append(target_orders(spec, f"analytic {spec}", ANALYTIC_TARGET_S, 3, False))
         console.print(f"  done orders {spec}", style="dim")
     files = sorted(RGL.glob("*.bsdf")) if RGL.is_dir() else []
     if args.quick:
         files = [f for f in files if f.name == SHARPEST_RGL] or files[:1]
     for path in files:
-        rows.append(target_orders(path, f"RGL table {path.name}", RGL_TARGET_S, repeats, True))
+        rows.append(target_orders(path, f"RGL table {path.name}", RGL_TARGET_S, 3, True))
         console.print(f"  done orders {path.name}", style="dim")
     if not files:
         rows.append(Target("order choice, RGL table", "not measured", f"<= {RGL_TARGET_S:g} s", False,
