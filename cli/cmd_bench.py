@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
+import sys
 import time
 from pathlib import Path
 
@@ -54,6 +55,9 @@ def _say(text: str) -> None:
 def _load(path: Path):
     spec = importlib.util.spec_from_file_location(f"shrm_bench_{path.stem}", path)
     module = importlib.util.module_from_spec(spec)
+    # registered before it runs, as an import would be: dataclasses (and pickling) look the
+    # module up in sys.modules while its classes are being defined
+    sys.modules[spec.name] = module
     spec.loader.exec_module(module)
     return module
 
