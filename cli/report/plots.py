@@ -71,7 +71,14 @@ def _figure(width: float = 6.0, height: float = 3.6):
 
 def _png(fig) -> bytes:
     buf = io.BytesIO()
-    fig.tight_layout()
+    if len(fig.axes) == 1 and fig.axes[0].name == "rectilinear":
+        # one plain axes: fixed margins in inches (tick labels, axis labels, a title line) instead of
+        # tight_layout, which draws the whole figure once more only to measure its text
+        width, height = fig.get_size_inches()
+        fig.subplots_adjust(left=0.72 / width, right=1.0 - 0.15 / width, bottom=0.5 / height,
+                            top=1.0 - (0.35 if fig.axes[0].get_title() else 0.15) / height)
+    else:
+        fig.tight_layout()
     fig.savefig(buf, format="png", dpi=_DPI, metadata={"Software": None})
     return buf.getvalue()
 
