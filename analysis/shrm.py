@@ -43,7 +43,7 @@ from .synthesis import (
     windowed,
 )
 from .tolerance import DEFAULT_EPS, check_eps
-from .view_bands import DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG, shrm_view_bands
+from .view_bands import DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG, bands_inside, shrm_view_bands
 from .window import (
     DEFAULT_WINDOW,
     UNDERSHOOT_MAX_VIEW_DEG,
@@ -289,8 +289,6 @@ def map_rows(
     :data:`MAP_BOUND_SHARE`. The lookup error falls as h⁴, so this is typically S ≈ 3–5 F instead
     of RH02's 10 F: what the stated error needs, not more.
     """
-    from .view_bands import bands_inside  # one module, same layer
-
     rule_hi = int(np.clip(10 * F, 32, 1024))
     hi = default_size(F, P, budget_bytes)
     inside = bands_inside(profile, max_view_deg)

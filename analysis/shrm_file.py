@@ -25,6 +25,7 @@ from ..brdf_io.atomic import atomic_path
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.jsonutil import loads_strict, to_jsonable
 from ..brdf_io.npz_safe import NpzMember, read_npz
+from .lights import Light, LightSet
 
 __all__ = ["save_shrm", "read_shrm_fields", "check_header", "FORMAT", "VERSION", "MAX_ORDER"]
 
@@ -217,8 +218,6 @@ def read_shrm_fields(path: str | Path) -> dict[str, Any]:
 def _read_lights(path: Path, arrays: dict[str, np.ndarray], meta: dict) -> Any:
     """The file's :class:`~shrmkit.analysis.lights.LightSet`, or None; all three arrays or none,
     matching shapes, finite, non-negative power, a BRDF named to shade them."""
-    from .lights import Light, LightSet
-
     present = [key for key in _LIGHT_KEYS if key in arrays]
     if not present:
         return None
