@@ -48,7 +48,7 @@ from ..brdf_io.brdf import BRDF
 from ..brdf_io.envmap import EnvironmentMap
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.exr import luminance_weights
-from ..brdf_io.latlong import pixel_directions, row_solid_angles
+from ..brdf_io.latlong import row_solid_angles
 from .pairs import sample_pairs_focused
 from .reference import local_frames
 
@@ -242,60 +242,62 @@ def extract_lights(env: EnvironmentMap, mode: str | int = DEFAULT_LIGHTS) -> Ext
         that residual + lights = ``env`` per pixel.
     """
     mode = check_lights(mode)
-    radiance = np.asarray(env.radiance, dtype=np.float64)
-    height, width = radiance.shape[:2]
+    height, width = env.radiance.shape[:2]
     if mode == "none" or height < 2:
         return Extraction(LightSet.empty(), env, np.inf, 0.0, 0, 0.0)
     limit = MAX_LIGHTS if mode == "auto" else int(mode)
-    Y = radiance @ luminance_weights()
-    omega = np.repeat(row_solid_angles(height, width)[:, None], width, axis=1)
+    weights = luminance_weights()
+    Y = env.radiance @ weights.astype(env.radiance.dtype)  # the map's own type: 2 Mpixel maps stay light
+    row_omega = row_solid_angles(height, width)
     y_max = float(Y.max())
     if not y_max > 0.0:
         return Extraction(LightSet.empty(), env, np.inf, 0.0, 0, 0.0)
-    reference = _weighted_median(Y.ravel(), omega.ravel())
+    reference = _median_luminance(Y, row_omega)
     threshold = max(LIGHT_CONTRAST * reference, 1e-3 * y_max)
     labels, n = _components(Y > threshold)
     if n == 0:
         return Extraction(LightSet.empty(), env, threshold, reference, 0, 0.0)
-    dirs = pixel_directions(height, width)
-    index = np.arange(1, n + 1)
-    flux = ndimage.sum_labels(Y * omega, labels, index)
-    order = np.argsort(flux)[::-1]
+    # every region as its pixel indices (work in proportion to the bright pixels, not the map)
+    regions = [np.nonzero(labels == label) for label in range(1, n + 1)] if n <= 4 else \
+        [tuple(np.unravel_index(idx, labels.shape)) for idx in _label_indices(labels, n)]
+    flux = np.array([float(Y[r, c].astype(np.float64) @ row_omega[r]) for r, c in regions])
     cos_max = np.cos(np.radians(MAX_LIGHT_RADIUS_DEG))
     kept, skipped = [], 0
-    for j in order:
-        label = index[j]
-        mask = labels == label
-        centre = _centre(dirs[mask], (Y * omega)[mask])
-        if float((dirs[mask] @ centre).min()) < cos_max or len(kept) >= limit:
+    for j in np.argsort(flux)[::-1]:
+        rows, cols = regions[j]
+        d = _directions(rows, cols, height, width)
+        centre = _centre(d, Y[rows, cols].astype(np.float64) * row_omega[rows])
+        if float((d @ centre).min()) < cos_max or len(kept) >= limit:
             skipped += 1
             continue
-        kept.append((label, mask, centre))
+        kept.append((rows, cols, d, centre))
     if not kept:
         return Extraction(LightSet.empty(), env, threshold, reference, skipped, 0.0)
-    residual = radiance.copy()
-    all_bright = labels > 0
-    if not np.any(np.where(np.any([mask for _, mask, _ in kept], axis=0)[..., None], 0.0, radiance) > 0.0):
+    residual = env.radiance.copy()  # the map's own type: residual + lights = map to its rounding
+    lit = np.zeros((height, width), dtype=bool)
+    for rows, cols, _, _ in kept:
+        lit[rows, cols] = True
+    floor = 0.0
+    if not np.any(residual[~lit] > 0.0):
         # the lights are all there is: keep the residual a map (the smallest normal float32, so the
         # SHT has something to expand) rather than a black one, which analyses refuse
-        residual[...] = np.maximum(residual, 0.0)
-        tiny = np.finfo(np.float32).tiny
-        outside = ~np.any([mask for _, mask, _ in kept], axis=0)
-        residual[outside] = tiny
-        floor = tiny
-    else:
-        floor = 0.0
+        floor = float(np.finfo(np.float32).tiny)
+        residual[~lit] = floor
     samples_d, samples_e, samples_k, lights = [], [], [], []
     pixels_d, pixels_e, pixels_k = [], [], []
-    total_flux = float((Y * omega).sum())
-    for k, (_, mask, centre) in enumerate(kept):
-        ring = _dilate(mask) & ~all_bright
-        fill = (radiance[ring] * omega[ring, None]).sum(axis=0) / max(float(omega[ring].sum()), 1e-300) \
-            if ring.any() else np.zeros(3)
+    total_flux = float(Y.astype(np.float64).sum(axis=1) @ row_omega)
+    bright = labels > 0
+    for k, (rows, cols, pix_dirs, centre) in enumerate(kept):
+        ring_r, ring_c = _ring(rows, cols, height, width)
+        outside = ~bright[ring_r, ring_c]
+        ring_r, ring_c = ring_r[outside], ring_c[outside]
+        ring_w = row_omega[ring_r]
+        fill = (residual[ring_r, ring_c].astype(np.float64) * ring_w[:, None]).sum(axis=0) / ring_w.sum() \
+            if ring_r.size else np.zeros(3)
+        original = np.asarray(env.radiance[rows, cols], dtype=np.float64)
         # rounded to the map's own type first, so that residual + lights = map holds to float64 rounding
-        residual[mask] = np.minimum(radiance[mask], np.maximum(fill, floor)[None, :]).astype(env.radiance.dtype)
-        excess = (radiance[mask] - residual[mask]) * omega[mask][:, None]  # (m, 3) ≥ 0
-        pix_dirs = dirs[mask]
+        residual[rows, cols] = np.minimum(original, np.maximum(fill, floor)[None, :])
+        excess = (original - residual[rows, cols].astype(np.float64)) * row_omega[rows][:, None]  # (m, 3) ≥ 0
         d, e, merge = _median_cut(pix_dirs, excess, MAX_SAMPLES_PER_LIGHT)
         pixels_d.append(pix_dirs)
         pixels_e.append(excess)
@@ -303,21 +305,21 @@ def extract_lights(env: EnvironmentMap, mode: str | int = DEFAULT_LIGHTS) -> Ext
         samples_d.append(d)
         samples_e.append(e)
         samples_k.append(np.full(len(d), k))
-        lum = excess @ luminance_weights()
+        lum = excess @ weights
         centre = _centre(pix_dirs, lum) if lum.sum() > 0 else centre
         el = float(np.degrees(np.arcsin(np.clip(centre[2], -1.0, 1.0))))
-        az = float(np.degrees(np.arctan2(centre[1], centre[0])) % 360.0)
+        az = float(np.degrees(np.arctan2(centre[1], centre[0])) % 360.0) % 360.0
         radius = float(np.degrees(np.arccos(np.clip((pix_dirs @ centre).min(), -1.0, 1.0))))
         lights.append(Light(
             direction=tuple(float(x) for x in centre), elevation_deg=el, azimuth_deg=az,
             power=tuple(float(x) for x in excess.sum(axis=0)), radius_deg=radius,
-            solid_angle=float(omega[mask].sum()), share=float(lum.sum() / total_flux) if total_flux > 0 else 0.0,
-            pixels=int(mask.sum()), samples=len(d), merge_deg=merge,
+            solid_angle=float(row_omega[rows].sum()), share=float(lum.sum() / total_flux) if total_flux > 0 else 0.0,
+            pixels=int(rows.size), samples=len(d), merge_deg=merge,
         ))
     light_set = LightSet(np.concatenate(samples_d), np.concatenate(samples_e), np.concatenate(samples_k),
                          tuple(lights))
-    residual_env = EnvironmentMap(residual.astype(env.radiance.dtype), name=env.name,
-                                  source=f"{env.source or env.name} without {len(lights)} light(s)")
+    residual_env = EnvironmentMap.derived(residual, name=env.name,
+                                          source=f"{env.source or env.name} without {len(lights)} light(s)")
     share = float(sum(light.share for light in lights))
     exact = None
     if any(light.merge_deg > 0.0 for light in lights):
@@ -355,10 +357,48 @@ def merge_error_by_band(
     return ratio(shrm_part), ratio(whole if whole is not None else shrm_part)
 
 
-def _weighted_median(values: np.ndarray, weights: np.ndarray) -> float:
-    order = np.argsort(values)
-    cumulative = np.cumsum(weights[order])
-    return float(values[order][np.searchsorted(cumulative, 0.5 * cumulative[-1])])
+def _median_luminance(Y: np.ndarray, row_omega: np.ndarray) -> float:
+    """The solid-angle-weighted median of the luminance, on the map area-averaged to at most 256
+    rows (a robust level of the sky or the room; sorting a 2-Mpixel map for it is not needed)."""
+    factor = 1
+    while Y.shape[0] % (2 * factor) == 0 and Y.shape[1] % (2 * factor) == 0 and Y.shape[0] // factor > 256:
+        factor *= 2
+    h, w = Y.shape[0] // factor, Y.shape[1] // factor
+    weighted = (Y.astype(np.float64) * row_omega[:, None]).reshape(h, factor, w, factor).sum(axis=(1, 3))
+    omega = row_omega.reshape(h, factor).sum(axis=1) * factor
+    values = weighted / omega[:, None]
+    order = np.argsort(values, axis=None)
+    cumulative = np.cumsum(np.repeat(omega, w)[order])
+    return float(values.ravel()[order][np.searchsorted(cumulative, 0.5 * cumulative[-1])])
+
+
+def _label_indices(labels: np.ndarray, n: int) -> list[np.ndarray]:
+    """Flat pixel indices of each label 1..n, in one pass."""
+    flat = labels.ravel()
+    nonzero = np.flatnonzero(flat)
+    order = nonzero[np.argsort(flat[nonzero], kind="stable")]
+    bounds = np.searchsorted(flat[order], np.arange(1, n + 2))
+    return [order[bounds[k] : bounds[k + 1]] for k in range(n)]
+
+
+def _directions(rows: np.ndarray, cols: np.ndarray, height: int, width: int) -> np.ndarray:
+    """Unit pixel-centre directions (DESIGN §2) of the pixels (rows, cols), (m, 3)."""
+    theta = (rows + 0.5) * np.pi / height
+    phi = 2.0 * np.pi * (cols + 0.5) / width
+    s = np.sin(theta)
+    return np.stack([s * np.cos(phi), s * np.sin(phi), np.cos(theta)], axis=-1)
+
+
+def _ring(rows: np.ndarray, cols: np.ndarray, height: int, width: int) -> tuple[np.ndarray, np.ndarray]:
+    """The 8-neighbours of the pixels (rows, cols) that are not among them (periodic in φ)."""
+    dr, dc = np.meshgrid([-1, 0, 1], [-1, 0, 1], indexing="ij")
+    r = (rows[:, None] + dr.ravel()[None, :]).ravel()
+    c = ((cols[:, None] + dc.ravel()[None, :]) % width).ravel()
+    ok = (r >= 0) & (r < height)
+    key = np.unique(r[ok].astype(np.int64) * width + c[ok])
+    own = rows.astype(np.int64) * width + cols
+    key = key[~np.isin(key, own)]
+    return key // width, key % width
 
 
 def _components(mask: np.ndarray) -> tuple[np.ndarray, int]:
@@ -395,13 +435,6 @@ def _components(mask: np.ndarray) -> tuple[np.ndarray, int]:
     relabel = np.zeros(n + 1, dtype=labels.dtype)
     relabel[1:] = np.searchsorted(unique, roots[1:]) + 1
     return relabel[labels], int(unique.size)
-
-
-def _dilate(mask: np.ndarray) -> np.ndarray:
-    """One-pixel 8-neighbour dilation, periodic in φ."""
-    padded = np.concatenate([mask[:, -1:], mask, mask[:, :1]], axis=1)
-    grown = ndimage.binary_dilation(padded, structure=np.ones((3, 3), dtype=bool))
-    return grown[:, 1:-1]
 
 
 def _centre(dirs: np.ndarray, weight: np.ndarray) -> np.ndarray:

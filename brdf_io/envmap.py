@@ -158,6 +158,27 @@ class EnvironmentMap:
         checked.flags.writeable = False
         object.__setattr__(self, "radiance", checked)
 
+    @classmethod
+    def derived(cls, radiance: np.ndarray, *, name: str = "", source: str = "") -> EnvironmentMap:
+        """A map computed from a checked one by operations that keep every value finite and
+        non-negative (a light taken out of it, say): the reading checks of ``__post_init__`` are
+        skipped (they cost a full pass over a 2-Mpixel map). ``radiance`` is taken as is, made
+        read-only.
+
+        Raises
+        ------
+        ValueError
+            A shape or dtype the class does not hold (a programming error, not bad input).
+        """
+        radiance = np.asarray(radiance)
+        if radiance.ndim != 3 or radiance.shape[2] != 3 or radiance.dtype not in (np.float32, np.float64):
+            raise ValueError(f"a derived map must be (H, W, 3) float32/float64, got {radiance.dtype} {radiance.shape}")
+        radiance.flags.writeable = False
+        out = object.__new__(cls)
+        for key, value in (("radiance", radiance), ("name", name), ("source", source)):
+            object.__setattr__(out, key, value)
+        return out
+
     @property
     def height(self) -> int:
         """Number of rows H."""
