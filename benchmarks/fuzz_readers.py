@@ -616,7 +616,10 @@ def build_cases(readers: dict[str, Reader], seed: int, per_reader: int, only: se
     return cases
 
 
-def _prepare(case: dict, readers: dict[str, Reader], work: Path) -> dict:
+def _prepare(case: dict, readers: dict[str, Reader], work: Path,
+             seed_bytes: Callable[[Path], bytes] = Path.read_bytes) -> dict:
+    """Write the case's file (``seed_bytes(path)``: a seed file's content, read once per run by
+    :func:`run_fuzz`; a MERL seed is 35 MB)."""
     reader = readers[case["reader"]]
     rng = np.random.default_rng(case["seed"])
     if reader.text_seeds:
@@ -636,7 +639,7 @@ def _prepare(case: dict, readers: dict[str, Reader], work: Path) -> dict:
         source = source.with_suffix(".pfm")
     elif reader.name == "curet":
         source = seed_path / ("abrdf.dat", "table.txt")[case["index"] % 2]
-    content, desc = mutate(reader, rng, source.read_bytes(), kind)
+    content, desc = mutate(reader, rng, seed_bytes(source), kind)
     target, names = _materialise(case, content, seed_path, work)
     return {**case, "target": target, "names": names, "mutation": f"{seed_path.name}: {desc}",
             "is_seed": kind == "none"}
@@ -721,7 +724,14 @@ def run_fuzz(
             if progress:
                 progress(done, len(cases))
 
-        return drive(cases, lambda c: _prepare(c, readers, work / "cases"), finished, workers, timeout,
+        seeds: dict[Path, bytes] = {}
+
+        def seed_bytes(path: Path) -> bytes:
+            if path not in seeds:
+                seeds[path] = path.read_bytes()
+            return seeds[path]
+
+        return drive(cases, lambda c: _prepare(c, readers, work / "cases", seed_bytes), finished, workers, timeout,
                      memory_gib, budget_mib)
     finally:
         _remove(work)
