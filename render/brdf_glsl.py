@@ -219,7 +219,7 @@ class BrdfTable:
     def cols(self) -> int:
         """Tiles (θ_h slices) per row of the atlas: the atlas as square as it gets."""
         nh, nd, npd = self.shape
-        return max(1, min(nh, round(math.sqrt(nh * nd / npd))))
+        return max(1, min(nh, round(math.sqrt(nh * nd / npd))))  # as atlas_texels
 
     def atlas(self) -> np.ndarray:
         """float32 (rows·ND, cols·NP, 3): tile i (θ_h) at column (i mod cols)·NP, row (i div cols)·ND,
@@ -339,13 +339,21 @@ def scaled_grid(shape: tuple[int, int, int], factor: float, periodic: bool) -> t
     return clamp[0], clamp[1], last
 
 
+def atlas_texels(shape: tuple[int, int, int]) -> int:
+    """Texels of the 2-D atlas of a table of ``shape`` (:meth:`BrdfTable.atlas`, tiles padded)."""
+    nh, nd, npd = shape
+    cols = max(1, min(nh, round(math.sqrt(nh * nd / npd))))
+    return -(-nh // cols) * nd * cols * npd
+
+
 def choose_table(brdf: BRDF, lights: LightSet, *, max_view_deg: float = 80.0, max_texels: int | None = None,
                  target: float = TABLE_TARGET_REL_RMS, shape: tuple[int, int, int] | None = None,
                  store: Callable[[BrdfTable], BrdfTable] | None = None) -> tuple[BrdfTable, dict[str, Any]]:
     """The table of ``brdf`` for ``lights`` and its measured error (:func:`table_error`).
 
     Grids :data:`TABLE_FACTORS` × the default (:func:`table_grid_for`) are tried coarse to fine,
-    those over ``max_texels`` left out (the coarsest kept if none fits), and the first whose
+    those whose atlas has over ``max_texels`` texels left out (if none fits, a coarser grid that
+    does), and the first whose
     worst view band is within ``target`` is taken, else the finest tried; ``shape`` forces one grid.
     ``store`` maps a table to what the texture will hold (e.g. half-float rounding) before its
     error is measured. The error dict adds ``target`` and ``grids_tried``.
@@ -354,8 +362,13 @@ def choose_table(brdf: BRDF, lights: LightSet, *, max_view_deg: float = 80.0, ma
     grids = [tuple(shape)] if shape is not None else list(dict.fromkeys(
         scaled_grid(base, f, periodic) for f in TABLE_FACTORS))
     if max_texels is not None and shape is None:
-        fitting = [g for g in grids if g[0] * g[1] * g[2] <= max_texels]
-        grids = fitting or [grids[0]]
+        fitting = [g for g in grids if atlas_texels(g) <= max_texels]
+        factor = TABLE_FACTORS[0]
+        while not fitting and factor > 1e-3:  # coarser still, until the atlas fits
+            factor *= 0.9
+            grid = scaled_grid(base, factor, periodic)
+            fitting = [grid] if atlas_texels(grid) <= max_texels or min(grid) <= 2 else []
+        grids = fitting
     tried = []
     for grid in grids:
         table = tabulate_brdf(brdf, grid, periodic)

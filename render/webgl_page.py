@@ -53,6 +53,7 @@ from ..brdf_io.atomic import atomic_path
 from ..brdf_io.envmap import EnvironmentMap
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.latlong import bilinear_corners, bilinear_lookup, row_edges_cos
+from .brdf_glsl import TABLE_SHADER, BrdfTable, brdf_shader_for, choose_table, light_shading, lights_glsl_parts
 from .camera import Camera, orthonormal_frame
 from .cpu_reference import shade, sphere_geometry
 from .mesh import Mesh, load_mesh, make_mesh
@@ -125,6 +126,10 @@ class ViewBudget:
         MAX_TEXTURE_SIZE, so that every WebGL2 implementation can hold it).
     min_rows
         The coefficient maps are never halved below this many rows (default 8).
+    brdf_bytes
+        The table of a measured BRDF that shades the lights (base64 of half floats; default
+        1.5 MiB, at most a quarter of ``page_bytes``): the finest grid within it whose error meets
+        the target, or the coarsest (``render.brdf_glsl.choose_table``).
     """
 
     page_bytes: int = 8 << 20
@@ -133,10 +138,11 @@ class ViewBudget:
     still_size: int = 384
     max_edge: int = 2048
     min_rows: int = 8
+    brdf_bytes: int = 3 << 19
 
     def __post_init__(self) -> None:
         for name, lo in (("page_bytes", 64 << 10), ("mesh_bytes", 4096), ("env_rows", 2), ("still_size", 16),
-                         ("max_edge", 64), ("min_rows", 2)):
+                         ("max_edge", 64), ("min_rows", 2), ("brdf_bytes", 4096)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < lo:
                 raise BadInputError(None, f"ViewBudget.{name} must be an integer >= {lo}, got {value!r}")
@@ -215,9 +221,11 @@ class ViewPage:
         return self.fit.P
 
     def stored_shrm(self, source: SHRM) -> SHRM:
-        """An SHRM of the coefficients as stored (for the CPU reference of the page's image)."""
+        """An SHRM of the coefficients as stored (for the CPU reference of the page's image), with
+        ``source``'s lights (the page holds their samples exactly, float32)."""
         return SHRM(F=source.F, P=self.fit.P, coeffs=self.coeffs, tolerance=source.tolerance, eps=dict(source.eps),
-                    meta=dict(source.meta))
+                    meta=dict(source.meta), lights=source.lights if source.has_lights else None,
+                    brdf=source.lights_brdf() if source.has_lights else None)
 
 
 # ------------------------------------------------------------------------------------------
@@ -401,9 +409,12 @@ def _b64_len(n_bytes: int) -> int:
 
 def _half(values: np.ndarray) -> tuple[np.ndarray, float]:
     """(little-endian float16 values × scale, scale): scale a power of two bringing the largest
-    magnitude to at most :data:`HALF_TARGET`."""
+    magnitude to at most :data:`HALF_TARGET` (and at most 2^64)."""
     peak = float(np.max(np.abs(values))) if values.size else 0.0
     scale = 2.0 ** math.floor(math.log2(HALF_TARGET / peak)) if peak > 0 and math.isfinite(peak) else 1.0
+    # at most 2^64: maps that are all but zero (a map whose light took everything, filled with
+    # float32's tiny) stay finite in float32 and round to zero
+    scale = min(scale, 2.0**64)
     scaled = (np.asarray(values, np.float64) * scale).astype("<f2")
     return scaled, scale
 
@@ -470,6 +481,50 @@ def _env_payload(env: EnvironmentMap, max_rows: int) -> tuple[dict[str, Any], np
     return {"name": env.name, "height": h, "width": w, "scale": scale, "texels": _b64(half)}, stored
 
 
+def _lights_payload(shrm: SHRM, budget: ViewBudget) -> tuple[dict[str, Any] | None, str | None]:
+    """The page's ``lights`` entry (``data_specs/view_html.md``) and a note, or (None, None).
+
+    The samples and the BRDF's parameters as the uniforms of ``render/webgl/lights.glsl`` and the
+    BRDF's GLSL (``render.brdf_glsl``: the same files as the desktop shaders); a measured BRDF's
+    table as half floats within ``budget.brdf_bytes``, its error measured on what the page holds.
+    """
+    if not shrm.has_lights:
+        return None, None
+    brdf = shrm.lights_brdf()
+    shader = brdf_shader_for(brdf)
+    table_doc, note = None, None
+    if shader is TABLE_SHADER:
+        share = min(budget.brdf_bytes, budget.page_bytes // 4)
+        max_texels = max(8, share // 8)  # 6 bytes of half floats a texel, × 4/3 in base64
+
+        def halves(table: BrdfTable) -> BrdfTable:
+            half, scale = _half(table.values)
+            return table.with_values((half.astype(np.float32) / np.float32(scale)).astype(np.float32), scale)
+
+        table, error = choose_table(brdf, shrm.lights, max_view_deg=float(shrm.meta.get("max_view_deg", 80.0)),
+                                    max_texels=max_texels, store=halves)
+        lights = light_shading(shrm, table=table, measure=False)
+        half = (table.atlas()).astype("<f2")  # values × scale, exact in half floats (rounded above)
+        nh, nd, npd = table.shape
+        table_doc = {"shape": [nh, nd, npd], "cols": table.cols, "rows": half.shape[0] // nd,
+                     "periodic": bool(table.periodic), "scale": table.scale, "texels": _b64(half),
+                     "rel_rms": error["rel_rms"], "worst_band_rel_rms": error["worst_band_rel_rms"],
+                     "max_view_deg": error["max_view_deg"], "target": error["target"]}
+        note = (f"lights shaded with a {nh}x{nd}x{npd} table of the measured BRDF (theta_h, theta_d, phi_d): its "
+                f"error on the lights' reflection {100 * error['rel_rms']:.2g} % relative RMS, worst view band "
+                f"{100 * error['worst_band_rel_rms']:.2g} % (to {error['max_view_deg']:g} degrees)")
+    else:
+        lights = light_shading(shrm)
+    doc = {
+        "count": len(shrm.lights), "lights": len(shrm.lights.lights) or len(set(shrm.lights.light.tolist())),
+        "model": shader.name, "glsl": list(lights_glsl_parts(shader)), "defines": dict(lights.defines),
+        "uniforms": {name: {"type": kind, "value": [float(np.float32(v)) for v in values]}
+                     for name, (kind, values) in lights.uniforms.items()},
+        "table": table_doc,
+    }
+    return doc, note
+
+
 # ------------------------------------------------------------------------------------------
 # the still image
 # ------------------------------------------------------------------------------------------
@@ -489,6 +544,8 @@ def _cpu_radiance(shrm: SHRM, mode: str, camera: Camera):
     if mode == "perpixel":
         return _chunked(shrm.radiance)
     view_map = shrm.view_map(camera.view_direction(np.zeros(3)))
+    if shrm.has_lights:  # the map holds the SHRM part; the lights at each pixel's own V, as the shaders
+        return _chunked(lambda R, V: bilinear_lookup(view_map, R) + shrm.light_radiance(R, V))
     return lambda R, V: bilinear_lookup(view_map, R)
 
 
@@ -647,6 +704,9 @@ def build_view(
     env_name = str(meta.get("environment", env.name if env is not None else "environment"))
     title = title or f"{brdf_name} under {env_name}"
     env_data, env_stored = (None, None) if env is None else _env_payload(env, budget.env_rows)
+    lights_data, lights_note = _lights_payload(shrm, budget)
+    if lights_note:
+        notes.append(lights_note)
     data: dict[str, Any] = {
         "format": "shrmkit-view",
         "version": 1,
@@ -658,6 +718,7 @@ def build_view(
         "shrm": None,
         "env": env_data,
         "mesh": _mesh_payload(page_mesh),
+        "lights": lights_data,
         "still": {"renderer": renderer, "width": budget.still_size, "height": budget.still_size,
                   "view": {**view, "mode": still_mode}},
         "notes": notes,
@@ -716,8 +777,9 @@ def _fragment(title: str, data: dict[str, Any], png: bytes, sources: dict[str, s
         raise BadInputError(None, f"element_id must be a letter then letters, digits, '-' or '_', got {element_id!r}")
     shaders = {name: text for name, text in sorted(sources.items()) if name.endswith(_SHADER_SUFFIXES)}
     s = data["shrm"]
+    lights = data.get("lights")
     info = (f"F = {s['F']}, P = {s['P']}, maps {s['height']}x{s['width']}, mesh {data['mesh']['triangles']} "
-            f"triangles")
+            f"triangles" + (f", {lights['count']} light samples shaded per pixel" if lights else ""))
     notes = "".join(f'<div class="shrm-view-note">{html.escape(n)}</div>' for n in data["notes"])
     still = (f'<img class="shrm-view-fallback" alt="still image of {html.escape(title)}" '
              f'src="data:image/png;base64,{base64.b64encode(png).decode("ascii")}">') if png else ""

@@ -236,6 +236,20 @@
     return t;
   }
 
+  // the constant uniforms of the lights and the BRDF (data.lights.uniforms: {name: {type, value}})
+  function setUniforms(gl, o, uniforms) {
+    gl.useProgram(o.p);
+    for (const [name, u] of Object.entries(uniforms)) {
+      const loc = o.u[name] !== undefined ? o.u[name] : o.u[name + "[0]"];
+      if (loc === undefined || loc === null) continue;  // not used by this program (optimized away)
+      const v = new Float32Array(u.value);
+      if (u.type === "int") gl.uniform1i(loc, Math.round(u.value[0]));
+      else if (u.type === "float") gl.uniform1f(loc, v[0]);
+      else if (u.type === "vec3" || u.type === "vec3[]") gl.uniform3fv(loc, v);
+      else throw new Error(`uniform ${name}: unknown type ${u.type}`);
+    }
+  }
+
   function halfTexels(b64, count) {
     const bytes = bytesOf(b64);
     if (bytes.length !== count * 2) throw new Error(`expected ${count * 2} bytes of half floats, got ${bytes.length}`);
@@ -287,7 +301,16 @@
       const maxTex = gl.getParameter(gl.MAX_TEXTURE_SIZE);
       if (Math.max(atlasW, atlasH) > maxTex) throw new Error(`the coefficient atlas ${atlasW}x${atlasH} exceeds MAX_TEXTURE_SIZE ${maxTex}`);
       const defines = { SHRM_P: S.P, SHRM_H: S.height, SHRM_W: S.width, SHRM_COLS: S.cols };
-      const objectFrag = ["latlong.glsl", "tonemap.glsl", "object_prelude.glsl"];
+      let objectFrag = ["latlong.glsl", "tonemap.glsl", "object_prelude.glsl"];
+      const lights = data.lights;
+      if (lights) {
+        // the lights beside the SHRM (lights.glsl after the BRDF's GLSL, render/brdf_glsl.py)
+        Object.assign(defines, lights.defines, { SHRM_LIGHTS: 1 });
+        objectFrag = objectFrag.concat(lights.glsl);
+        const need = 2 * lights.count + 16;
+        const have = gl.getParameter(gl.MAX_FRAGMENT_UNIFORM_VECTORS);
+        if (have < need) throw new Error(`${lights.count} light samples need ${need} fragment uniform vectors, this WebGL2 has ${have}`);
+      }
       res = {
         distant: program(gl, ["object.vert"], objectFrag.concat(["object_distant.frag"]), defines, "distant"),
         perpixel: program(gl, ["object.vert"], objectFrag.concat(["shrm_sum.glsl", "object_perpixel.frag"]), defines, "perpixel"),
@@ -295,6 +318,15 @@
           ? program(gl, ["background.vert"], ["latlong.glsl", "tonemap.glsl", "background.frag"], {}, "background")
           : null,
       };
+      if (lights) {
+        for (const o of [res.distant, res.perpixel]) setUniforms(gl, o, lights.uniforms);
+        const T = lights.table;
+        if (T) {
+          const tw = T.cols * T.shape[2], th = T.rows * T.shape[1];
+          if (Math.max(tw, th) > maxTex) throw new Error(`the BRDF table ${tw}x${th} exceeds MAX_TEXTURE_SIZE ${maxTex}`);
+          res.brdfTex = texture(gl, tw, th, gl.RGB16F, gl.HALF_FLOAT, halfTexels(T.texels, tw * th * 3));
+        }
+      }
       const coef = halfTexels(S.texels, atlasW * atlasH * 3);
       res.coefHalf = coef;
       res.coefTex = texture(gl, atlasW, atlasH, gl.RGB16F, gl.HALF_FLOAT, coef);
@@ -423,6 +455,12 @@
       gl.useProgram(o.p);
       gl.enable(gl.DEPTH_TEST);
       gl.depthFunc(gl.LESS);
+      if (res.brdfTex) {
+        // a measured BRDF's table (brdf_table.glsl) on texture unit 1
+        gl.activeTexture(gl.TEXTURE1);
+        gl.bindTexture(gl.TEXTURE_2D, res.brdfTex);
+        gl.uniform1i(o.u.shrmBrdfTex, 1);
+      }
       gl.activeTexture(gl.TEXTURE0);
       if (view.mode === "perpixel") {
         gl.bindTexture(gl.TEXTURE_2D, res.coefTex);
