@@ -111,7 +111,8 @@ def reference_image(shrm: SHRM, page, mode: str, az: float, el: float, zoom: flo
         radiance = shade(geometry, shrm.radiance)
     else:
         view_map = shrm.view_map(camera.view_direction(np.zeros(3)))
-        radiance = shade(geometry, lambda R, V: bilinear_lookup(view_map, R))
+        # the map holds the SHRM part; the explicit lights are shaded at each pixel's V (DESIGN §5a)
+        radiance = shade(geometry, lambda R, V: bilinear_lookup(view_map, R) + shrm.light_radiance(R, V))
     if background:
         bg = environment_background(page.env_radiance, camera, SIZE, SIZE)
     else:
