@@ -99,8 +99,10 @@ class TestSerialBatch:
         """The same tasks on a Dask LocalCluster (in-process workers) give the same reports."""
         distributed = pytest.importorskip("distributed")
         root, sources, _, _ = serial_batch
+        # ":0": the scheduler's HTTP server on a free port (None still takes 8787, and a second
+        # cluster on the machine then warns, an error here)
         with distributed.LocalCluster(
-            n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None
+            n_workers=1, threads_per_worker=2, processes=False, dashboard_address=":0"
         ) as cluster:
             result = run_batch(sources, root / "dask", tiny_options(), scheduler=cluster.scheduler_address)
         assert result.engine.startswith("dask") and result.n_failed == 1
@@ -174,7 +176,7 @@ class TestManyBrdfs:
         sys.setswitchinterval(1e-5)  # switch threads often, as a loaded machine does
         try:
             with distributed.LocalCluster(n_workers=1, threads_per_worker=4, processes=False,
-                                          dashboard_address=None) as cluster:
+                                          dashboard_address=":0") as cluster:
                 result = run_batch(MANY, serial_many / "dask", tiny_options(), scheduler=cluster.scheduler_address)
         finally:
             sys.setswitchinterval(interval)
