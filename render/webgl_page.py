@@ -48,6 +48,7 @@ import numpy as np
 from scipy import sparse
 
 from .._version import __version__
+from ..analysis.lights import LightSet
 from ..analysis.shrm import SHRM
 from ..brdf_io.atomic import atomic_path
 from ..brdf_io.envmap import EnvironmentMap
@@ -81,6 +82,7 @@ __all__ = [
     "view_html",
     "write_view",
     "webgl_sources",
+    "stored_lights",
 ]
 
 #: The render modes the page draws (``render.modes`` names).
@@ -479,6 +481,19 @@ def _env_payload(env: EnvironmentMap, max_rows: int) -> tuple[dict[str, Any], np
     h, w, _ = radiance.shape
     stored = (half.astype(np.float32) / np.float32(scale)).astype(np.float32)
     return {"name": env.name, "height": h, "width": w, "scale": scale, "texels": _b64(half)}, stored
+
+
+def stored_lights(data: dict[str, Any]) -> LightSet | None:
+    """The light samples a page's document holds (``data["lights"]``; None without), as a
+    :class:`~shrmkit.analysis.lights.LightSet` (float32 values, one light per sample), for CPU
+    references of the page's image."""
+    doc = data.get("lights")
+    if not doc:
+        return None
+    u = doc["uniforms"]
+    directions = np.reshape(np.asarray(u["shrmLightDir"]["value"], np.float64), (-1, 3))
+    power = np.reshape(np.asarray(u["shrmLightPower"]["value"], np.float64), (-1, 3))
+    return LightSet(directions, power, np.arange(len(directions)))
 
 
 def _lights_payload(shrm: SHRM, budget: ViewBudget) -> tuple[dict[str, Any] | None, str | None]:

@@ -31,7 +31,7 @@ from shrmkit.brdf_io.table import TableBRDF, tabulate_table
 from shrmkit.render.brdf_glsl import BRDF_GLSL, table_lookup
 from shrmkit.render.cpu_reference import shade, sphere_geometry
 from shrmkit.render.output import composite, to_8bit
-from shrmkit.render.webgl_page import ViewBudget, build_view, page_camera, page_html, write_view
+from shrmkit.render.webgl_page import ViewBudget, build_view, page_camera, page_html, stored_lights, write_view
 
 pytestmark = pytest.mark.render
 
@@ -150,6 +150,10 @@ def test_page_embeds_the_samples_and_the_model(tmp_path) -> None:
     assert still.max() > 100
     stored = page.stored_shrm(shrm)
     assert stored.has_lights and stored.lights is shrm.lights
+    decoded = stored_lights(page.data)  # what a reference of the page's image can read back
+    np.testing.assert_allclose(decoded.directions, shrm.lights.directions, atol=1e-7)
+    np.testing.assert_allclose(decoded.power, shrm.lights.power, rtol=1e-7)
+    assert stored_lights({"lights": None}) is None
     plain = build_view(SHRM(F=0, P=0, coeffs=np.ones((1, 8, 16, 3), np.float32)), None, mesh=MESH, still="none")
     assert plain.data["lights"] is None
 
