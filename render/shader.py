@@ -204,12 +204,16 @@ def _light_parts(lights: LightShading | None) -> dict[str, Any]:
 
 
 def _view_map_shading(height: int, width: int, state: Any, lights: LightShading | None = None) -> Shading:
-    """A per-frame H × W map looked up by R (filled by the mode's update before each frame)."""
+    """A per-frame H × W map looked up by R (filled by the mode's update before each frame). With
+    lights it has a deferred screen pass too (the map is the same texture, rewritten per frame):
+    their per-pixel sum is what costs, and deferred it runs once per covered pixel."""
     return Shading(
         np.zeros((height, width, 3), dtype=np.float32),
         vertex_replacements(),
         shrm_fragment_replacements(0, height, width, per_pixel=False, lights=lights),
         state=state,
+        deferred=None if lights is None else shrm_fragment_replacements(0, height, width, per_pixel=False,
+                                                                         screen=True, lights=lights),
         **_light_parts(lights),
     )
 

@@ -18,7 +18,8 @@ closed and outward oriented (:func:`closed_outward`) while its bounding sphere l
 beyond the near plane: then they are all hidden, and culling them saves their rasterization
 and shading (on a CPU rasterizer, most of a frame) without changing a pixel.
 
-Deferred shading (``perpixel``, ``kautz-mccool``: the modes whose ``Shading.deferred`` is set):
+Deferred shading (``perpixel``, ``kautz-mccool``, and ``distant`` with explicit lights: the shadings
+whose ``Shading.deferred`` is set):
 when every object of the scene has it, a frame is two VTK renders. (1) The geometry pass draws
 each object k with a trivial shader writing its R (the prelude's reflected direction, unit, z-up
 world frame) times the tag 2^(k+1) (exact in float32) to the float colour buffer, with depth.

@@ -93,16 +93,17 @@ CAMERAS = [Camera.looking_at(view=(1.0, 0.3, 0.4)), Camera.looking_at(view=(-0.2
 def test_each_model_glsl_against_its_numpy_model(offscreen, sphere, dots, spec) -> None:
     """A sphere lit only by the lights, for each model of the table: the GLSL ρ̂ against the model's
     own ρ̂ (``light_radiance``) per pixel, perspective and ortho, grazing views (θ_v to 89°, where
-    the lights at the horizon graze the surface) included; perpixel drawn forward and deferred
-    equal, distant equal (the lights do not go through its map)."""
+    the lights at the horizon graze the surface) included; perpixel and distant (the lights do not
+    go through its map) drawn forward and deferred equal."""
     brdf = load_brdf(spec)
     assert brdf_shader_for(brdf) is BRDF_GLSL[type(brdf)]
     shrm = lights_only(dots, brdf)
     assert len(shrm.lights) == len(DOTS)
     frames = {}
-    for mode, deferred in (("perpixel", False), ("perpixel", True), ("distant", False)):
+    for mode, deferred in (("perpixel", False), ("perpixel", True), ("distant", False), ("distant", True)):
         with SHRMRenderer(SIZE, SIZE, deferred=deferred) as r:
             r.add_object(sphere, shrm, mode=mode)
+            assert r.deferred == deferred  # distant with lights has a deferred pass too
             frames[mode, deferred] = [r.render(cam) for cam in CAMERAS]
     for c, cam in enumerate(CAMERAS):
         geom = mesh_geometry(cam, SIZE, SIZE, sphere)
@@ -114,8 +115,9 @@ def test_each_model_glsl_against_its_numpy_model(offscreen, sphere, dots, spec) 
             rel, worst, share = compare(res.radiance, res.alpha, ref, geom.hit, cos_v)
             # measured ≤ 6e-4 relative RMS, silhouette pixels (a different interpolated normal) included
             assert rel < 5e-3 and share > 0.97, (spec, rel, worst, share)
-        same = np.abs(images["perpixel", True].radiance - images["perpixel", False].radiance) <= 2e-5 * ref.max()
-        assert np.mean(same) > 0.995  # V from the quad's point: a few silhouette pixels differ by rounding
+        for mode in ("perpixel", "distant"):
+            same = np.abs(images[mode, True].radiance - images[mode, False].radiance) <= 2e-5 * ref.max()
+            assert np.mean(same) > 0.995  # V from the quad's point: a few silhouette pixels differ by rounding
 
 
 def test_sharp_lobes_keep_float32_accuracy_near_the_peak(offscreen, dots) -> None:
