@@ -49,6 +49,7 @@ Model", SIGGRAPH 2003 (MERL's table).
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from importlib import resources
@@ -57,10 +58,12 @@ from typing import Any
 import numpy as np
 
 from ..analysis.lights import LightSet, light_radiance
+from ..analysis.pairs import sample_pairs_focused
 from ..analysis.reference import local_frames
 from ..brdf_io.brdf import BRDF
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.halfdiff import directions_to_halfdiff, halfdiff_to_directions
+from ..brdf_io.merl import MerlBRDF
 from ..brdf_io.models import CookTorrance, Lafortune, Lambert, PhongLobe, SimplifiedMicrofacet
 
 __all__ = [
@@ -78,6 +81,7 @@ __all__ = [
     "TABLE_TARGET_REL_RMS",
     "TABLE_FACTORS",
     "table_lookup",
+    "table_light_radiance",
     "table_error",
     "light_shading",
     "lights_glsl_parts",
@@ -248,8 +252,6 @@ def table_grid_for(brdf: BRDF) -> tuple[tuple[int, int, int], bool]:
     """The default grid and φ_d fold of ``brdf``'s table: MERL's own samples for a MERL file
     (91 × 91 × 180, periodic: every sample of the file is a texel and the reader's trilinear
     interpolation is reproduced), :data:`TABLE_GRID` with the mirror fold otherwise."""
-    from ..brdf_io.merl import MerlBRDF  # same layer
-
     if isinstance(brdf, MerlBRDF):
         return (TABLE_GRID[0], TABLE_GRID[1], TABLE_GRID[2] - 1), True
     return TABLE_GRID, False
@@ -258,8 +260,6 @@ def table_grid_for(brdf: BRDF) -> tuple[tuple[int, int, int], bool]:
 def tabulate_brdf(brdf: BRDF, shape: tuple[int, int, int] | None = None, periodic: bool | None = None) -> BrdfTable:
     """ρ of ``brdf`` (its own ``eval``) on a half/difference grid (:class:`BrdfTable`); ``shape`` and
     ``periodic`` default to :func:`table_grid_for`."""
-    import time
-
     default_shape, default_periodic = table_grid_for(brdf)
     shape = default_shape if shape is None else shape
     periodic = default_periodic if periodic is None else bool(periodic)
@@ -381,7 +381,9 @@ def choose_table(brdf: BRDF, lights: LightSet, *, max_view_deg: float = 80.0, ma
     return table, {**error, "target": float(target), "grids_tried": tried}
 
 
-def _table_light_radiance(table: BrdfTable, lights: LightSet, R: np.ndarray, V: np.ndarray) -> np.ndarray:
+def table_light_radiance(table: BrdfTable, lights: LightSet, R: np.ndarray, V: np.ndarray) -> np.ndarray:
+    """Σ_k ρ̂_table(ω_k; V, N) E_k at (n, 3) R and V, N = normalize(R + V): the lights' reflection as
+    the table texture gives it (:func:`table_lookup` in the frame of N, as ``light_radiance``)."""
     frames = local_frames(R + V)
     L_loc = np.einsum("kij,nj->kni", frames, lights.directions)
     V_loc = np.broadcast_to(np.einsum("kij,kj->ki", frames, V)[:, None, :], L_loc.shape)
@@ -398,13 +400,11 @@ def table_error(table: BrdfTable, brdf: BRDF, lights: LightSet, *, max_view_deg:
     over the RMS of the latter: ``rel_rms`` over all pairs and ``worst_band_rel_rms``, the
     largest per band; ``pairs`` counts them.
     """
-    from ..analysis.pairs import sample_pairs_focused  # same layer below; imported when measured
-
     edges = np.linspace(0.0, float(max_view_deg), max(2, int(math.ceil(max_view_deg / 10.0)) + 1))
     centres = np.array([light.direction for light in lights.lights]) if lights.lights else lights.directions
     R, V, theta_v, w = sample_pairs_focused(per_band, edges, centre=centres, seed=seed)
     exact = light_radiance(brdf, lights.directions, lights.power, R, V)
-    got = _table_light_radiance(table, lights, R, V)
+    got = table_light_radiance(table, lights, R, V)
     err = w * ((got - exact) ** 2).sum(axis=1)
     sig = w * (exact**2).sum(axis=1)
     band = np.clip(np.searchsorted(np.radians(edges), theta_v, side="right") - 1, 0, len(edges) - 2)

@@ -26,7 +26,7 @@ from shrmkit.brdf_io.latlong import bilinear_lookup
 from shrmkit.brdf_io.specs import load_brdf
 from shrmkit.brdf_io.table import TableBRDF, tabulate_table
 from shrmkit.render.api import render_scene
-from shrmkit.render.brdf_glsl import BRDF_GLSL, TABLE_SHADER, brdf_shader_for, light_shading, table_lookup
+from shrmkit.render.brdf_glsl import BRDF_GLSL, TABLE_SHADER, brdf_shader_for, light_shading, table_light_radiance
 from shrmkit.render.camera import Camera
 from shrmkit.render.cpu_reference import mesh_geometry, shade
 from shrmkit.render.mesh import load_mesh, make_mesh
@@ -198,15 +198,7 @@ def test_measured_table_against_the_brdf_eval(offscreen, sphere, dots) -> None:
     cos_v = np.sum(geom.N * geom.V, axis=-1)
     ref = shade(geom, shrm.radiance)
 
-    def table_radiance(R, V):
-        from shrmkit.analysis.reference import local_frames
-
-        frames = local_frames(R + V)
-        L_loc = np.einsum("kij,nj->kni", frames, shrm.lights.directions)
-        V_loc = np.broadcast_to(np.einsum("kij,kj->ki", frames, V)[:, None, :], L_loc.shape)
-        return np.einsum("knc,nc->kc", table_lookup(lights.table, L_loc, V_loc), shrm.lights.power)
-
-    tab = shade(geom, table_radiance)
+    tab = shade(geom, lambda R, V: table_light_radiance(lights.table, shrm.lights, R, V))
     with SHRMRenderer(SIZE, SIZE) as r:
         r.add_object(sphere, shrm, mode="perpixel")
         res = r.render(cam)

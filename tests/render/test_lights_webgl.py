@@ -28,7 +28,7 @@ from shrmkit.brdf_io.envmap import EnvironmentMap
 from shrmkit.brdf_io.latlong import bilinear_lookup
 from shrmkit.brdf_io.specs import load_brdf
 from shrmkit.brdf_io.table import TableBRDF, tabulate_table
-from shrmkit.render.brdf_glsl import BRDF_GLSL, table_lookup
+from shrmkit.render.brdf_glsl import BRDF_GLSL, BrdfTable, table_light_radiance
 from shrmkit.render.cpu_reference import shade, sphere_geometry
 from shrmkit.render.output import composite, to_8bit
 from shrmkit.render.webgl_page import ViewBudget, build_view, page_camera, page_html, stored_lights, write_view
@@ -243,16 +243,10 @@ class TestInBrowser:
         atlas = atlas.reshape(doc["rows"] * nd, doc["cols"] * npd, 3)
         values = np.stack([atlas[(i // doc["cols"]) * nd:(i // doc["cols"] + 1) * nd,
                                  (i % doc["cols"]) * npd:(i % doc["cols"] + 1) * npd] for i in range(nh)])
-        from shrmkit.analysis.reference import local_frames
-        from shrmkit.render.brdf_glsl import BrdfTable
-
         table = BrdfTable(values, doc["scale"], periodic=doc["periodic"])
 
         def table_radiance(R, V):
-            frames = local_frames(R + V)
-            L_loc = np.einsum("kij,nj->kni", frames, shrm.lights.directions)
-            V_loc = np.broadcast_to(np.einsum("kij,kj->ki", frames, V)[:, None, :], L_loc.shape)
-            return np.einsum("knc,nc->kc", table_lookup(table, L_loc, V_loc), shrm.lights.power)
+            return table_light_radiance(table, shrm.lights, R, V)
 
         image = shot(browser, url, "perpixel", VIEWS[0], 0.0)
         tab, hit = reference(page, shrm, "perpixel", VIEWS[0], 0.0, table_radiance)
