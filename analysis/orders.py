@@ -508,10 +508,13 @@ def _search(data_for: Callable[[ReparamGrid], _GridData], eps: float, max_F: int
         F, P, capped = _choose(on, eps, hint)
         hint = P
         if capped and not at_caps:
-            F_goal, P_goal = min(2 * F_goal, max_F), min(P_goal + 4, max_P)
+            # the grid holds too few orders: the next holds half again as many as this one does
+            # (a grid for F_goal has 2 F_goal + 24 nodes and holds ~2 F_goal + 23 orders)
+            F_goal = min(max(2 * F_goal, int(np.ceil(1.5 * on.F0))), max_F)
+            P_goal = min(max(P_goal + 4, P + 2), max_P)
         elif F > GRID_SLACK * F_goal + 2 or P > P_goal:
             # the grid holds orders up to ~2x what it resolves well: resize it for the choice
-            grow = 1.5 if F > 0.8 * on.F0 else GRID_SLACK
+            grow = 1.5 if F > 0.8 * on.F0 else 1.25
             F_goal, P_goal = min(max(F_goal, int(np.ceil(grow * F))), max_F), max(P_goal, P)
         else:
             break

@@ -272,6 +272,8 @@ MAP_ERROR_SHARE = 0.01
 #: … and whose bound (which takes the lookup error of the global maps at degree l + P, RH02 eq. 8)
 #: is at most this fraction above the bound of exact evaluation.
 MAP_BOUND_SHARE = 0.25
+#: … and holds at least this many samples per period of the highest degree F + P (S >= 2.5 (F + P)).
+MAP_MIN_SAMPLES = 5.0
 
 
 def map_rows(
@@ -281,9 +283,10 @@ def map_rows(
 ) -> tuple[int, bool]:
     """Rows S of the S × 2S maps for the ``"bands"`` rule, and whether the memory budget bound them.
 
-    The error-driven size: the smallest S in [32, :func:`default_size`] (RH02's 10 F within the
-    budget) for which bilinear lookup in the maps adds at most :data:`MAP_ERROR_SHARE` × ε to the
-    predicted error energy of every view band inside the limit (the map term of
+    The error-driven size: the smallest S in [max(32, 2.5 (F + P)), :func:`default_size`] (five
+    samples per period of the highest degree; RH02's 10 F within the budget) for which bilinear
+    lookup in the maps adds at most :data:`MAP_ERROR_SHARE` × ε to the predicted error energy of
+    every view band inside the limit (the map term of
     :func:`~shrmkit.analysis.view_bands.shrm_view_bands`, κ_l ≈ (l(l+1))² h⁴/160 per degree,
     h = π/S, beside the same statement without lookup) and raises no band's bound by more than
     :data:`MAP_BOUND_SHARE`. The lookup error falls as h⁴, so this is typically S ≈ 3–5 F instead
@@ -308,7 +311,9 @@ def map_rows(
             for b in inside
         )
 
-    lo = min(32, hi)
+    # at least MAP_MIN_SAMPLES samples per period of the highest degree F + P in R: the lookup error
+    # is an average over R, and near a sharp feature (what is left of a light) it is larger
+    lo = min(max(32, int(np.ceil(MAP_MIN_SAMPLES * (F + P) / 2.0))), hi)
     if not fits(hi):
         return hi, hi < rule_hi
     if fits(lo):

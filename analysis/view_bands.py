@@ -35,7 +35,8 @@ bound takes the ceiling Λ_0² a_0; the prediction takes the mean of the last kn
   quadrature minus the resolved part — discrete Bessel, non-negative) is error;
 - bilinear lookup in an S × 2S map: the mean square error of a degree-l field is
   κ_l ≈ (l(l+1))² h⁴/160, h = π/S (measured: 0.0035–0.0095 × (l(l+1))² h⁴ for
-  S = 32–128, l = 1..S−1); the bound takes h⁴/100 at degree l + P;
+  S = 32–128, l = 1..S−1), at degree l + p for view order p's share of the degree-l energy (the
+  global map of order p has degree up to l + p); the bound takes h⁴/100;
 - the area-averaging of large maps before the SHT (lighting amplitude error
   δ_l ≈ l(l+1)h_L²/24 of a block h_L; the bound doubles it);
 - float32 storage ((P+1)² terms, each rounded to 2⁻²⁴ relative).
@@ -674,8 +675,18 @@ def shrm_view_bands(
     map_pred = np.full(F + 1, _FLOAT32_REL**2 * (P + 1) ** 2)
     map_bound = 4.0 * map_pred
     if map_rows is not None:
-        map_pred += _map_factor(l, map_rows, 160.0)
-        map_bound += _map_factor(l + P, map_rows, 100.0)
+        # the global map of view order p has degree up to l + p in R (the rotation to the global
+        # frame, RH02 eq. 8): each p's share of the degree-l energy at degree l + p
+        c = coefficients.coeffs[: F + 1, : P + 1, : P + 1, :]
+        if sigma is not None:
+            c = c * window_matrix(sigma, F, P)[:, :, None, None]
+        e_lp = np.tensordot(c**2, _mult(P + 1), axes=(2, 0)).sum(axis=-1)  # (F+1, P+1)
+        total = e_lp.sum(axis=1, keepdims=True)
+        share = np.where(total > 0, e_lp / np.where(total > 0, total, 1.0), 0.0)
+        share[total[:, 0] <= 0, P] = 1.0  # nothing known: the largest degree
+        degree = l[:, None] + np.arange(P + 1)[None, :]
+        map_pred += (share * _map_factor(degree, map_rows, 160.0)).sum(axis=1)
+        map_bound += (share * _map_factor(degree, map_rows, 100.0)).sum(axis=1)
     if lighting_rows is not None and lighting_rows[0] < lighting_rows[1]:
         delta = l * (l + 1.0) * (np.pi / lighting_rows[0]) ** 2 / 24.0
         map_pred += np.minimum(delta, 1.0) ** 2

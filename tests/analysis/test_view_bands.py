@@ -160,7 +160,9 @@ def test_band_statement_holds_against_brute_force(shared_data, env_name, spec):
     env = _env(env_name, shared_data)
     brdf = shrmkit.load_brdf(spec)
     shrm = prefilter(env, brdf, eps=EPS, lights="none" if env_name == "sun" else "auto")
-    measured = _measure(shrm, env, brdf, per_band=200)
+    # Grace's many bright windows make the focused sampler's weights heavy-tailed: its standard error
+    # is optimistic at 200 pairs a band there (a 4 s.e. outlier seen), so 400
+    measured = _measure(shrm, env, brdf, per_band=400 if env_name == "grace" else 200)
     ratios = []
     for band, m in zip(shrm.meta["view_bands"], measured, strict=True):
         got, se = m["measured_rel_rms"], m["stderr"]
