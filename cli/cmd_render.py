@@ -28,7 +28,14 @@ from ..render.modes import (
 )
 from ..render.output import to_8bit, turntable_paths, write_exr, write_gif, write_png
 from ..render.pipeline import BACKGROUNDS, Frame, turntable_cameras
-from .common import add_env_orientation, add_order_rule, add_window_option, load_env_arg, order_rule
+from .common import (
+    add_env_orientation,
+    add_lights_option,
+    add_order_rule,
+    add_window_option,
+    load_env_arg,
+    order_rule,
+)
 
 HELP = "render a mesh shaded by the SHRM of ENV and BRDF to PNG (and linear EXR), offscreen"
 
@@ -80,6 +87,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--self-shadow", action="store_true",
                    help=f"{shadow}: per-vertex self-shadowing by ray casting (Green et al. 2007 eq. 7)")
     add_window_option(p)
+    add_lights_option(p)
     add_order_rule(p)
     p.add_argument("--size", type=int, default=512, help="image width and height in pixels (default 512)")
     p.add_argument("--camera", choices=("perspective", "ortho"), default="perspective")
@@ -127,7 +135,7 @@ def _validate(args: argparse.Namespace) -> tuple[list[Camera], RenderOptions]:
     cameras = turntable_cameras(camera, args.turntable) if args.turntable else [camera]
     # RenderOptions checks --lobes/--elevations (its ranges, one home) before anything is loaded
     options = RenderOptions(lobes=args.lobes, elevations=args.elevations, self_shadow=args.self_shadow,
-                            window=args.window, **order_rule(args))
+                            window=args.window, lights=args.lights, **order_rule(args))
     return cameras, options
 
 

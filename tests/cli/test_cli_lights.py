@@ -51,7 +51,7 @@ def test_prefilter_lights_none_and_a_count(tmp_path: Path, capsys) -> None:
     assert len(doc["meta"]["lights"]) == 2 and doc["meta"]["lights_left_in_map"] == 1
 
 
-@pytest.mark.parametrize("verb", ["prefilter", "orders", "report", "compare", "view"])
+@pytest.mark.parametrize("verb", ["prefilter", "orders", "report", "compare", "view", "render"])
 def test_bad_lights_value_exits_2(verb, tmp_path: Path, capsys) -> None:
     args = {
         "prefilter": ["prefilter", "--env", SUN, "--brdf", "phong:s=8", "-o", str(tmp_path / "m.shrm.npz")],
@@ -59,6 +59,7 @@ def test_bad_lights_value_exits_2(verb, tmp_path: Path, capsys) -> None:
         "report": ["report", "phong:s=8", "--out", str(tmp_path / "rep")],
         "compare": ["compare", "phong:s=8", "--env", SUN],
         "view": ["view", "phong:s=8", "--env", SUN, "-o", str(tmp_path / "v.html")],
+        "render": ["render", "builtin:sphere", "--env", SUN, "-o", str(tmp_path / "r.png")],
     }[verb]
     with pytest.raises(SystemExit) as exc:
         main([*args, "--lights", "bright"])
@@ -87,3 +88,15 @@ def test_report_lists_the_lights(tmp_path: Path) -> None:
     env = doc["environments"][0]
     assert len(env["lights"]) == 1 and env["capped"] is False and env["capped_by"] == []
     assert doc["speed_vs_error"][0]["lights"] == 1
+
+
+@pytest.mark.render
+def test_render_prints_the_lights(offscreen, tmp_path: Path, capsys) -> None:
+    png = tmp_path / "r.png"
+    assert main(["render", "builtin:sphere", "--env", SUN, "--brdf", "phong:s=100", "--size", "24",
+                 "--fps-frames", "0", "-o", str(png)]) == 0
+    printed = capsys.readouterr().out
+    assert "lights:" in printed and png.is_file()
+    assert main(["render", "builtin:sphere", "--env", SUN, "--brdf", "phong:s=100", "--size", "24",
+                 "--fps-frames", "0", "--lights", "none", "-o", str(png)]) == 0
+    assert "lights: none" in capsys.readouterr().out
