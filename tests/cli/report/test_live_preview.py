@@ -32,6 +32,7 @@ from scipy.ndimage import binary_dilation, binary_erosion
 
 from shrmkit.analysis.shrm import SHRM
 from shrmkit.brdf_io.latlong import bilinear_lookup
+from shrmkit.brdf_io.specs import load_brdf
 from shrmkit.cli.report.collect import collect_report
 from shrmkit.cli.report.explorer import LIVE_VIEW_BUDGET_BYTES, LiveView, preview_view_angles
 from shrmkit.cli.report.html import _viewer_once, report_html
@@ -41,7 +42,7 @@ from shrmkit.render.camera import Camera
 from shrmkit.render.cpu_reference import shade, sphere_geometry
 from shrmkit.render.output import composite, environment_background, to_8bit
 from shrmkit.render.preview import PREVIEW_VIEW, PreviewImage
-from shrmkit.render.webgl_page import page_camera, webgl_sources
+from shrmkit.render.webgl_page import page_camera, stored_lights, webgl_sources
 
 BRDF = "lafortune:kd=0.45/0.07/0.05,cxy=-1,cz=1,n=60,ks=3"  # the demo's red plastic, analytic
 ENVS = ("builtin:sky", "builtin:studio")
@@ -87,7 +88,8 @@ def stored_shrm_and_env(data: dict) -> tuple[SHRM, np.ndarray]:
     coeffs = np.stack([atlas[(k // cols) * h:(k // cols + 1) * h, (k % cols) * w:(k % cols + 1) * w]
                        for k in range(n)])
     env = _halves(e["texels"], (e["height"], e["width"], 3), e["scale"])
-    return SHRM(F=s["F"], P=s["P"], coeffs=coeffs), env
+    lights = stored_lights(data)  # the page shades its explicit lights per pixel (data_specs/lights.md)
+    return SHRM(F=s["F"], P=s["P"], coeffs=coeffs, lights=lights, brdf=load_brdf(BRDF) if lights else None), env
 
 
 def reference_image(data: dict, width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
@@ -98,7 +100,7 @@ def reference_image(data: dict, width: int, height: int) -> tuple[np.ndarray, np
     camera = page_camera(view["azimuth"], view["elevation"], view["zoom"], width, height)
     geometry = sphere_geometry(camera, width, height)
     view_map = shrm.view_map(camera.view_direction(np.zeros(3)))
-    radiance = shade(geometry, lambda R, V: bilinear_lookup(view_map, R))
+    radiance = shade(geometry, lambda R, V: bilinear_lookup(view_map, R) + shrm.light_radiance(R, V))
     bg = environment_background(env, camera, width, height)
     linear = composite(radiance.astype(np.float32), geometry.hit.astype(np.float32), bg)
     return to_8bit(linear, exposure=view["exposure"], curve=view["tone"]), geometry.hit
