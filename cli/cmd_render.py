@@ -18,6 +18,7 @@ from ..brdf_io.atomic import check_writable
 from ..brdf_io.errors import BadInputError
 from ..render.api import SIZE_RANGE, SceneRender, render_scene
 from ..render.camera import Camera
+from ..render.error_image import ERROR_IMAGE_HELP, check_error_image_request, error_image, write_error_image_line
 from ..render.mesh import load_mesh
 from ..render.modes import (
     DEFAULT_MODE,
@@ -103,6 +104,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("-o", "--output", required=True, help="output PNG")
     add_env_orientation(p)
     p.add_argument("--exr", help="also write linear radiance (before tone mapping) to this EXR")
+    p.add_argument("--error-image", metavar="PATH", help=ERROR_IMAGE_HELP)
 
 
 def _validate(args: argparse.Namespace) -> tuple[list[Camera], RenderOptions]:
@@ -119,6 +121,8 @@ def _validate(args: argparse.Namespace) -> tuple[list[Camera], RenderOptions]:
         raise BadInputError(args.output, "output must be a .png file")
     if args.exr and Path(args.exr).suffix.lower() != ".exr":
         raise BadInputError(args.exr, "--exr must name a .exr file")
+    if args.error_image:
+        check_error_image_request(args.error_image, args.mode)
     if args.self_shadow and args.mode not in self_shadow_modes():
         raise BadInputError(None, f"--self-shadow needs --mode {' or '.join(self_shadow_modes())}")
     given = [f"--{name}" for name in ("lobes", "elevations") if getattr(args, f"{name}_given", False)]
@@ -177,7 +181,7 @@ def _write(args: argparse.Namespace, frames: list[Frame]) -> None:
 
 def run(args: argparse.Namespace) -> int:
     cameras, options = _validate(args)
-    for path in (args.output, args.exr):
+    for path in (args.output, args.exr, args.error_image):
         if path:
             check_writable(path)
     mesh = load_mesh(args.mesh)
@@ -187,5 +191,8 @@ def run(args: argparse.Namespace) -> int:
         background=args.background, fps_frames=args.fps_frames, options=options,
     )
     _report(args, result)
+    errors = error_image(result) if args.error_image else None  # computed before any file is written
     _write(args, result.frames)
+    if errors is not None:
+        print(write_error_image_line(args.error_image, errors))
     return 0

@@ -216,6 +216,7 @@ class _Object:
     radius: float
     closed: bool  # closed, consistently and outward oriented: back faces never visible from outside
     deferred: _Deferred | None = None  # the deferred passes' actors, when the mode has them
+    geometry: Any = None  # vtkActor writing R (the geometry pass's shader, tag 1), made by reflection_directions
 
 
 class SHRMRenderer:
@@ -437,25 +438,42 @@ class SHRMRenderer:
             obj.mode.update(obj.state, camera.view_direction(obj.center), obj.buffer)
             obj.image.Modified()
 
-    def _setup(self, camera: Camera, update_maps: bool = True) -> None:
+    def _clipping(self, camera: Camera) -> tuple[float, float]:
+        """Near and far planes about every object's bounding sphere."""
         if not self._objects:
             raise ValueError("nothing to render: add an object first")
         centers = np.array([o.center for o in self._objects])
         radii = np.array([o.radius for o in self._objects])
         dist = np.linalg.norm(centers - camera.eye, axis=1)
         near = max(float(np.min(dist - radii)) * 0.99, 1e-3 * float(np.max(dist + radii)))
-        far = float(np.max(dist + radii)) * 1.01
+        return near, float(np.max(dist + radii)) * 1.01
+
+    @staticmethod
+    def _cull(obj: _Object, camera: Camera, near: float) -> bool:
+        """Whether ``obj``'s back faces can be culled from ``camera`` without changing a pixel.
+
+        Back faces of a closed, outward-oriented surface are hidden behind its front faces
+        whenever the view rays start outside the solid; with its bounding sphere wholly
+        beyond the near plane they do (and the near plane cuts nothing open), so culling
+        them skips their rasterization and shading and changes no pixel.
+        """
+        depth = float(np.dot(obj.center - camera.eye, camera.forward))
+        return bool(obj.closed and depth - obj.radius >= near)
+
+    @staticmethod
+    def _set_view_uniforms(actor, camera: Camera) -> None:
+        uni = actor.GetShaderProperty().GetFragmentCustomUniforms()
+        uni.SetUniform3f("shrmEye", camera.eye.tolist())
+        uni.SetUniform3f("shrmViewDir", (-camera.forward).tolist())
+        uni.SetUniformi("shrmOrtho", 1 if camera.projection == "ortho" else 0)
+
+    def _setup(self, camera: Camera, update_maps: bool = True) -> None:
+        near, far = self._clipping(camera)
         camera.apply_to(self._renderer.GetActiveCamera(), (near, far))
-        ortho = 1 if camera.projection == "ortho" else 0
         self._deferred_frame = self.deferred
         corners = self._quad_corners(camera, far) if self._deferred_frame else None
         for obj in self._objects:
-            # Back faces of a closed, outward-oriented surface are hidden behind its front faces
-            # whenever the view rays start outside the solid; with its bounding sphere wholly
-            # beyond the near plane they do (and the near plane cuts nothing open), so culling
-            # them skips their rasterization and shading and changes no pixel.
-            depth = float(np.dot(obj.center - camera.eye, camera.forward))
-            cull = bool(obj.closed and depth - obj.radius >= near)
+            cull = self._cull(obj, camera, near)
             if self._deferred_frame:  # the mesh drawn in pass 1, the quad (never culled) in pass 2
                 obj.deferred.gbuffer.GetProperty().SetBackfaceCulling(cull)
                 obj.deferred.quad_points[...] = corners
@@ -465,10 +483,7 @@ class SHRMRenderer:
                 obj.actor.GetProperty().SetBackfaceCulling(cull)
                 actors = (obj.actor,)
             for actor in actors:
-                uni = actor.GetShaderProperty().GetFragmentCustomUniforms()
-                uni.SetUniform3f("shrmEye", camera.eye.tolist())
-                uni.SetUniform3f("shrmViewDir", (-camera.forward).tolist())
-                uni.SetUniformi("shrmOrtho", ortho)
+                self._set_view_uniforms(actor, camera)
         if update_maps:
             self.update_view_maps(camera)
 
@@ -527,6 +542,42 @@ class SHRMRenderer:
         self.draw(camera)
         rgba = read_rgba_float(self._window)
         return RenderResult(rgba[..., :3].copy(), rgba[..., 3].copy(), time.perf_counter() - t0)
+
+    def reflection_directions(self, camera: Camera) -> tuple[np.ndarray, np.ndarray]:
+        """The reflection direction R at each pixel centre, as the fragment shaders compute it.
+
+        Draws the objects once more with the deferred geometry pass's shader (the shared prelude's
+        R, unit, z-up world frame; tag 1) — forward, with the frame's camera, clipping planes and
+        back-face culling — and reads the float colour buffer back: the R every mode shades each
+        pixel with (the view direction there is the pixel's camera ray reversed,
+        ``Camera.rays``). For per-pixel statements on any mesh (``render.error_image``).
+
+        Returns
+        -------
+        R
+            float32 (H, W, 3), row 0 at the top; 0 where no object covers the pixel centre.
+        coverage
+            float32 (H, W): 1 where an object covers the pixel centre, else 0.
+        """
+        near, far = self._clipping(camera)
+        camera.apply_to(self._renderer.GetActiveCamera(), (near, far))
+        for obj in self._objects:
+            if obj.geometry is None:
+                obj.geometry = self._new_actor(obj.actor.GetMapper().GetInput())
+                self._shader(obj.geometry, vertex_replacements(), gbuffer_fragment_replacements(), 1.0)
+                self._renderer.AddActor(obj.geometry)
+            obj.geometry.GetProperty().SetBackfaceCulling(self._cull(obj, camera, near))
+            self._set_view_uniforms(obj.geometry, camera)
+        self._show(forward=False, gbuffer=False, screen=False)
+        try:
+            for obj in self._objects:
+                obj.geometry.SetVisibility(True)
+            self._window.Render()
+            rgba = read_rgba_float(self._window)
+        finally:
+            for obj in self._objects:
+                obj.geometry.SetVisibility(False)
+        return rgba[..., :3].copy(), rgba[..., 3].copy()
 
     def close(self) -> None:
         """Release the OpenGL context."""
