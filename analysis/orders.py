@@ -44,6 +44,7 @@ from ..brdf_io.errors import BadInputError
 from ..brdf_io.reparam import ReparamBRDF, ReparamGrid, reparameterize
 from ..brdf_io.specs import load_brdf
 from .brdf_coeffs import BRDFCoefficients, rho_lpq
+from .threads import single_threaded_blas
 from .tolerance import DEFAULT_EPS, check_eps
 from .view_bands import (
     DEFAULT_CRITERION,
@@ -465,7 +466,8 @@ def choose_orders_many(
             cache[key] = _GridData(brdf, grid, max_F, max_P, criterion, max_view_deg)
         return cache[key]
 
-    return [_search(data_for, tol, max_F, max_P, start_F, start_P, criterion, max_view_deg) for tol in tolerances]
+    with single_threaded_blas():
+        return [_search(data_for, tol, max_F, max_P, start_F, start_P, criterion, max_view_deg) for tol in tolerances]
 
 
 #: ``"bands"``: a grid resolves a choice when the energy just above the chosen orders is at most

@@ -42,6 +42,7 @@ from .synthesis import (
     local_shrm_fast,
     windowed,
 )
+from .threads import with_single_threaded_blas
 from .tolerance import DEFAULT_EPS, check_eps
 from .view_bands import DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG, bands_inside, shrm_view_bands
 from .window import (
@@ -345,6 +346,7 @@ def _check_given_orders(orders: OrderChoice, brdf: Any, eps: float, criterion: s
         )
 
 
+@with_single_threaded_blas
 def prefilter(
     env: Any,
     brdf: Any,
