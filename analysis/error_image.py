@@ -33,8 +33,11 @@ statements pool the channels the same way, so err is the per-pixel analogue of t
 **Assumptions.** (1) Within a band the absolute error is spread evenly over R: a pixel gets the
 band's RMS, not its own error; where the error concentrates (a horizon, a sharp edge of the map,
 what ringing the window left) the pixel's error is larger than predicted, elsewhere smaller.
-Measured against brute force on 48² spheres (``tests/analysis/test_error_image.py``): the
-measured/predicted ratio has a median of 0.5–0.9 and a 90th percentile of 1.4–2.0. (2) The SHRM
+Measured against brute force per pixel (``tests/analysis/test_error_image.py``: 48² spheres
+under ``builtin:sky`` and a one-pixel sun; ``benchmarks/error_image_figure.py``: the README's
+``venice_sunset`` sphere): the measured/predicted ratio has a median of 0.5–0.85 and a 90th
+percentile of 1.4–2.0; the error concentrates beside the sky's horizon step (ratio up to 4) and is
+over-predicted toward the rim on ``venice_sunset`` (median 0.3 at θ_v > 75°). (2) The SHRM
 part's RMS stands for the RMS of the exact reflection of the map it holds (they differ by the
 stated error). (3) The statements hold (a band with missing measured data, ``bound_holds`` false,
 only predicts).
