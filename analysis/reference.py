@@ -32,7 +32,7 @@ def local_frames(normals: np.ndarray) -> np.ndarray:
 
 
 def reference_radiance(
-    env: object, brdf: BRDF, R: np.ndarray, V: np.ndarray, *, chunk_bytes: int = 256 << 20
+    env: object, brdf: BRDF, R: np.ndarray, V: np.ndarray, *, chunk_bytes: int = 4 << 20
 ) -> np.ndarray:
     """B(R, V) by brute-force summation over all environment pixels.
 
@@ -63,7 +63,7 @@ def reference_radiance(
     step = max(1, chunk_bytes // per_pair)
     for start in range(0, R.shape[0], step):
         fr = frames[start : start + step]  # (k, 3, 3)
-        L_loc = np.einsum("kij,nj->kni", fr, dirs)
+        L_loc = np.matmul(dirs, fr.transpose(0, 2, 1))  # (k, n, 3): each frame's rows dotted with every ω
         V_loc = np.einsum("kij,kj->ki", fr, V[start : start + step])[:, None, :]
         rho_hat = _rho_hat(brdf, L_loc, V_loc)
         out[start : start + step] = np.einsum("knc,nc->kc", rho_hat, emitted)

@@ -306,7 +306,9 @@ class CookTorrance(_Analytic):
         cos_i, cos_o = L[..., 2], V[..., 2]
         above = (cos_i > 0) & (cos_o > 0)
         cos_h, cos_d = _half_vector_cos(L, V)
-        fresnel = self.f0 + (1.0 - self.f0) * (1.0 - np.clip(cos_d, 0, 1))[..., None] ** 5
+        m = 1.0 - np.clip(cos_d, 0.0, 1.0)
+        m2 = m * m
+        fresnel = self.f0 + (1.0 - self.f0) * (m2 * m2 * m)[..., None]  # Schlick (1 - cos θ_d)^5: products, not pow
         spec = self.microfacet_term(cos_i, cos_o, cos_h)[..., None] * fresnel * self.ks
         return np.where(above[..., None], self.kd / np.pi + spec, 0.0)
 
