@@ -69,9 +69,23 @@ def _figure(width: float = 6.0, height: float = 3.6):
     return fig
 
 
+def _row_layout(fig, left: float, right: float, bottom: float, top: float, gap: float) -> None:
+    """Fixed margins in inches for a row of panels (``gap`` between neighbours): what
+    tight_layout would find for these labels, without drawing the figure once more to measure
+    its text (a row of polar axes: 40 % of a report's plotting time)."""
+    width, height = fig.get_size_inches()
+    n = max(len(fig.axes), 1)
+    panel = max((width - left - right - (n - 1) * gap) / n, 1e-3)
+    fig.subplots_adjust(left=left / width, right=1.0 - right / width, bottom=bottom / height,
+                        top=1.0 - top / height, wspace=gap / panel)
+    fig._shrm_fixed_layout = True
+
+
 def _png(fig) -> bytes:
     buf = io.BytesIO()
-    if len(fig.axes) == 1 and fig.axes[0].name == "rectilinear":
+    if getattr(fig, "_shrm_fixed_layout", False):
+        pass
+    elif len(fig.axes) == 1 and fig.axes[0].name == "rectilinear":
         # one plain axes: fixed margins in inches (tick labels, axis labels, a title line) instead of
         # tight_layout, which draws the whole figure once more only to measure its text
         width, height = fig.get_size_inches()
@@ -185,6 +199,7 @@ def fit_slices_plot(doc: dict[str, Any]) -> bytes:
         if k == 0:
             ax.set_ylabel("ρ luminance (1/sr)", fontsize=7)
             ax.legend(fontsize=6)
+    _row_layout(fig, left=0.62, right=0.1, bottom=0.42, top=0.25, gap=0.4)
     return _png(fig)
 
 
@@ -326,9 +341,10 @@ def explorer_polar_plot(doc: dict[str, Any]) -> bytes:
         ax.set_yticklabels([])
         ax.set_thetagrids([-90, -60, -30, 0, 30, 60, 90], fontsize=6)
         ax.set_title(f"θ_i = {c['theta_i_deg']:g}°", fontsize=8)
-        ax.set_xlabel(f"rings: decades of ρ, 1e{lo:.0f} (centre) to 1e{hi:.0f}", fontsize=6, labelpad=-28)
+        ax.set_xlabel(f"rings: decades of ρ, 1e{lo:.0f} (centre) to 1e{hi:.0f}", fontsize=6, labelpad=-20)
         if k == 0:
             ax.legend(fontsize=6, loc="lower left", bbox_to_anchor=(-0.15, -0.25))
+    _row_layout(fig, left=0.3, right=0.3, bottom=0.7, top=0.3, gap=0.4)
     return _png(fig)
 
 
@@ -367,6 +383,7 @@ def image_row_plot(images: list[np.ndarray], titles: list[str]) -> bytes:
             ax.imshow(image, interpolation="nearest")
             ax.set_title(title, fontsize=8)
             ax.set_axis_off()
+        _row_layout(fig, left=0.05, right=0.05, bottom=0.05, top=0.28, gap=0.1)
         return _png(fig)
 
 

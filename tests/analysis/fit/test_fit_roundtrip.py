@@ -136,6 +136,7 @@ def test_merl_roundtrip_pbrt_v1_bluepaint_three_lobes(tmp_path, shared_data):
     lobes.sort(reverse=True)
     truth = lafortune(vals["diffuse"], [(a, b, e, (s, s, s)) for e, a, b, s in lobes])
     brdf = merl_roundtrip(truth, tmp_path / "bluepaint.binary", noise=False)
-    r = fit_brdf(brdf, "lafortune", lobes=3, energy_conserving=False, starts=6)
+    # 3 starts find the same optimum as 6 (rel. RMS 2.8e-9 with 2, 3, 4 or 6 starts) in half the time
+    r = fit_brdf(brdf, "lafortune", lobes=3, energy_conserving=False, starts=3)
     assert r.errors["rel_rms"] < 0.01
     assert_lafortune_close(r.params, truth, 0.02)

@@ -165,7 +165,11 @@ def test_figures_drawn_from_four_threads_at_once():
 
 
 class TestManyBrdfs:
-    """The tests of the serial_many fixture: one unit of work under xdist (tests/conftest.py), one serial run."""
+    """The tests of the serial_many fixture: one unit of work under xdist (tests/conftest.py), one serial run.
+
+    Spawned worker processes hold their own copies of the global state (no threads share it):
+    that they match the serial run is checked by TestSerialBatch.test_workers_match_serial (with a
+    corrupt file) and test_scaling (largest first), not a third time here."""
 
     def test_dask_worker_with_four_threads_loses_no_report(self, serial_many):
         """One in-process Dask worker with 4 threads runs all 4 reports; the reports equal the serial ones."""
@@ -180,13 +184,6 @@ class TestManyBrdfs:
             sys.setswitchinterval(interval)
         assert result.n_failed == 0, [r.get("error") for r in result.rows]
         assert reports(serial_many / "dask") == reports(serial_many / "serial")
-
-    @pytest.mark.slow
-    def test_worker_processes_lose_no_report(self, serial_many):
-        """--workers 2 (spawned processes, their own copies of the global state) on the same 4 BRDFs."""
-        result = run_batch(MANY, serial_many / "workers", tiny_options(), workers=2)
-        assert result.n_failed == 0
-        assert reports(serial_many / "workers") == reports(serial_many / "serial")
 
 
 def test_two_environments_with_one_name_get_two_columns(tmp_path):
