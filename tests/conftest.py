@@ -62,6 +62,13 @@ def pytest_xdist_make_scheduler(config, log):
     return ClassScheduling(config, log)
 
 
+def pytest_collection_modifyitems(config, items):
+    """Tests marked ``slow`` first (a stable sort: otherwise collection order). Under xdist the
+    single tests are handed out in this order after the classes, so the long ones start early and
+    the run does not end with one worker busy on a 25 s test while the other is idle."""
+    items.sort(key=lambda item: item.get_closest_marker("slow") is None)
+
+
 @pytest.fixture(scope="session")
 def shared_data() -> Path:
     """Path of ../shared/data; skips the test when a user's clone has no ../shared."""

@@ -149,6 +149,7 @@ def test_one_pixel_sun_needs_low_orders_and_its_statement_holds(spec):
             assert m["measured_rel_rms"] - 2.0 * m["stderr"] <= 2.0 * np.sqrt(EPS) + 0.01
 
 
+@pytest.mark.slow
 def test_statement_holds_away_from_the_sun():
     """The issue's case: Phong s = 512 under builtin:sky. Without lights the statement is an average
     the sun dominates (the error over the directions farther than 6° from it is ~3× the bound);

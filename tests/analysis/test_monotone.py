@@ -39,6 +39,7 @@ def _worst_measured(shrm, env, brdf, R, V, theta_v, weights) -> tuple[float, flo
     return worst["measured_rel_rms"], worst["stderr"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("env_spec, spec", CASES)
 def test_tighter_tolerance_never_gives_a_larger_error(env_spec, spec):
     env = shrmkit.load_env(env_spec)

@@ -8,6 +8,8 @@ import os
 import subprocess
 import sys
 
+import pytest
+
 from shrmkit.cli.main import _verbs, build_parser
 
 #: imported by no `shrm --version` / `shrm --help`; VTK and friends by no `shrm VERB --help` either
@@ -84,6 +86,7 @@ def test_unknown_verb_is_a_usage_error():
     assert all(f"'{verb}'" in proc.stderr for verb in _verbs())
 
 
+@pytest.mark.slow
 def test_unwritable_outputs_exit_2_without_traceback(tmp_path):
     for args in (
         ["prefilter", "--env", "builtin:sky,height=16", "--brdf", "phong:s=8", "-o", "/proc/x.shrm.npz"],

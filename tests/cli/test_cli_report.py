@@ -114,6 +114,7 @@ def test_report_missing_brdf_file_is_a_usage_error(tmp_path, capsys):
 # ----------------------------------------------------------------------------- long names, per-item failures
 
 
+@pytest.mark.slow
 def test_report_with_245_character_file_names(tmp_path, capsys):
     """A table and a model file whose stems are 245 characters and share their first 100:
     both reports are made into distinct folders of at most 100 + 11 characters (a cut stem

@@ -69,6 +69,7 @@ def test_render_window(offscreen, tmp_path: Path, capsys) -> None:
         assert shown in capsys.readouterr().out
 
 
+@pytest.mark.slow
 def test_report_window(tmp_path: Path) -> None:
     out = tmp_path / "rep"
     assert main(["report", "phong:s=100", "--out", str(out), *REPORT_FAST, "--window", "none"]) == 0
