@@ -28,14 +28,13 @@ parsed. The rules are in ``data_specs/render_outputs.md`` (Meshes).
 
 from __future__ import annotations
 
+import functools
 import re
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import trimesh
-import trimesh.resolvers
 
 from ..brdf_io import limits
 from ..brdf_io.errors import BadInputError
@@ -208,6 +207,8 @@ def _parse_params(spec: str, text: str, allowed: dict[str, type]) -> dict[str, f
 
 
 def _icosphere(subdivisions: int) -> tuple[np.ndarray, np.ndarray]:
+    import trimesh.creation  # imported on use: trimesh and its scipy.spatial cost ~0.9 s CPU at start-up
+
     ico = trimesh.creation.icosphere(subdivisions=subdivisions, radius=1.0)
     v = np.asarray(ico.vertices, dtype=np.float64)
     v /= np.linalg.norm(v, axis=1, keepdims=True)
@@ -341,20 +342,28 @@ def _check_ply_header(path: Path, size: int) -> None:
         )
 
 
-class _SafeResolver(trimesh.resolvers.FilePathResolver):
-    """trimesh's file resolver (files a mesh references: OBJ materials and textures, glTF
-    buffers) restricted to regular files of allowed size inside the mesh's folder
-    (:func:`limits.read_bytes`), so a referenced FIFO or device cannot block or exhaust memory."""
+@functools.cache
+def _safe_resolver() -> type:
+    """trimesh's file resolver restricted as :class:`SafeResolver` says (made on first use, so that
+    importing this module does not import trimesh)."""
+    import trimesh.resolvers  # imported on use (see _icosphere)
 
-    def get(self, name: str) -> bytes:
-        root = Path(self.parent).resolve()
-        for candidate in (name.strip(), name.strip().lstrip("/"), Path(name.strip()).name):
-            if not candidate:
-                continue
-            path = (root / candidate).resolve()
-            if path.is_relative_to(root) and path.exists():
-                return limits.read_bytes(path, "file referenced by the mesh")
-        raise FileNotFoundError(name)
+    class SafeResolver(trimesh.resolvers.FilePathResolver):
+        """trimesh's file resolver (files a mesh references: OBJ materials and textures, glTF
+        buffers) restricted to regular files of allowed size inside the mesh's folder
+        (:func:`limits.read_bytes`), so a referenced FIFO or device cannot block or exhaust memory."""
+
+        def get(self, name: str) -> bytes:
+            root = Path(self.parent).resolve()
+            for candidate in (name.strip(), name.strip().lstrip("/"), Path(name.strip()).name):
+                if not candidate:
+                    continue
+                path = (root / candidate).resolve()
+                if path.is_relative_to(root) and path.exists():
+                    return limits.read_bytes(path, "file referenced by the mesh")
+            raise FileNotFoundError(name)
+
+    return SafeResolver
 
 
 def load_mesh(source: str | Path) -> Mesh:
@@ -380,10 +389,12 @@ def load_mesh(source: str | Path) -> Mesh:
         raise BadInputError(path, "empty file")
     if suffix == ".ply":
         _check_ply_header(path, size)
+    import trimesh  # imported on use (see _icosphere)
+
     try:
         # process=False: keep the data as written (trimesh would otherwise silently drop
         # NaN vertices and degenerate faces, which we want to report)
-        loaded = trimesh.load(str(path), process=False, resolver=_SafeResolver(str(path)))
+        loaded = trimesh.load(str(path), process=False, resolver=_safe_resolver()(str(path)))
     except BadInputError:
         raise
     except IndexError as err:  # e.g. an OBJ face naming a vertex the file does not have

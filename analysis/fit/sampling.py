@@ -45,7 +45,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import qmc
 
 from ...brdf_io.brdf import BRDF
 from ...brdf_io.errors import BadInputError
@@ -135,6 +134,8 @@ def sample_halfdiff(
     if n < 16:
         raise BadInputError(None, f"need at least 16 samples, got {n}")
     m = int(np.ceil(np.log2(n)))
+    from scipy.stats import qmc  # imported on use: scipy.stats costs ~0.5 s CPU at start-up
+
     u = qmc.Sobol(d=3, scramble=True, seed=seed).random_base2(m)
     u = np.clip(u, 1e-12, 1.0 - 1e-12)
     theta_h = 0.5 * np.pi * u[:, 0] ** 2
