@@ -44,6 +44,7 @@ from .latlong import (
     row_edges_cos,
     row_solid_angles,
 )
+from .limits import check_pixels
 from .probe import probe_to_latlong
 
 __all__ = [
@@ -553,7 +554,13 @@ def _load_file(
     if not path.exists():
         raise BadInputError(path, "no such file")
     if path.suffix.lower() == ".exr":
-        exr = read_exr_image(path, layer=layer, part=part)
+        def check_windows(display: tuple[int, int], data: tuple[int, int], envmap: str | None) -> None:
+            if envmap is None:
+                _plain_shape(path, *display, probe)
+            else:
+                _envmap_shape(path, envmap, *data, height)
+
+        exr = read_exr_image(path, layer=layer, part=part, check_windows=check_windows)
         if exr.envmap is not None:
             return _load_openexr_envmap(path, exr, up, flip, probe, azimuth, height)
         image = exr.pixels
@@ -562,23 +569,15 @@ def _load_file(
             raise BadInputError(path, "layer and part apply to OpenEXR files only")
         image = read_image(path)
     h, w = image.shape[:2]
-    if h == 0 or w == 0:
-        raise BadInputError(path, f"zero-size image ({w} x {h})")
+    is_probe = _plain_shape(path, h, w, probe)
     image = _check_radiance(path, image)
-    is_probe = probe if probe is not None else (h == w and "probe" in path.name.lower())
     if is_probe:
         if flip:
             raise BadInputError(path, "flip does not apply to angular probes")
         if up == "z":
             raise BadInputError(path, "angular probes are y-up (Debevec convention); up='z' does not apply")
-        if h != w:
-            raise BadInputError(path, f"an angular probe must be square, got {w} x {h}")
         radiance = probe_to_latlong(image, int(height or max(1, h // 2))).astype(np.float32)
         return EnvironmentMap(radiance, path.stem, f"{path}" + _options_text("y", False, azimuth, "probe"))
-    if w != 2 * h:
-        raise BadInputError(
-            path, f"a lat-long map must be 2:1 (width = 2 x height), got {w} x {h}; pass probe=True for angular maps"
-        )
     if flip:
         image = image[::-1]
     up = up or "z"
@@ -589,13 +588,40 @@ def _load_file(
     )
 
 
+def _plain_shape(path: Path, h: int, w: int, probe: bool | None) -> bool:
+    """The shape rules of a map without an ``envmap`` attribute (an angular probe is square, a
+    lat-long map 2:1); True for a probe. Checked on an EXR's header before its pixels are read."""
+    if h <= 0 or w <= 0:
+        raise BadInputError(path, f"zero-size image ({w} x {h})")
+    is_probe = probe if probe is not None else (h == w and "probe" in path.name.lower())
+    if is_probe and h != w:
+        raise BadInputError(path, f"an angular probe must be square, got {w} x {h}")
+    if not is_probe and w != 2 * h:
+        raise BadInputError(
+            path, f"a lat-long map must be 2:1 (width = 2 x height), got {w} x {h}; pass probe=True for angular maps"
+        )
+    return bool(is_probe)
+
+
+def _envmap_shape(path: Path, kind: str, h: int, w: int, height: int | None) -> None:
+    """The rules of an OpenEXR ``envmap`` file's data window (h × w), before its pixels are read:
+    a known kind, six stacked square faces for a cube, and a lat-long output within the pixel
+    limit (``SHRM_MAX_PIXELS``; a 1 × 20,000 window would otherwise ask for 20,000 × 40,000)."""
+    if kind not in ("latlong", "cube"):
+        raise BadInputError(path, f"envmap attribute {kind!r} is neither ENVMAP_LATLONG nor ENVMAP_CUBE")
+    if kind == "cube" and h != 6 * w:
+        raise BadInputError(
+            path, f"envmap=cube needs a data window of six stacked square faces (h = 6w), got {w} x {h}"
+        )
+    rows = int(height or (h if kind == "latlong" else 2 * w))
+    check_pixels(path, rows, 2 * rows)
+
+
 def _load_openexr_envmap(
     path: Path, exr: ExrImage, up: str | None, flip: bool, probe: bool | None, azimuth: float, height: int | None
 ) -> EnvironmentMap:
     """A file with the ``envmap`` attribute: OpenEXR's own convention, honoured automatically."""
-    kind = exr.envmap
-    if kind not in ("latlong", "cube"):
-        raise BadInputError(path, f"envmap attribute {kind!r} is neither ENVMAP_LATLONG nor ENVMAP_CUBE")
+    kind = exr.envmap  # its windows were checked by _envmap_shape before the pixels were read
     if flip or probe:
         raise BadInputError(
             path, f"the file declares envmap={kind} (OpenEXR's own orientation, ImfEnvmap); flip and probe do not apply"
@@ -606,10 +632,6 @@ def _load_openexr_envmap(
         )
     image = exr.data
     h, w = image.shape[:2]
-    if kind == "cube" and h != 6 * w:
-        raise BadInputError(
-            path, f"envmap=cube needs a data window of six stacked square faces (h = 6w), got {w} x {h}"
-        )
     image = _check_radiance(path, image)
     rows = int(height or (h if kind == "latlong" else 2 * w))
     radiance = openexr_envmap_to_latlong(image, kind, rows).astype(np.float32)

@@ -47,7 +47,7 @@ import io
 import os
 import sys
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -483,7 +483,13 @@ def _read_planes(path: Path, chosen: _Part, wanted: list[str], n_parts: int) -> 
     return planes, out.text
 
 
-def read_exr_image(path: str | Path, *, layer: str | None = None, part: int | str | None = None) -> ExrImage:
+def read_exr_image(
+    path: str | Path,
+    *,
+    layer: str | None = None,
+    part: int | str | None = None,
+    check_windows: Callable[[tuple[int, int], tuple[int, int], str | None], None] | None = None,
+) -> ExrImage:
     """Read the colour of one part and layer of an OpenEXR file (the rules: module docstring
     and data_specs/environment_maps.md §2.1).
 
@@ -498,6 +504,11 @@ def read_exr_image(path: str | Path, *, layer: str | None = None, part: int | st
     part
         Part name or index (an integer, or a string of digits that names no part). Default:
         the only part with colour channels.
+    check_windows
+        Called as ``check_windows((h, w) of the display window, (h, w) of the data window, envmap
+        kind or None)`` after the headers are read and before any pixel is: the caller's shape
+        rules (a lat-long map is 2:1, a cube h = 6w, an output size within the limits) refuse a
+        file before its windows are allocated (a few hundred bytes can declare gigabytes).
 
     Returns
     -------
@@ -525,6 +536,9 @@ def read_exr_image(path: str | Path, *, layer: str | None = None, part: int | st
     display = _box(chosen.header.get("displayWindow", chosen.header["dataWindow"]))
     check_pixels(path, *_box_size(display))
     data_window = chosen.data_window
+    envmap_kind = _envmap_kind(chosen.header.get("envmap"))
+    if check_windows is not None:
+        check_windows(_box_size(display), _box_size(data_window), envmap_kind)
     keys = ("R", "G", "B") if kind == "rgb" else ("Y", "RY", "BY") if kind == "yca" else ("Y",)
     for key in keys:
         if key in ("RY", "BY"):
@@ -552,15 +566,18 @@ def read_exr_image(path: str | Path, *, layer: str | None = None, part: int | st
     pixels = _place(data, data_window, display, notes)
     if library_text.strip():
         notes.append(f"OpenEXR library message: {_first_line(path, library_text)}")
-    envmap = chosen.header.get("envmap")
-    envmap_kind = None
-    if envmap is not None:
-        label = _enum_name(envmap)
-        envmap_kind = {"ENVMAP_LATLONG": "latlong", "ENVMAP_CUBE": "cube"}.get(label, f"unknown({label})")
     return ExrImage(
         pixels=pixels, data=data, data_window=data_window, display_window=display, envmap=envmap_kind,
         part=chosen.index, part_name=chosen.name, layer=name, colour=kind, notes=tuple(notes),
     )
+
+
+def _envmap_kind(envmap: Any) -> str | None:
+    """The ``envmap`` attribute as "latlong", "cube", "unknown(…)" or None (absent)."""
+    if envmap is None:
+        return None
+    label = _enum_name(envmap)
+    return {"ENVMAP_LATLONG": "latlong", "ENVMAP_CUBE": "cube"}.get(label, f"unknown({label})")
 
 
 def _place(

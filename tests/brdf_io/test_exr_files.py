@@ -518,3 +518,43 @@ def test_special_and_foreign_files(tmp_path):
     (tmp_path / "header.exr").write_bytes(b"\x76\x2f\x31\x01\x02\x00\x00\x00channels\x00chlist\x00")
     with pytest.raises(BadInputError, match="not a readable OpenEXR file"):
         read_exr(tmp_path / "header.exr")
+
+
+# --------------------------------------------------------------------------------------
+# 8. windows that declare far more than the file holds, refused before they are allocated
+# --------------------------------------------------------------------------------------
+def _peak_bytes(call) -> tuple[int, BaseException | None]:
+    """Peak traced allocation (numpy's included) of ``call()`` and what it raised."""
+    import tracemalloc
+
+    tracemalloc.start()
+    try:
+        call()
+        raised = None
+    except BaseException as err:  # noqa: BLE001 - returned to the test
+        raised = err
+    finally:
+        peak = tracemalloc.get_traced_memory()[1]
+        tracemalloc.stop()
+    return peak, raised
+
+
+def test_huge_display_window_of_a_small_file_is_refused_before_it_is_allocated(tmp_path):
+    """An 8 × 16 data window on a 16 × 4,194,305 display window (a few hundred bytes, found by the
+    fuzz harness: ``--seed 20261130 --cases 20 --show exr:7``): not a 2:1 lat-long map, refused from
+    the header. Before, the display window was filled first (16 × 4,194,305 × 3 float32 = 805 MB)."""
+    path = _write(tmp_path / "tall.exr", _rgb("", 1.0, (8, 16)), displayWindow=((0, 0), (15, 4194304)))
+    peak, raised = _peak_bytes(lambda: load_env(path))
+    assert isinstance(raised, BadInputError) and "2:1" in str(raised) and "tall.exr" in str(raised)
+    assert peak < 16 << 20, f"{peak / 2**20:.0f} MiB allocated before the refusal"
+
+
+def test_envmap_latlong_output_beyond_the_pixel_limit_is_refused_from_the_header(tmp_path):
+    """envmap=latlong on a 20,000-row, 1-column data window: its default lat-long output would be
+    20,000 × 40,000 pixels (issue 30: 24-149 GiB asked for); refused by the pixel limit before the
+    pixels are read, naming the file."""
+    path = _write(tmp_path / "strip.exr", _rgb("", 1.0, (20000, 1)), envmap=OpenEXR.ENVMAP_LATLONG)
+    peak, raised = _peak_bytes(lambda: load_env(path))
+    assert isinstance(raised, BadInputError) and "SHRM_MAX_PIXELS" in str(raised) and "strip.exr" in str(raised)
+    assert peak < 16 << 20
+    assert load_env(path, height=16).radiance.shape == (16, 32, 3)  # a size the user asks for is read
