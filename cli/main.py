@@ -118,6 +118,14 @@ def main(argv: list[str] | None = None) -> int:
         where = f"{err.filename}: " if err.filename else ""
         print(f"shrm {args.verb}: error: {where}{err.strerror or err}", file=sys.stderr)
         return 2
+    except MemoryError:
+        # one line, not a traceback: the input asked for more memory than this machine has
+        source = next((str(getattr(args, key)) for key in ("brdf", "env", "source", "sources", "input")
+                       if getattr(args, key, None)), None)
+        what = f"{source}: " if source else ""
+        print(f"shrm {args.verb}: error: {what}out of memory (the input or the options ask for more than this "
+              "machine has; SHRM_MAX_PIXELS and SHRM_MAX_ELEMENTS cap what a file may declare)", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         print(f"shrm {args.verb}: interrupted", file=sys.stderr)
         return 130

@@ -81,3 +81,18 @@ def test_env_orientation_options_reach_the_loader(capsys):
     assert main(["orders", "phong:s=8", "--env", "builtin:spot,height=16", "--env-azimuth", "180", "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["environment"] and 0 <= doc["bound"] <= 1
+
+
+def test_out_of_memory_is_one_line_naming_the_input(capsys, monkeypatch):
+    """A MemoryError anywhere in a verb (issue 30: small files that ask for gigabytes) ends as one
+    line naming the input, exit 2, no traceback."""
+    import shrmkit.cli.cmd_orders as cmd_orders
+
+    def exhausted(*args, **kwargs):
+        raise MemoryError
+
+    monkeypatch.setattr(cmd_orders, "choose_orders", exhausted)
+    code, err = run_main(capsys, "orders", "phong:s=10")
+    assert code == 2 and "Traceback" not in err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and "phong:s=10" in lines[0] and "out of memory" in lines[0], err
