@@ -94,6 +94,11 @@ _BLOCK = 1 << 16  # query points per evaluation block
 GRAZING_COS = 1e-6
 
 
+#: A negative RGB value larger than this fraction of the table's largest value is corruption, not an
+#: out-of-gamut colour (the RGL files of ../shared/data: at most 0.023).
+CORRUPT_NEGATIVE = 0.5
+
+
 class RGLGamutWarning(UserWarning):
     """An RGL RGB table holds negative (out-of-gamut) values; they were clamped to 0."""
 
@@ -499,6 +504,14 @@ class RGLBRDF(BRDF):
             k = int(np.argmax(warp.totals <= 0))
             raise BadInputError(where, f"field 'vndf' slice {k} (θ_i = {theta_i[k]!r}) is zero everywhere")
         self.n_negative = int(np.sum(rgb < 0))
+        peak = float(rgb.max())
+        if self.n_negative and (peak <= 0.0 or -float(rgb.min()) > CORRUPT_NEGATIVE * peak):
+            # an out-of-gamut channel is a small fraction of the colour beside it (≤ 0.023 of the
+            # table's largest value in every RGL file of ../shared/data); −2.5e38 is corruption
+            raise BadInputError(
+                where, f"field 'rgb' holds {float(rgb.min()):.4g} beside a largest value of {peak:.4g}: not an "
+                f"out-of-gamut colour (|min| > {CORRUPT_NEGATIVE:g} x max); the file is corrupt"
+            )
         if self.n_negative and clip_negative:
             warnings.warn(
                 f"{where}: {self.n_negative} of {rgb.size} RGB values are negative (out of gamut, min "

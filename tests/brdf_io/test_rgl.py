@@ -601,3 +601,17 @@ def test_matches_mitsuba_measured_plugin(shared_data: Path, name: str) -> None:
     big = scale > 1e-3 * scale.max()
     rel = np.abs(mine - theirs).max(axis=1)[big] / scale[big]
     assert np.median(rel) < 1e-5 and rel.max() < 1e-3
+
+
+def test_huge_negative_rgb_is_corruption_not_gamut(tmp_path: Path) -> None:
+    """One RGB value of −2.5e38 (issue 30: clamped to 0 as "out of gamut", then `shrm orders` exited 0
+    with ε = 1.02): refused as corrupt, naming the file; all-negative tables too. Small negatives
+    (test above, and the real files' ≤ 0.023 of the largest value) stay a warning."""
+    rgb = _fields()["rgb"].copy()
+    rgb[0, 1, 2, 0, 0] = -2.5e38
+    path = _write(tmp_path, "corrupt_rgb.bsdf", rgb=rgb)
+    with pytest.raises(BadInputError, match="corrupt") as raised:
+        read_rgl(path)
+    assert str(path) in str(raised.value)
+    with pytest.raises(BadInputError, match="corrupt"):
+        read_rgl(_write(tmp_path, "negative_rgb.bsdf", rgb=-_fields()["rgb"]))
