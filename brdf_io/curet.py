@@ -230,6 +230,8 @@ def _select(sample: int | str | None, available: list[int], source: Path) -> int
     if isinstance(sample, str):
         text = sample.strip()
         if re.fullmatch(r"\d+", text):
+            if len(text.lstrip("0")) > 6:  # int() refuses > 4300 digits with a ValueError; no sample is that large
+                raise BadInputError(source, f"no sample {text[:12]}… ({len(text)} digits) in a CURET file (1..61)")
             sample = int(text)
         else:
             by_slug = {_slug(name): k for k, name in CURET_SAMPLE_NAMES.items()}

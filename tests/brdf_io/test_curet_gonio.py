@@ -84,6 +84,10 @@ def test_curet_file_arguments_and_selection(curet_dir: Path) -> None:
         read_curet(curet_dir, "granite")
     with pytest.raises(BadInputError, match="number 1..61"):
         read_curet(curet_dir, 1.5)  # type: ignore[arg-type]
+    # 5,000 digits (issue 30): int() refuses > 4300 digits with a ValueError traceback; one line, shortened
+    with pytest.raises(BadInputError, match=r"no sample 999999999999… \(5000 digits\)") as raised:
+        read_curet(curet_dir, "9" * 5000)
+    assert len(str(raised.value)) < 300
 
 
 def test_curet_negative_values_are_clamped_and_counted(curet_dir: Path) -> None:
