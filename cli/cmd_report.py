@@ -54,6 +54,24 @@ def _positive_int(text: str) -> int:
     return value
 
 
+def _int_in(low: int, high: int, why: str):
+    """An argparse type: an integer in [low, high]; ``why`` says what the upper bound protects."""
+    def parse(text: str) -> int:
+        value = _positive_int(text)
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"must be in {low}..{high:,} ({why}), got {text}")
+        return value
+
+    return parse
+
+
+#: Upper bounds of the report's size options (issue 30: ``--fit-samples 1e9`` asked for 22-24 GiB per
+#: BRDF, ``--lobes 1000`` silently dropped the fit): the fits support 1-4 Lafortune lobes; 2^22 fit
+#: samples (~0.4 GiB) exceed a MERL table's 1.46 million cells; 10^6 measured-error pairs are hours of
+#: brute force per environment.
+MAX_LOBES, MAX_FIT_SAMPLES, MAX_PAIRS, MAX_WORKERS = 4, 2**22, 10**6, 256
+
+
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("brdfs", nargs="+", metavar="BRDF",
                    help="BRDF files (.binary, .npz, .bsdf, .brdf, .json; CURET abrdf.dat and gonioreflectometer "
@@ -68,22 +86,26 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="environment rows used by the report (default 64, quick 32)")
     p.add_argument("--models", type=_csv_list, default=None,
                    help="models to fit, comma-separated (default lafortune,cook-torrance)")
-    p.add_argument("--lobes", type=_positive_int, default=1, help="Lafortune lobes (default 1)")
+    p.add_argument("--lobes", type=_int_in(1, MAX_LOBES, "the Lafortune fits support 1-4 lobes"), default=1,
+                   help="Lafortune lobes, 1-4 (default 1)")
     p.add_argument("--mesh", default=None, help="also preview this mesh (file or builtin:torus-knot ...)")
     p.add_argument("--preview", choices=("auto", "gl", "cpu", "none"), default="auto",
                    help="preview renderer: OpenGL if available else CPU (auto), or force one (default auto)")
-    p.add_argument("--pairs", type=_positive_int, default=None, help="(R, V) pairs for the measured error")
+    p.add_argument("--pairs", type=_int_in(1, MAX_PAIRS, "each pair is a brute-force sum over the map"),
+                   default=None, help="(R, V) pairs for the measured error (at most 1,000,000)")
     p.add_argument("--seed", type=int, default=0, help="seed of every random choice (default 0)")
     p.add_argument("--quick", action="store_true",
                    help="quick profile: 32-row environments, fewer pairs, small fits (what tests and demo use)")
     p.add_argument("--out", default="shrm-report", help="output folder (default ./shrm-report)")
-    p.add_argument("--workers", type=_positive_int, default=1,
-                   help="parallel worker processes, each with its share of the cores (default 1)")
+    p.add_argument("--workers", type=_int_in(1, MAX_WORKERS, "each worker is a process with its own copy of the "
+                                             "analysis"), default=1,
+                   help="parallel worker processes, each with its share of the cores (default 1, at most 256)")
     p.add_argument("--dask-scheduler", default=None, metavar="ADDRESS",
                    help="run the per-BRDF tasks on this Dask distributed scheduler (tcp://host:8786); "
                         "start workers with --nthreads 1 --nworkers N (see README)")
     p.add_argument("--max-F", type=_positive_int, default=None, help="cap on F (default 256, quick 96)")
-    p.add_argument("--fit-samples", type=_positive_int, default=None, help="fit samples (default 16384, quick 4096)")
+    p.add_argument("--fit-samples", type=_int_in(1, MAX_FIT_SAMPLES, "about 0.4 GiB of samples"), default=None,
+                   help="fit samples (default 16384, quick 4096; at most 4,194,304)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_window_option(p)
     add_lights_option(p)

@@ -210,3 +210,19 @@ def test_report_engine_failure_still_writes_the_summary(tmp_path, capsys, monkey
     with open(out / "summary.csv", newline="") as f:
         assert [r["status"] for r in csv.DictReader(f)] == ["ok", "failed"]
     assert "Incomplete" in (out / "index.html").read_text()
+
+
+@pytest.mark.parametrize("option, value, bound", [
+    ("--lobes", "1000", "1..4"), ("--fit-samples", "1000000000", "1..4,194,304"),
+    ("--pairs", "10000000", "1..1,000,000"), ("--workers", "100000", "1..256"),
+])
+def test_absurd_sizes_are_usage_errors_before_any_work(tmp_path, capsys, option, value, bound):
+    """Issue 30: `--fit-samples 1e9` asked for 22-24 GiB per BRDF and `--lobes 1000` silently dropped
+    the fit with exit 0; each is now a usage error (exit 2) naming the option and its range, and no
+    output folder is made."""
+    out = tmp_path / "rep"
+    with pytest.raises(SystemExit) as stop:
+        main(["report", "lambert:albedo=0.5", option, value, "--out", str(out)])
+    err = capsys.readouterr().err
+    assert stop.value.code == 2 and f"argument {option}: must be in {bound}" in err and "Traceback" not in err
+    assert not out.exists()
