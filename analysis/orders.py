@@ -458,6 +458,14 @@ def choose_orders_many(
         raise BadInputError(None, "no tolerance to choose orders for")
     if isinstance(brdf, str | Path):
         brdf = load_brdf(brdf)
+    resolved = getattr(brdf, "resolved_order", None)
+    table_cap = resolved() if callable(resolved) else None
+    cap_note = None
+    if table_cap is not None and table_cap < max_F:
+        # a table resolves no order beyond its grid's: the search stops there instead of growing
+        # grids after the interpolation's kinks (TableBRDF.resolved_order)
+        max_F = max(int(table_cap), 1)
+        cap_note = "the highest order this table's grid resolves: 2π / its finest measured spacing"
     cache: dict[tuple[int, int, int], _GridData] = {}
 
     def data_for(grid: ReparamGrid) -> _GridData:
@@ -467,7 +475,8 @@ def choose_orders_many(
         return cache[key]
 
     with single_threaded_blas():
-        return [_search(data_for, tol, max_F, max_P, start_F, start_P, criterion, max_view_deg) for tol in tolerances]
+        return [_search(data_for, tol, max_F, max_P, min(start_F, max_F), start_P, criterion, max_view_deg,
+                        cap_note) for tol in tolerances]
 
 
 #: ``"bands"``: a grid resolves a choice when the energy just above the chosen orders is at most
@@ -487,7 +496,7 @@ def _finer(grid: ReparamGrid) -> ReparamGrid:
 
 
 def _search(data_for: Callable[[ReparamGrid], _GridData], eps: float, max_F: int, max_P: int, start_F: int,
-            start_P: int, criterion: str, max_view_deg: float) -> OrderChoice:
+            start_P: int, criterion: str, max_view_deg: float, cap_note: str | None = None) -> OrderChoice:
     """The order search of :func:`choose_orders` at one tolerance, grids from ``data_for``.
 
     Grids are sized for the choice they give (``ReparamGrid.for_orders``) until the choice fits
@@ -537,7 +546,10 @@ def _search(data_for: Callable[[ReparamGrid], _GridData], eps: float, max_F: int
             break
     if on.zero:
         on.raise_zero()
-    if capped:
+    if capped and cap_note is not None:
+        notes.append(f"tolerance {eps:g} not met within F<={max_F} ({cap_note}), P<={max_P}: "
+                     f"ε({F}, {P}) = {on.column(P)[F]:.3g}; a finer table is needed")
+    elif capped:
         notes.append(
             f"tolerance {eps:g} not met within the caps F<={max_F}, P<={max_P}: "
             f"ε({F}, {P}) = {on.column(P)[F]:.3g}; raise --max-F/--max-P"

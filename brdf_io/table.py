@@ -167,6 +167,23 @@ class TableBRDF(MaskedTableBRDF):
         self.source = source
         self.metadata = dict(metadata or {})
 
+    def resolved_order(self) -> int | None:
+        """The highest spherical-harmonic order F the table can resolve: ⌈2π / Δ⌉, Δ the finest
+        spacing between two *measured* nodes along any axis (θ_i, θ_o, φ_d; the axis's own nodes
+        where fewer than two are measured); None for a grid of one node per axis (a constant).
+        Beyond it the spectrum is the trilinear interpolation's kinks and edges (a table holding
+        one measured sample among 216 nodes sent the order search to F = 356 grids and never
+        settled; issue 30). Used as a cap by :func:`~shrmkit.analysis.orders.choose_orders`."""
+        grid = self.values if self.values.ndim == 4 else self.values[..., None]
+        measured = ~np.any(np.isnan(grid), axis=-1)  # (n_ti, n_to, n_pd)
+        finest = np.inf
+        for axis, nodes in enumerate((self.theta_i, self.theta_o, self.phi_d)):
+            present = nodes[np.any(measured, axis=tuple(k for k in range(3) if k != axis))]
+            present = present if present.size >= 2 else nodes  # fewer than two measured: the grid's own
+            if present.size >= 2:
+                finest = min(finest, float(np.min(np.diff(present))))
+        return None if not np.isfinite(finest) else int(np.ceil(2.0 * np.pi / finest - 1e-9))
+
     def index_coordinates(self, L: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Continuous grid indices of (θ_i, θ_o, φ_d) for (N, 3) direction pairs above the surface.
 

@@ -185,3 +185,23 @@ def test_prefilter_reuses_given_orders_and_refuses_mismatched_ones():
         shrmkit.prefilter(env, brdf, eps=0.1, orders=choice)
     with pytest.raises(BadInputError, match="criterion"):
         shrmkit.prefilter(env, brdf, eps=0.03, criterion="rh02", orders=choice)
+
+
+def test_table_orders_stop_at_the_resolution_of_its_grid(tmp_path):
+    """A table holding one measured sample among 6 × 6 × 6 nodes 0.3 rad apart (issue 30: a 1.1 KB
+    file sent `shrm orders` to F = 356 grids for minutes and never settled): F is capped at the
+    order the grid resolves, ⌈2π / 0.3⌉ = 21, and the note says why; a table with measured nodes
+    1° apart resolves F up to 360, beyond the default cap, so its orders are not limited."""
+    from shrmkit.brdf_io.table import TableBRDF, read_table, write_table
+
+    axis = np.linspace(0.0, 1.5, 6)
+    values = np.full((6, 6, 6), np.nan)
+    values[2, 3, 1] = 0.5
+    path = write_table(tmp_path / "one_of_many.npz", values, theta_i=axis, theta_o=axis, phi_d=np.linspace(0, 1.5, 6))
+    sparse = read_table(path)
+    assert sparse.resolved_order() == int(np.ceil(2 * np.pi / 0.3)) == 21
+    o = choose_orders(sparse, eps=0.03)
+    assert o.F <= 21 and o.capped and "grid resolves" in o.message, (o.F, o.message)
+    fine = np.radians(np.arange(0.0, 90.0, 1.0))
+    table = TableBRDF(fine, fine[:4], np.radians([0.0, 90.0, 180.0]), np.ones((90, 4, 3)))
+    assert table.resolved_order() == 360
