@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import os
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -128,9 +128,14 @@ def _number(path: Path, line_no: int, token: str) -> float:
         raise BadInputError(path, f"line {line_no}: {token[:MAX_NUMBER_CHARS]!r} is not a number") from None
 
 
-def _rows(path: Path, what: str, n_numbers: int, max_rows: int, layout: str) -> list[tuple[int, list[float]]]:
+def _rows(
+    path: Path, what: str, n_numbers: int, max_rows: int, layout: str, bad: dict[int, str] | None = None
+) -> list[tuple[int, list[float]]]:
     """(line number, numbers) of every non-blank line, each with exactly ``n_numbers`` numbers,
-    at most ``max_rows`` rows; the counts are checked before any token is converted."""
+    at most ``max_rows`` rows; the counts are checked before any token is converted. With ``bad``,
+    a non-finite number after a line's first token is not an error of the file: the line's
+    message goes to ``bad[line number]`` and its numbers are NaN there (one bad sample of the
+    values file fails alone)."""
     data = read_bytes(path, what)
     try:
         text = data.decode("ascii")
@@ -145,7 +150,19 @@ def _rows(path: Path, what: str, n_numbers: int, max_rows: int, layout: str) -> 
             raise BadInputError(path, f"line {line_no}: {len(tokens)} numbers, expected {n_numbers} ({layout})")
         if len(rows) == max_rows:
             raise BadInputError(path, f"line {line_no}: more than {max_rows} rows")
-        rows.append((line_no, [_number(path, line_no, tok) for tok in tokens]))
+        if bad is None:
+            rows.append((line_no, [_number(path, line_no, tok) for tok in tokens]))
+            continue
+        numbers = [_number(path, line_no, tokens[0])]
+        for tok in tokens[1:]:
+            try:
+                numbers.append(_number(path, line_no, tok))
+            except BadInputError as err:
+                if "non-finite" not in str(err):
+                    raise
+                bad.setdefault(line_no, str(err).removeprefix(f"{path}: "))
+                numbers.append(float("nan"))
+        rows.append((line_no, numbers))
     if not rows:
         raise BadInputError(path, f"empty {what}")
     return rows
@@ -163,6 +180,7 @@ class _Curet:
     V: np.ndarray  # (205, 3)
     values: dict[int, np.ndarray]  # sample -> (205,) raw values
     source: Path
+    bad: dict[int, str] = field(default_factory=dict)  # sample -> why it cannot be read (its line)
 
 
 def _read_table(path: Path) -> tuple[np.ndarray, np.ndarray]:
@@ -186,9 +204,11 @@ def _read_table(path: Path) -> tuple[np.ndarray, np.ndarray]:
     return L, V
 
 
-def _read_values(path: Path, n: int) -> dict[int, np.ndarray]:
-    rows = _rows(path, "CURET values file", 1 + n, 61, f"the sample number + {n} values")
+def _read_values(path: Path, n: int) -> tuple[dict[int, np.ndarray], dict[int, str]]:
+    bad_lines: dict[int, str] = {}
+    rows = _rows(path, "CURET values file", 1 + n, 61, f"the sample number + {n} values", bad_lines)
     values: dict[int, np.ndarray] = {}
+    bad: dict[int, str] = {}
     for line_no, numbers in rows:
         sample = numbers[0]
         if sample != int(sample) or not 1 <= sample <= 61:
@@ -196,13 +216,16 @@ def _read_values(path: Path, n: int) -> dict[int, np.ndarray]:
         if int(sample) in values:
             raise BadInputError(path, f"line {line_no}: sample {int(sample)} listed twice")
         values[int(sample)] = np.array(numbers[1:])
-    return values
+        if line_no in bad_lines:
+            bad[int(sample)] = bad_lines[line_no]
+    return values, bad
 
 
 def _parse(path: str | os.PathLike[str]) -> _Curet:
     values_path, table_path = curet_files(path)
     L, V = _read_table(table_path)
-    return _Curet(L=L, V=V, values=_read_values(values_path, len(L)), source=values_path)
+    values, bad = _read_values(values_path, len(L))
+    return _Curet(L=L, V=V, values=values, source=values_path, bad=bad)
 
 
 def curet_samples(path: str | os.PathLike[str]) -> list[int]:
@@ -246,6 +269,8 @@ def _select(sample: int | str | None, available: list[int], source: Path) -> int
 
 
 def _brdf(curet: _Curet, sample: int) -> ScatteredBRDF:
+    if sample in curet.bad:
+        raise BadInputError(curet.source, f"sample {sample}: {curet.bad[sample]}")
     raw = curet.values[sample]
     negative = raw < 0
     grey = np.maximum(raw, 0.0)

@@ -139,7 +139,6 @@ def test_curet_synthetic_roundtrip(tmp_path: Path) -> None:
         ("abrdf.dat", 2, "2 " + " ".join(["0.1"] * 204), "line 2: 205 numbers, expected 206 \\(the sample"),
         ("abrdf.dat", 2, "1 " + " ".join(["0.1"] * 205), "line 2: sample 1 listed twice"),
         ("abrdf.dat", 2, "62 " + " ".join(["0.1"] * 205), "line 2: sample number 62"),
-        ("abrdf.dat", 2, "2 nan " + " ".join(["0.1"] * 204), "line 2: non-finite number 'nan'"),
         ("table.txt", 7, "7 0.1 0.2 0.3", "line 7: 4 numbers, expected 5"),
         ("table.txt", 7, "7 0.1 0.2 0.3 -Infinity", "line 7: non-finite number '-Infinity'"),
         ("table.txt", 7, "8 0.1 0.2 0.3 0.4", "line 7: measurement index 8, expected 7"),
@@ -153,6 +152,23 @@ def test_curet_bad_files(tmp_path: Path, file: str, line: int, text: str, match:
     with pytest.raises(BadInputError, match=match) as info:
         read_curet(tmp_path, 1)
     assert info.value.source == str(tmp_path / file)
+
+
+def test_curet_sample_with_a_nan_fails_alone(tmp_path: Path) -> None:
+    """A non-finite value on sample 2's line (issue 28: one `nan` made `shrm report abrdf.dat` exit 2
+    with no report of the 61): sample 2 fails with the line's message, sample 1 reads, both are
+    listed (the batch makes one failed report and the rest)."""
+    from shrmkit.brdf_io.curet import curet_samples
+    from shrmkit.brdf_io.specs import brdf_sources
+
+    _write_curet(tmp_path)
+    _replace_line(tmp_path / "abrdf.dat", 2, "2 nan " + " ".join(["0.1"] * 204))
+    with pytest.raises(BadInputError, match="sample 2: line 2: non-finite number 'nan'") as info:
+        read_curet(tmp_path, 2)
+    assert info.value.source == str(tmp_path / "abrdf.dat")
+    assert np.all(np.isfinite(read_curet(tmp_path, 1).rgb))
+    assert curet_samples(tmp_path) == [1, 2]
+    assert brdf_sources(tmp_path / "abrdf.dat") == [f"{tmp_path / 'abrdf.dat'}#1", f"{tmp_path / 'abrdf.dat'}#2"]
 
 
 def test_curet_missing_and_short_files(tmp_path: Path) -> None:
