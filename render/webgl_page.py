@@ -818,11 +818,17 @@ def _fragment(title: str, data: dict[str, Any], png: bytes, sources: dict[str, s
     ])
 
 
+#: The page template's placeholders, filled in one pass (:func:`_render_page`).
+_PLACEHOLDER = re.compile(r"\{\{(VERSION|TITLE|FRAGMENT)\}\}")
+
+
 def _render_page(title: str, data: dict[str, Any], png: bytes, sources: dict[str, str]) -> str:
+    """The page: the template's placeholders replaced in a single pass over the template, so text
+    that came from a user (a file named ``{{FRAGMENT}}.hdr``, a title) is never read again as a
+    placeholder (successive ``str.replace`` calls pasted the fragment into itself; issue 28)."""
     fragment = _fragment(title, data, png, sources, "shrm-view", True)
-    page = sources["page.html"]
-    return (page.replace("{{VERSION}}", html.escape(__version__)).replace("{{TITLE}}", html.escape(title))
-            .replace("{{FRAGMENT}}", fragment))
+    values = {"VERSION": html.escape(__version__), "TITLE": html.escape(title), "FRAGMENT": fragment}
+    return _PLACEHOLDER.sub(lambda match: values[match.group(1)], sources["page.html"])
 
 
 def view_fragment(page: ViewPage, *, element_id: str = "shrm-view", use_hash: bool = False) -> str:

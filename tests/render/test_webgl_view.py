@@ -243,6 +243,21 @@ def test_page_is_self_contained_and_within_budget(sky) -> None:
     assert np.abs(page.coeffs - shrm.coeffs).max() <= 1e-3 * np.abs(shrm.coeffs).max()
 
 
+def test_placeholders_in_user_text_are_not_substituted_again(sky) -> None:
+    """A title holding the template's own placeholders and HTML (issue 28: an environment named
+    `{{FRAGMENT}}.hdr` made `shrm view` paste the page fragment into itself): the page holds one
+    viewer, the title appears as text (escaped), and no placeholder is left or re-expanded."""
+    from dataclasses import replace
+
+    shrm = shrmkit.prefilter(sky, "phong:s=32", eps=0.05, size=32)
+    hostile = '{{FRAGMENT}} {{TITLE}} {{VERSION}} </script><img src=x onerror="alert(1)">'
+    text = page_html(replace(build_view(shrm, sky, still="none"), title=hostile))
+    assert text.count('<div class="shrm-view" id="shrm-view"') == 1
+    assert text.count("window.ShrmView.mount(") == 1
+    assert "<img src=x" not in text and "&lt;img src=x onerror=&quot;alert(1)&quot;&gt;" in text
+    assert f"<title>{'{{FRAGMENT}} {{TITLE}} {{VERSION}}'}" in text
+
+
 def test_over_budget_material_is_reduced_with_a_visible_note(sky) -> None:
     """A synthetic SHRM of 81 maps 96×192 (27 MiB as half floats) in a 2 MiB page: the page holds,
     the note is in the HTML, and the estimated added error is the measured one within 30 %
