@@ -117,6 +117,24 @@ def summary_columns(rows: Sequence[Mapping[str, Any]]) -> list[str]:
     return columns
 
 
+#: A spreadsheet reads a cell that starts with one of these as a formula (OWASP "CSV injection").
+_FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
+
+
+def csv_cell(value: Any) -> Any:
+    """A summary value as written to ``summary.csv``: None as empty; a text that a spreadsheet
+    would run as a formula (a report named after a file ``=HYPERLINK(…).binary``) prefixed with
+    ``'``; numbers, and texts that are numbers (``-0.5``), as they are."""
+    if value is None:
+        return ""
+    if isinstance(value, str) and value.startswith(_FORMULA_START):
+        try:
+            float(value)
+        except ValueError:
+            return "'" + value
+    return value
+
+
 def write_summary(out_dir: str | os.PathLike[str], rows: Sequence[Mapping[str, Any]],
                   notes: Sequence[str] = ()) -> tuple[Path, Path]:
     """Write ``summary.csv`` and the sortable ``index.html`` (without the long ``source``
@@ -127,7 +145,7 @@ def write_summary(out_dir: str | os.PathLike[str], rows: Sequence[Mapping[str, A
     writer = csv.DictWriter(buf, fieldnames=columns, lineterminator="\n")
     writer.writeheader()
     for row in rows:
-        writer.writerow({c: "" if row.get(c) is None else row.get(c) for c in columns})
+        writer.writerow({c: csv_cell(row.get(c)) for c in columns})
     csv_path, html_path = out / "summary.csv", out / "index.html"
     with atomic_path(csv_path) as tmp:
         tmp.write_text(buf.getvalue(), encoding="utf-8")

@@ -196,3 +196,20 @@ def test_two_environments_with_one_name_get_two_columns(tmp_path):
     assert [e["name"] for e in doc["environments"]] == ["constant", "constant-2"]
     row = result.rows[0]
     assert {"shrm_rel_rms_constant", "shrm_rel_rms_constant-2"} <= set(row)
+
+
+def test_summary_csv_cells_are_never_formulas(tmp_path):
+    """Names and errors that a spreadsheet would run as formulas (issue 28: a file named
+    `=HYPERLINK(...)`) are written with a leading `'`; numbers, negative ones included, are not."""
+    from shrmkit.cli.report.writer import write_summary
+
+    rows = [{"name": "=HYPERLINK(\"http://x\")", "status": "failed", "value": -0.5, "text": "-0.25",
+             "error": "@SUM(A1:A2) +1 -cmd"},
+            {"name": "plain", "status": "ok", "value": 1.5, "text": "+3", "error": None}]
+    csv_path, _ = write_summary(tmp_path, rows)
+    with open(csv_path, newline="") as f:
+        got = list(csv.DictReader(f))
+    assert got[0]["name"] == "'=HYPERLINK(\"http://x\")" and got[0]["error"] == "'@SUM(A1:A2) +1 -cmd"
+    assert got[0]["value"] == "-0.5" and got[0]["text"] == "-0.25" and got[1]["text"] == "+3"
+    assert got[1]["name"] == "plain" and got[1]["error"] == ""
+    assert all(not cell.startswith(("=", "@")) for row in got for cell in row.values())
