@@ -27,6 +27,7 @@ from ..render.modes import (
     mode_names,
     self_shadow_modes,
 )
+from ..render.offscreen import skipped_window_classes
 from ..render.output import to_8bit, turntable_paths, write_exr, write_gif, write_png
 from ..render.pipeline import BACKGROUNDS, Frame, turntable_cameras
 from .common import (
@@ -148,7 +149,9 @@ def _report(args: argparse.Namespace, result: SceneRender) -> None:
     print(f"mesh {result.mesh.name}: {result.mesh.n_triangles} triangles")
     for line in result.built.description:
         print(line)
-    print(f"renderer: {timings.backend}, mode {result.mode}, {args.size}x{args.size}, {args.camera}")
+    skipped = "".join(f"; {name} skipped: {why}" for name, why in skipped_window_classes()
+                      if name != timings.backend)
+    print(f"renderer: {timings.backend}, mode {result.mode}, {args.size}x{args.size}, {args.camera}{skipped}")
     print(f"first frame: {timings.first_frame_s:.3f} s")
     if timings.fps_frames:
         print(f"frames per second: {timings.fps:.1f} (over {timings.fps_frames} frames)")

@@ -5,7 +5,11 @@ we create the window class directly instead of going through the object factory 
 X first and prints a warning): ``vtkEGLRenderWindow`` first (Mesa's EGL gives llvmpipe on a
 CPU-only machine, the vendor's EGL uses the GPU), then ``vtkOSOpenGLRenderWindow`` (OSMesa).
 The environment variable ``VTK_DEFAULT_OPENGL_WINDOW`` (a VTK convention) overrides the
-choice; with a ``DISPLAY`` set and no override, the factory default is used.
+choice; with a ``DISPLAY`` set and no override, the factory default is used. Without a display
+an override is tried first and EGL, OSMesa follow it. A class that a safe query shows would
+crash VTK (a segmentation fault, not an error) is skipped and named (:func:`skipped_window_classes`,
+printed on ``shrm render``'s renderer line): EGL when glvnd finds no vendor library, an X window
+when ``DISPLAY`` is not set.
 
 Float readback: VTK's render and display framebuffers are 8-bit RGBA by default. After the
 first render we re-populate both with 32-bit float colour attachments (``GL_RGBA32F``), so
@@ -28,7 +32,7 @@ from ..brdf_io.errors import ShrmError
 
 __all__ = [
     "OffscreenError", "make_render_window", "read_rgba_float", "probe_offscreen", "window_classes", "gl_renderer",
-    "is_software_rasterizer", "SOFTWARE_RASTERIZERS",
+    "is_software_rasterizer", "SOFTWARE_RASTERIZERS", "skipped_window_classes", "egl_vendor_available",
 ]
 
 #: Substrings of ``GL_RENDERER`` that name a rasterizer running on the CPU (Mesa's llvmpipe,
@@ -45,14 +49,56 @@ class OffscreenError(ShrmError, RuntimeError):
     """No offscreen OpenGL context with float colour buffers could be created."""
 
 
+#: Window classes that need an X display (VTK crashes, exit 139, when one is made without it).
+X_WINDOW_CLASSES = ("vtkXOpenGLRenderWindow",)
+#: glvnd's default folders of EGL vendor files (``__EGL_VENDOR_LIBRARY_DIRS`` replaces them).
+EGL_VENDOR_DIRS = ("/etc/glvnd/egl_vendor.d", "/usr/share/glvnd/egl_vendor.d")
+
+
+def egl_vendor_available() -> bool:
+    """Whether glvnd can find an EGL vendor library: a file of ``__EGL_VENDOR_LIBRARY_FILENAMES``,
+    or a ``*.json`` in ``__EGL_VENDOR_LIBRARY_DIRS`` (default :data:`EGL_VENDOR_DIRS`). Without one
+    ``vtkEGLRenderWindow`` dies in its first render with a segmentation fault (many containers and
+    CI runners have libEGL but no vendor file; pyvista #1278, #2142), so it is not tried."""
+    files = os.environ.get("__EGL_VENDOR_LIBRARY_FILENAMES")
+    if files:
+        return any(os.path.isfile(f) for f in files.split(":") if f)
+    dirs = os.environ.get("__EGL_VENDOR_LIBRARY_DIRS")
+    for folder in (dirs.split(":") if dirs else EGL_VENDOR_DIRS):
+        try:
+            if any(name.endswith(".json") for name in os.listdir(folder)):
+                return True
+        except OSError:
+            continue
+    return False
+
+
 def window_classes() -> list[str]:
-    """Names of the VTK render-window classes to try, in order (see module docstring)."""
+    """Names of the VTK render-window classes to try, in order (see module docstring), without
+    those a safe query shows would crash: :func:`skipped_window_classes` says which and why."""
+    return [name for name, _ in _candidates() if name not in dict(skipped_window_classes())]
+
+
+def skipped_window_classes() -> list[tuple[str, str]]:
+    """(class, reason) of the candidates left out: an X window without ``DISPLAY``, EGL without a
+    vendor library (:func:`egl_vendor_available`)."""
+    has_display = bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+    out = []
+    for name, _ in _candidates():
+        if name in X_WINDOW_CLASSES and not has_display:
+            out.append((name, "needs an X display and DISPLAY is not set"))
+        elif name == "vtkEGLRenderWindow" and not egl_vendor_available():
+            out.append((name, "no EGL vendor library (glvnd egl_vendor.d holds no .json)"))
+    return out
+
+
+def _candidates() -> list[tuple[str, str]]:
     override = os.environ.get("VTK_DEFAULT_OPENGL_WINDOW")
-    if override:
-        return [override]
     if os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"):
-        return ["vtkRenderWindow"]
-    return ["vtkEGLRenderWindow", "vtkOSOpenGLRenderWindow"]
+        return [(override or "vtkRenderWindow", "")]
+    # an override is tried first; without a display the offscreen classes follow it as fallbacks
+    names = ([override] if override else []) + ["vtkEGLRenderWindow", "vtkOSOpenGLRenderWindow"]
+    return [(n, "") for n in dict.fromkeys(names)]
 
 
 def _new_window(name: str):  # -> vtkRenderWindow
@@ -112,6 +158,7 @@ def make_render_window(width: int, height: int):  # -> vtkRenderWindow
             window.Finalize()
             continue
         return window
+    problems += [f"{name} skipped: {why}" for name, why in skipped_window_classes()]
     raise OffscreenError("no offscreen OpenGL context: " + "; ".join(problems))
 
 
