@@ -39,7 +39,9 @@ the summary is written.
 from __future__ import annotations
 
 import dataclasses
+import fcntl
 import hashlib
+import json
 import math
 import multiprocessing
 import os
@@ -388,9 +390,34 @@ def run_batch(
         notes.append(note)
     if broken:
         notes.append(f"Incomplete: {broken}.")
-    write_summary(out, ordered, notes)
+    _write_index(out, ordered, notes)
     n_failed = sum(1 for r in ordered if r["status"] != "ok")
     return BatchResult(out, ordered, n_failed, time.perf_counter() - t0, engine)
+
+
+def _write_index(out: Path, rows: list[dict[str, Any]], notes: list[str]) -> None:
+    """``summary.csv`` and ``index.html`` of every report in ``out``: this run's rows (input order),
+    then those of the other report folders already there (earlier or concurrent runs into the
+    same ``--out``), rebuilt from their ``report.json``, under an exclusive lock on the folder, so
+    two runs at once never lose a row (issue 28: the last writer's index listed 2 of 3)."""
+    fd = os.open(out, os.O_RDONLY)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        names = {row["name"] for row in rows}
+        others = []
+        for folder in sorted(p for p in out.iterdir() if p.is_dir() and not p.name.startswith(".")):
+            if folder.name in names:
+                continue
+            try:
+                doc = json.loads((folder / "report.json").read_text(encoding="utf-8"))
+                others.append(summary_row(doc))
+            except (OSError, ValueError, KeyError, TypeError):
+                continue  # not a report folder (or one being replaced): left out
+        if others:
+            notes = [*notes, f"{len(others)} more report(s) already in this folder are listed after this run's."]
+        write_summary(out, rows + others, notes)
+    finally:
+        os.close(fd)
 
 
 def _failed_row(name: str, source: str, seconds: float | None, error: str) -> dict[str, Any]:

@@ -213,3 +213,19 @@ def test_summary_csv_cells_are_never_formulas(tmp_path):
     assert got[0]["value"] == "-0.5" and got[0]["text"] == "-0.25" and got[1]["text"] == "+3"
     assert got[1]["name"] == "plain" and got[1]["error"] == ""
     assert all(not cell.startswith(("=", "@")) for row in got for cell in row.values())
+
+
+def test_two_runs_into_one_folder_keep_every_row(tmp_path):
+    """Two batches writing into the same --out at once (issue 28: both exit 0 and the index listed 2
+    of the 3 reports in the folder): the index and summary.csv hold every report folder, this run's
+    rows first, each run's rows rebuilt from report.json under a lock on the folder."""
+    out = tmp_path / "out"
+    batches = [["lambert:albedo=0.5", "phong:s=16"], ["lafortune:kd=0.2,n=30,ks=2"]]
+    with ThreadPoolExecutor(2) as pool:
+        results = list(pool.map(lambda sources: run_batch(sources, out, tiny_options()), batches))
+    assert all(r.n_failed == 0 for r in results)
+    with open(out / "summary.csv", newline="") as f:
+        names = sorted(row["name"] for row in csv.DictReader(f))
+    assert names == sorted(["lambert_albedo_0.5", "phong_s_16", "lafortune_kd_0.2_n_30_ks_2"])
+    index = (out / "index.html").read_text()
+    assert all(name in index for name in names)
