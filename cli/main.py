@@ -103,6 +103,21 @@ def build_parser() -> argparse.ArgumentParser:
     return _parser(lazy=False)
 
 
+#: Longest error message printed (characters): a 6,000-character spec string or 161 KB of a file's
+#: raw bytes quoted in a message is cut, with the count of what was left out (issue 30).
+MAX_MESSAGE_CHARS = 500
+
+
+def shorten(text: str, limit: int = MAX_MESSAGE_CHARS) -> str:
+    """``text`` on one line, cut to about ``limit`` characters: its start and end, and how many
+    characters were left out in between."""
+    text = " ".join(text.split("\n"))
+    if len(text) <= limit:
+        return text
+    head, tail = text[: limit * 3 // 4], text[-(limit // 4):]
+    return f"{head} … ({len(text) - len(head) - len(tail):,} characters left out) … {tail}"
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = _parser(lazy=True)
     args = parser.parse_args(argv)
@@ -112,7 +127,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return int(args._run(args) or 0)
     except ShrmError as err:
-        print(f"shrm {args.verb}: error: {err}", file=sys.stderr)
+        print(f"shrm {args.verb}: error: {shorten(str(err))}", file=sys.stderr)
         return 2
     except OSError as err:  # a file system refusal the verb did not turn into a BadInputError
         where = f"{err.filename}: " if err.filename else ""

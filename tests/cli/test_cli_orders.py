@@ -96,3 +96,12 @@ def test_out_of_memory_is_one_line_naming_the_input(capsys, monkeypatch):
     assert code == 2 and "Traceback" not in err
     lines = err.strip().splitlines()
     assert len(lines) == 1 and "phong:s=10" in lines[0] and "out of memory" in lines[0], err
+
+
+def test_long_messages_are_cut_with_a_count(capsys):
+    """A 6,000-character spec echoed in its error (issue 30: 5-10 KB lines, 161 KB of a file's raw
+    bytes) is cut to its start and end with the count left out, on one line."""
+    code, err = run_main(capsys, "orders", "phong:s=" + "9" * 6000)
+    lines = err.strip().splitlines()
+    assert code == 2 and len(lines) == 1 and len(lines[0]) < 600 and "characters left out" in lines[0], err[:300]
+    assert lines[0].startswith("shrm orders: error: phong:s=999")
