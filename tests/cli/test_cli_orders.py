@@ -10,16 +10,6 @@ import pytest
 from shrmkit.cli.main import main
 
 
-def run_main(capsys, *args: str) -> tuple[int, str]:
-    """`shrm ARGS` in this process (the process path is tests/cli/test_cli_main.py's): exit code
-    and stderr; a usage error exits through argparse's SystemExit."""
-    try:
-        code = main(list(args))
-    except SystemExit as stop:
-        code = stop.code
-    return code, capsys.readouterr().err
-
-
 def test_orders_json(capsys):
     assert main(["orders", "phong:s=64", "--eps", "0.01", "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
@@ -54,9 +44,9 @@ def test_orders_bands_json_states_every_view_band(capsys):
     assert doc["bound_units"].startswith("relative RMS")
 
 
-def test_max_view_angle_and_criterion_are_validated(capsys):
+def test_max_view_angle_and_criterion_are_validated(capsys, run_main):
     for args in (["--max-view-angle", "95"], ["--max-view-angle", "0"], ["--criterion", "rh03"]):
-        code, err = run_main(capsys, "orders", "phong:s=8", *args)
+        code, err = run_main("orders", "phong:s=8", *args)
         assert code == 2 and ("max-view-angle" in err or "criterion" in err)
 
 
@@ -66,9 +56,9 @@ def test_orders_table_output(capsys):
     assert "eps(F, P)" in out and "orders for microfacet:sigma=0.4" in out
 
 
-def test_bad_input_exit_2_one_line(capsys):
+def test_bad_input_exit_2_one_line(capsys, run_main):
     for args in (["orders", "nosuch:a=1"], ["orders", "phong:s=8", "--eps", "2"], ["orders", "/no/file.binary"]):
-        code, err = run_main(capsys, *args)
+        code, err = run_main(*args)
         assert code == 2, args
         assert err.strip().count("\n") == 0 or "usage" in err
         assert err.startswith(("shrm orders: error:", "usage: shrm orders")), err
@@ -83,7 +73,7 @@ def test_env_orientation_options_reach_the_loader(capsys):
     assert doc["environment"] and 0 <= doc["bound"] <= 1
 
 
-def test_out_of_memory_is_one_line_naming_the_input(capsys, monkeypatch):
+def test_out_of_memory_is_one_line_naming_the_input(capsys, monkeypatch, run_main):
     """A MemoryError anywhere in a verb (issue 30: small files that ask for gigabytes) ends as one
     line naming the input, exit 2, no traceback."""
     import shrmkit.cli.cmd_orders as cmd_orders
@@ -92,16 +82,16 @@ def test_out_of_memory_is_one_line_naming_the_input(capsys, monkeypatch):
         raise MemoryError
 
     monkeypatch.setattr(cmd_orders, "choose_orders", exhausted)
-    code, err = run_main(capsys, "orders", "phong:s=10")
+    code, err = run_main("orders", "phong:s=10")
     assert code == 2 and "Traceback" not in err
     lines = err.strip().splitlines()
     assert len(lines) == 1 and "phong:s=10" in lines[0] and "out of memory" in lines[0], err
 
 
-def test_long_messages_are_cut_with_a_count(capsys):
+def test_long_messages_are_cut_with_a_count(capsys, run_main):
     """A 6,000-character spec echoed in its error (issue 30: 5-10 KB lines, 161 KB of a file's raw
     bytes) is cut to its start and end with the count left out, on one line."""
-    code, err = run_main(capsys, "orders", "phong:s=" + "9" * 6000)
+    code, err = run_main("orders", "phong:s=" + "9" * 6000)
     lines = err.strip().splitlines()
     assert code == 2 and len(lines) == 1 and len(lines[0]) < 600 and "characters left out" in lines[0], err[:300]
     assert lines[0].startswith("shrm orders: error: phong:s=999")

@@ -6,16 +6,6 @@ import shrmkit
 from shrmkit.cli.main import main
 
 
-def run_main(capsys, *args: str) -> tuple[int, str]:
-    """`shrm ARGS` in this process (the process path is tests/cli/test_cli_main.py's): exit code
-    and stderr; a usage error exits through argparse's SystemExit."""
-    try:
-        code = main(list(args))
-    except SystemExit as stop:
-        code = stop.code
-    return code, capsys.readouterr().err
-
-
 def test_prefilter_writes_loadable_file(tmp_path, capsys):
 
 
@@ -26,20 +16,20 @@ def test_prefilter_writes_loadable_file(tmp_path, capsys):
     assert "wrote" in capsys.readouterr().out
 
 
-def test_prefilter_bad_input_leaves_no_file(tmp_path, capsys):
+def test_prefilter_bad_input_leaves_no_file(tmp_path, capsys, run_main):
     out = tmp_path / "bad.shrm.npz"
-    code, err = run_main(capsys, "prefilter", "--env", str(tmp_path / "missing.exr"), "--brdf", "phong:s=8",
+    code, err = run_main("prefilter", "--env", str(tmp_path / "missing.exr"), "--brdf", "phong:s=8",
                          "-o", str(out))
     assert code == 2 and "missing.exr" in err
-    code, err = run_main(capsys, "prefilter", "--env", "builtin:sky", "--brdf", "lambert:albedo=0", "-o", str(out))
+    code, err = run_main("prefilter", "--env", "builtin:sky", "--brdf", "lambert:albedo=0", "-o", str(out))
     assert code == 2 and "zero everywhere" in err
     assert not out.exists() and not list(tmp_path.iterdir())
 
 
-def test_prefilter_eps_is_validated_by_the_one_rule(tmp_path, capsys):
+def test_prefilter_eps_is_validated_by_the_one_rule(tmp_path, capsys, run_main):
     """--eps outside (0, 1) is a usage error (exit 2) with check_eps's message; no file is written."""
     out = tmp_path / "m.shrm.npz"
-    code, err = run_main(capsys, "prefilter", "--env", "builtin:sky,height=16", "--brdf", "phong:s=8", "--eps", "1.5",
+    code, err = run_main("prefilter", "--env", "builtin:sky,height=16", "--brdf", "phong:s=8", "--eps", "1.5",
                          "-o", str(out))
     assert code == 2 and "eps must be in (0, 1), got 1.5" in err
     assert not out.exists()
