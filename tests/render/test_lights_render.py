@@ -18,9 +18,7 @@ import numpy as np
 import pytest
 
 import shrmkit
-from shrmkit.analysis.lights import extract_lights
 from shrmkit.analysis.shrm import SHRM
-from shrmkit.brdf_io.envmap import EnvironmentMap
 from shrmkit.brdf_io.errors import BadInputError
 from shrmkit.brdf_io.latlong import bilinear_lookup
 from shrmkit.brdf_io.specs import load_brdf
@@ -47,32 +45,12 @@ MODELS = [
     "cook-torrance:kd=0.1,ks=1,alpha=0.2,f0=0.04/0.5/0.9,dist=beckmann",
     "cook-torrance:kd=0.05,ks=1,alpha=0.08,f0=0.9/0.6/0.3,dist=ggx",
 ]
-#: Bright pixels of the 32 × 64 "dots" map: (row, column, RGB radiance); one near the horizon
-DOTS = [(8, 5, (50, 40, 30)), (14, 20, (20, 30, 60)), (20, 44, (40, 40, 40)), (5, 33, (10, 60, 10)),
-        (15, 58, (30, 20, 10))]
+
 
 
 @pytest.fixture(scope="module")
 def sphere():
     return load_mesh("builtin:sphere:subdivisions=3")
-
-
-@pytest.fixture(scope="module")
-def dots() -> EnvironmentMap:
-    radiance = np.zeros((32, 64, 3), np.float32)
-    for i, j, c in DOTS:
-        radiance[i, j] = c
-    return EnvironmentMap(radiance, name="dots")
-
-
-def lights_only(env: EnvironmentMap, brdf) -> SHRM:
-    """The SHRM of a map that is only lights: extract_lights(env, "auto") (what prefilter does first)
-    takes every bright pixel, the residual is black, so the maps are zero and the radiance is the
-    lights' alone."""
-    extraction = extract_lights(env, "auto")
-    assert float(extraction.residual.radiance.max()) < 1e-30  # black (a float32 "tiny" at most)
-    return SHRM(F=0, P=0, coeffs=np.zeros((1, 8, 16, 3), np.float32), meta={"max_view_deg": 80.0},
-                lights=extraction.lights, brdf=brdf)
 
 
 def compare(image, alpha, reference, hit, cos_v, max_view_deg: float = 89.0) -> tuple[float, float, float]:
@@ -90,15 +68,15 @@ CAMERAS = [Camera.looking_at(view=(1.0, 0.3, 0.4)), Camera.looking_at(view=(-0.2
 
 
 @pytest.mark.parametrize("spec", MODELS)
-def test_each_model_glsl_against_its_numpy_model(offscreen, sphere, dots, spec) -> None:
+def test_each_model_glsl_against_its_numpy_model(offscreen, sphere, lights_only, n_dots, spec) -> None:
     """A sphere lit only by the lights, for each model of the table: the GLSL ρ̂ against the model's
     own ρ̂ (``light_radiance``) per pixel, perspective and ortho, grazing views (θ_v to 89°, where
     the lights at the horizon graze the surface) included; perpixel and distant (the lights do not
     go through its map) drawn forward and deferred equal."""
     brdf = load_brdf(spec)
     assert brdf_shader_for(brdf) is BRDF_GLSL[type(brdf)]
-    shrm = lights_only(dots, brdf)
-    assert len(shrm.lights) == len(DOTS)
+    shrm = lights_only(brdf)
+    assert len(shrm.lights) == n_dots
     frames = {}
     for mode, deferred in (("perpixel", False), ("perpixel", True), ("distant", False), ("distant", True)):
         with SHRMRenderer(SIZE, SIZE, deferred=deferred) as r:
@@ -120,7 +98,7 @@ def test_each_model_glsl_against_its_numpy_model(offscreen, sphere, dots, spec) 
             assert np.mean(same) > 0.995  # V from the quad's point: a few silhouette pixels differ by rounding
 
 
-def test_sharp_lobes_keep_float32_accuracy_near_the_peak(offscreen, dots) -> None:
+def test_sharp_lobes_keep_float32_accuracy_near_the_peak(offscreen, lights_only) -> None:
     """Phong s = 3·10⁵ and GGX α = 0.01: a patch of a finely tessellated sphere about the highlight
     of one light, seen close up (ortho, a few hundredths of a radian across), so that the lobe spans
     many pixels; the GLSL (a series for log(1 − u), |N × H| for sin θ_h) matches the float64 model
@@ -128,7 +106,7 @@ def test_sharp_lobes_keep_float32_accuracy_near_the_peak(offscreen, dots) -> Non
     fine = load_mesh("builtin:sphere:subdivisions=6")
     view = np.array([1.0, 0.3, 0.4]) / np.linalg.norm([1.0, 0.3, 0.4])
     for spec, half_width in (("phong:s=300000", 0.004), ("cook-torrance:kd=0,alpha=0.01,f0=1,dist=ggx", 0.03)):
-        shrm = lights_only(dots, load_brdf(spec))
+        shrm = lights_only(load_brdf(spec))
         normal = shrm.lights.directions[0] + view
         normal /= np.linalg.norm(normal)
         near = np.linalg.norm(fine.vertices[fine.faces].mean(axis=1) - normal, axis=1) < 4 * half_width
@@ -179,7 +157,7 @@ def test_shrm_part_plus_lights_in_every_mode(offscreen, sphere, sky_shrm, mode) 
     assert compare(no_lights, res.alpha, ref, geom.hit, cos_v)[0] > 10 * rel + 0.02
 
 
-def test_measured_table_against_the_brdf_eval(offscreen, sphere, dots) -> None:
+def test_measured_table_against_the_brdf_eval(offscreen, sphere, lights_only) -> None:
     """A tabulated BRDF (our table format, kind "tabulated": a Cook–Torrance sampled on a
     (θ_i, θ_o, φ_d) grid and interpolated by its reader) goes to the GPU as a half/difference table
     texture; the GLSL equals the numpy lookup of that table, and both the BRDF's own eval within
@@ -189,7 +167,7 @@ def test_measured_table_against_the_brdf_eval(offscreen, sphere, dots) -> None:
     ti, to, pd = axes
     brdf = TableBRDF(ti, to, pd, tabulate_table(source, theta_i=ti, theta_o=to, phi_d=pd), name="ct-table")
     assert brdf.kind != "analytic" and brdf_shader_for(brdf) is TABLE_SHADER
-    shrm = lights_only(dots, brdf)
+    shrm = lights_only(brdf)
     lights = light_shading(shrm)
     error = lights.table_error
     assert error is not None and error["rel_rms"] <= error["worst_band_rel_rms"] <= error["target"]

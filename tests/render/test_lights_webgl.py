@@ -22,9 +22,7 @@ from PIL import Image
 from scipy.ndimage import binary_dilation, binary_erosion
 
 import shrmkit
-from shrmkit.analysis.lights import extract_lights
 from shrmkit.analysis.shrm import SHRM
-from shrmkit.brdf_io.envmap import EnvironmentMap
 from shrmkit.brdf_io.latlong import bilinear_lookup
 from shrmkit.brdf_io.specs import load_brdf
 from shrmkit.brdf_io.table import TableBRDF, tabulate_table
@@ -51,25 +49,8 @@ MODELS = [
     "cook-torrance:kd=0.1,ks=1,alpha=0.2,f0=0.04/0.5/0.9,dist=beckmann",
     "cook-torrance:kd=0.05,ks=1,alpha=0.08,f0=0.9/0.6/0.3,dist=ggx",
 ]
-DOTS = [(8, 5, (50, 40, 30)), (14, 20, (20, 30, 60)), (20, 44, (40, 40, 40)), (5, 33, (10, 60, 10)),
-        (15, 58, (30, 20, 10))]
 #: (azimuth, elevation, zoom) of the views compared
 VIEWS = [(30.0, 20.0, 1.0), (-120.0, -35.0, 1.3)]
-
-
-def dots_env() -> EnvironmentMap:
-    radiance = np.zeros((32, 64, 3), np.float32)
-    for i, j, c in DOTS:
-        radiance[i, j] = c
-    return EnvironmentMap(radiance, name="dots")
-
-
-def lights_only(brdf) -> SHRM:
-    """The SHRM of the dots map: every bright pixel a light (extract_lights, "auto"), maps zero."""
-    extraction = extract_lights(dots_env(), "auto")
-    return SHRM(F=0, P=0, coeffs=np.zeros((1, 8, 16, 3), np.float32),
-                meta={"max_view_deg": 80.0, "brdf": brdf.name, "environment": "dots", "lights_requested": "auto"},
-                lights=extraction.lights, brdf=brdf)
 
 
 def reference(page, shrm: SHRM, mode: str, view: tuple[float, float, float], exposure: float,
@@ -125,7 +106,7 @@ def write_page(folder, name: str, shrm: SHRM, **kwargs) -> tuple[object, str]:
 # ------------------------------------------------------------------------------------------
 
 
-def test_page_embeds_the_samples_and_the_model(tmp_path) -> None:
+def test_page_embeds_the_samples_and_the_model(tmp_path, lights_only, n_dots) -> None:
     """data["lights"]: the samples (float32 of the SHRM's), the model's uniforms and #defines, its
     GLSL files (inlined with the viewer); a page without lights has none; the CPU still image of
     a lit scene shows the lights (distant: the map plus the lights at each pixel's V)."""
@@ -133,7 +114,7 @@ def test_page_embeds_the_samples_and_the_model(tmp_path) -> None:
     shrm = lights_only(brdf)
     page = build_view(shrm, None, mesh=MESH, still="cpu", exposure=0.0)
     lights = page.data["lights"]
-    assert lights["count"] == len(shrm.lights) == len(DOTS) and lights["model"] == "cook-torrance"
+    assert lights["count"] == len(shrm.lights) == n_dots and lights["model"] == "cook-torrance"
     assert lights["glsl"] == ["brdf_common.glsl", BRDF_GLSL[type(brdf)].source, "lights.glsl"]
     assert all(name in page.sources for name in lights["glsl"])
     u = lights["uniforms"]
@@ -141,9 +122,9 @@ def test_page_embeds_the_samples_and_the_model(tmp_path) -> None:
                                   shrm.lights.directions.astype(np.float32))
     np.testing.assert_array_equal(np.reshape(u["shrmLightPower"]["value"], (-1, 3)),
                                   shrm.lights.power.astype(np.float32))
-    assert u["shrmLightCount"] == {"type": "int", "value": [len(DOTS)]}
+    assert u["shrmLightCount"] == {"type": "int", "value": [n_dots]}
     assert u["shrmCtAlpha"]["value"] == [np.float32(0.2)] and lights["defines"]["SHRM_CT_GGX"] == 0
-    assert lights["defines"]["SHRM_NLIGHTS"] == len(DOTS) and lights["table"] is None
+    assert lights["defines"]["SHRM_NLIGHTS"] == n_dots and lights["table"] is None
     assert "light samples shaded per pixel" in page_html(page)
     # the still image (CPU reference, distant) holds the lights: the object is not black
     still = np.asarray(Image.open(io.BytesIO(page.still_png)).convert("RGB"))
@@ -158,7 +139,7 @@ def test_page_embeds_the_samples_and_the_model(tmp_path) -> None:
     assert plain.data["lights"] is None
 
 
-def test_measured_brdf_table_in_the_page_within_its_budget() -> None:
+def test_measured_brdf_table_in_the_page_within_its_budget(lights_only) -> None:
     """A measured (tabulated) BRDF: its half/difference table as half floats within the budget's
     share, the error of what the page holds measured and stated in a note and in the document."""
     source = load_brdf("cook-torrance:kd=0.2,alpha=0.3,f0=0.5/0.4/0.3,dist=ggx")
@@ -192,7 +173,7 @@ class TestInBrowser:
 
     @pytest.mark.slow
     @pytest.mark.parametrize("spec", MODELS)
-    def test_each_model_against_the_cpu_reference(self, browser, tmp_path, spec) -> None:
+    def test_each_model_against_the_cpu_reference(self, browser, tmp_path, lights_only, spec) -> None:
         """The dots map's lights alone, per model: perpixel at two views and distant at one, against
         the CPU reference of the same scene (measured 0.2–0.9 % relative RMS of the 8-bit image)."""
         shrm = lights_only(load_brdf(spec))
@@ -229,7 +210,7 @@ class TestInBrowser:
         assert err <= REL_RMS_MAX and relative_rms(image, without, inner(hit)) > 3 * err + 0.01, err
 
     @pytest.mark.slow
-    def test_measured_table_in_the_browser(self, browser, tmp_path) -> None:
+    def test_measured_table_in_the_browser(self, browser, tmp_path, lights_only) -> None:
         """A tabulated BRDF's lights: the page's table (as stored) in WebGL equals the numpy lookup of
         that table, and the BRDF's own eval within the table's measured error."""
         source = load_brdf("cook-torrance:kd=0.2,alpha=0.3,f0=0.5/0.4/0.3,dist=ggx")
