@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import os
 import re
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -116,14 +117,18 @@ def curet_files(path: str | os.PathLike[str]) -> tuple[Path, Path]:
     return values, table
 
 
-def _number(path: Path, line_no: int, token: str) -> float:
+def _number(path: Path, line_no: int, token: str, nonfinite: Callable[[str], object] | None = None) -> float:
     """One decimal number token (``1``, ``-0.5``, ``2.5e-3``; :func:`parse_number`);
     BadInputError otherwise (``nan``, ``inf``, ``1_000``, hexadecimal and overflowing tokens
-    included)."""
+    included). With ``nonfinite``, a non-finite token is NaN and its message goes there instead."""
     try:
         return parse_number(token, strip=False)
     except NonFiniteNumberError:
-        raise BadInputError(path, f"line {line_no}: non-finite number {token[:MAX_NUMBER_CHARS]!r}") from None
+        message = f"line {line_no}: non-finite number {token[:MAX_NUMBER_CHARS]!r}"
+        if nonfinite is None:
+            raise BadInputError(path, message) from None
+        nonfinite(message)
+        return float("nan")
     except ValueError:
         raise BadInputError(path, f"line {line_no}: {token[:MAX_NUMBER_CHARS]!r} is not a number") from None
 
@@ -150,19 +155,9 @@ def _rows(
             raise BadInputError(path, f"line {line_no}: {len(tokens)} numbers, expected {n_numbers} ({layout})")
         if len(rows) == max_rows:
             raise BadInputError(path, f"line {line_no}: more than {max_rows} rows")
-        if bad is None:
-            rows.append((line_no, [_number(path, line_no, tok) for tok in tokens]))
-            continue
-        numbers = [_number(path, line_no, tokens[0])]
-        for tok in tokens[1:]:
-            try:
-                numbers.append(_number(path, line_no, tok))
-            except BadInputError as err:
-                if "non-finite" not in str(err):
-                    raise
-                bad.setdefault(line_no, str(err).removeprefix(f"{path}: "))
-                numbers.append(float("nan"))
-        rows.append((line_no, numbers))
+        record = None if bad is None else (lambda message, line_no=line_no: bad.setdefault(line_no, message))
+        rows.append((line_no, [_number(path, line_no, tokens[0])]
+                     + [_number(path, line_no, tok, record) for tok in tokens[1:]]))
     if not rows:
         raise BadInputError(path, f"empty {what}")
     return rows

@@ -603,6 +603,12 @@ def _plain_shape(path: Path, h: int, w: int, probe: bool | None) -> bool:
     return bool(is_probe)
 
 
+def _envmap_rows(kind: str, h: int, w: int, height: int | None) -> int:
+    """Rows of the lat-long map an ``envmap`` file of an h × w data window is resampled to: the
+    ``height`` asked for, else h for a lat-long map, 2w (twice a cube face) for a cube."""
+    return int(height or (h if kind == "latlong" else 2 * w))
+
+
 def _envmap_shape(path: Path, kind: str, h: int, w: int, height: int | None) -> None:
     """The rules of an OpenEXR ``envmap`` file's data window (h × w), before its pixels are read:
     a known kind, six stacked square faces for a cube, and a lat-long output within the pixel
@@ -613,7 +619,7 @@ def _envmap_shape(path: Path, kind: str, h: int, w: int, height: int | None) -> 
         raise BadInputError(
             path, f"envmap=cube needs a data window of six stacked square faces (h = 6w), got {w} x {h}"
         )
-    rows = int(height or (h if kind == "latlong" else 2 * w))
+    rows = _envmap_rows(kind, h, w, height)
     check_pixels(path, rows, 2 * rows)
 
 
@@ -633,7 +639,7 @@ def _load_openexr_envmap(
     image = exr.data
     h, w = image.shape[:2]
     image = _check_radiance(path, image)
-    rows = int(height or (h if kind == "latlong" else 2 * w))
+    rows = _envmap_rows(kind, h, w, height)
     radiance = openexr_envmap_to_latlong(image, kind, rows).astype(np.float32)
     return EnvironmentMap(radiance, path.stem, f"{path}" + _options_text("y", False, azimuth, f"openexr-{kind}"))
 

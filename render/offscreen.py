@@ -76,7 +76,8 @@ def egl_vendor_available() -> bool:
 def window_classes() -> list[str]:
     """Names of the VTK render-window classes to try, in order (see module docstring), without
     those a safe query shows would crash: :func:`skipped_window_classes` says which and why."""
-    return [name for name, _ in _candidates() if name not in dict(skipped_window_classes())]
+    skipped = dict(skipped_window_classes())
+    return [name for name in _candidates() if name not in skipped]
 
 
 def skipped_window_classes() -> list[tuple[str, str]]:
@@ -84,7 +85,7 @@ def skipped_window_classes() -> list[tuple[str, str]]:
     vendor library (:func:`egl_vendor_available`)."""
     has_display = bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
     out = []
-    for name, _ in _candidates():
+    for name in _candidates():
         if name in X_WINDOW_CLASSES and not has_display:
             out.append((name, "needs an X display and DISPLAY is not set"))
         elif name == "vtkEGLRenderWindow" and not egl_vendor_available():
@@ -92,13 +93,13 @@ def skipped_window_classes() -> list[tuple[str, str]]:
     return out
 
 
-def _candidates() -> list[tuple[str, str]]:
+def _candidates() -> list[str]:
     override = os.environ.get("VTK_DEFAULT_OPENGL_WINDOW")
     if os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"):
-        return [(override or "vtkRenderWindow", "")]
+        return [override or "vtkRenderWindow"]
     # an override is tried first; without a display the offscreen classes follow it as fallbacks
     names = ([override] if override else []) + ["vtkEGLRenderWindow", "vtkOSOpenGLRenderWindow"]
-    return [(n, "") for n in dict.fromkeys(names)]
+    return list(dict.fromkeys(names))
 
 
 def _new_window(name: str):  # -> vtkRenderWindow

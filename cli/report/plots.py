@@ -78,7 +78,6 @@ def _row_layout(fig, left: float, right: float, bottom: float, top: float, gap: 
     panel = max((width - left - right - (n - 1) * gap) / n, 1e-3)
     fig.subplots_adjust(left=left / width, right=1.0 - right / width, bottom=bottom / height,
                         top=1.0 - top / height, wspace=gap / panel)
-    fig._shrm_fixed_layout = True
 
 
 class _PlainLogFormatter(LogFormatter):
@@ -97,10 +96,13 @@ def _log_y(ax) -> None:
     ax.yaxis.set_minor_formatter(_PlainLogFormatter(labelOnlyBase=False, minor_thresholds=(1, 0.4)))
 
 
-def _png(fig) -> bytes:
+def _png(fig, row: tuple[float, float, float, float, float] | None = None) -> bytes:
+    """The figure as PNG bytes; ``row``: (left, right, bottom, top, gap) margins in inches of a row
+    of panels (:func:`_row_layout`), else one plain axes gets fixed margins and anything else
+    tight_layout."""
     buf = io.BytesIO()
-    if getattr(fig, "_shrm_fixed_layout", False):
-        pass
+    if row is not None:
+        _row_layout(fig, *row)
     elif len(fig.axes) == 1 and fig.axes[0].name == "rectilinear":
         # one plain axes: fixed margins in inches (tick labels, axis labels, a title line) instead of
         # tight_layout, which draws the whole figure once more only to measure its text
@@ -215,8 +217,7 @@ def fit_slices_plot(doc: dict[str, Any]) -> bytes:
         if k == 0:
             ax.set_ylabel("ρ luminance (1/sr)", fontsize=7)
             ax.legend(fontsize=6)
-    _row_layout(fig, left=0.62, right=0.1, bottom=0.42, top=0.25, gap=0.4)
-    return _png(fig)
+    return _png(fig, row=(0.62, 0.1, 0.42, 0.25, 0.4))  # left, right, bottom, top, gap (inches)
 
 
 def fit_bands_plot(doc: dict[str, Any]) -> bytes:
@@ -360,8 +361,7 @@ def explorer_polar_plot(doc: dict[str, Any]) -> bytes:
         ax.set_xlabel(f"rings: decades of ρ, 1e{lo:.0f} (centre) to 1e{hi:.0f}", fontsize=6, labelpad=-20)
         if k == 0:
             ax.legend(fontsize=6, loc="lower left", bbox_to_anchor=(-0.15, -0.25))
-    _row_layout(fig, left=0.3, right=0.3, bottom=0.7, top=0.3, gap=0.4)
-    return _png(fig)
+    return _png(fig, row=(0.3, 0.3, 0.7, 0.3, 0.4))  # left, right, bottom, top, gap (inches)
 
 
 def explorer_albedo_plot(doc: dict[str, Any]) -> bytes:
@@ -399,8 +399,7 @@ def image_row_plot(images: list[np.ndarray], titles: list[str]) -> bytes:
             ax.imshow(image, interpolation="nearest")
             ax.set_title(title, fontsize=8)
             ax.set_axis_off()
-        _row_layout(fig, left=0.05, right=0.05, bottom=0.05, top=0.28, gap=0.1)
-        return _png(fig)
+        return _png(fig, row=(0.05, 0.05, 0.05, 0.28, 0.1))  # left, right, bottom, top, gap (inches)
 
 
 def make_plots(doc: dict[str, Any]) -> dict[str, bytes]:
