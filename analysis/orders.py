@@ -56,6 +56,7 @@ from .view_bands import (
     check_max_view,
     fit_view_coefficients,
     resolution_tail,
+    view_order_floor,
     view_profile,
 )
 
@@ -312,29 +313,34 @@ class _GridData:
             out[:, p] = col
         return out
 
-    def choose(self, tolerance: float, hint: int) -> tuple[int, int, bool]:
+    def choose(self, tolerance: float, hint: int | None) -> tuple[int, int, bool]:
         """(F, P, capped) by :func:`choose_from_table`'s rule, computing only the columns it needs.
 
-        The best error of a column falls as P grows (a larger view order can only fit the views
-        better: the fits nest; checked over the model families, measured files and P <= 20 of
-        ``tests/analysis/test_orders.py``), so the first column that meets the tolerance is
-        found from ``hint`` (the previous grid's P) by a galloping search and bisection."""
+        The best error of a column falls as P grows (a larger view order fits the views better:
+        the fits nest, up to their reweighting passes — +1 % of ε at ε ≈ 3·10⁻⁵ for Lafortune
+        n = 20; checked against a scan of every column in ``tests/analysis/test_orders.py``),
+        so the first column that meets the tolerance is found from ``hint`` (the previous
+        grid's P) by a galloping search and bisection, or, without a hint (a search's first
+        grid), by bisection above the floor of :func:`~shrmkit.analysis.view_bands.view_order_floor`
+        (no column below it can meet it)."""
         best = lambda p: float(self.column(p).min())  # noqa: E731
-        P = _first_true(lambda p: best(p) <= tolerance, self.P0, hint)
+        floor = lambda tol: view_order_floor(self.profile, tol, self.max_view_deg)  # noqa: E731
+        P = _first_true(lambda p: best(p) <= tolerance, self.P0, hint, floor(tolerance))
         capped = P is None
         reach = tolerance
         if capped:
             reach = best(self.P0) + CAPPED_SLACK * tolerance
-            P = _first_true(lambda p: best(p) <= reach, self.P0, hint)
+            P = _first_true(lambda p: best(p) <= reach, self.P0, hint, floor(reach))
             P = self.P0 if P is None else P
         F = int(np.nonzero(self.column(P) <= reach)[0][0])
         return F, int(P), capped
 
 
-def _first_true(pred: Callable[[int], bool], top: int, hint: int) -> int | None:
-    """Smallest x in [0, top] with ``pred(x)`` for a monotone ``pred`` (False … False True … True),
-    None when ``pred(top)`` is False: from ``hint`` one step at a time for two steps (a hint from
-    the previous grid is usually within one), then galloping, then bisection."""
+def _first_true(pred: Callable[[int], bool], top: int, hint: int | None, low: int = 0) -> int | None:
+    """Smallest x in [low, top] with ``pred(x)`` for a monotone ``pred`` (False … False True … True;
+    every x < ``low`` is known False), None when ``pred(top)`` is False: from ``hint`` one step at a
+    time for two steps (a hint from the previous grid is usually within one), then galloping, then
+    bisection; without a hint, bisection from [low, top] (``pred(top)`` first)."""
     def steps():
         yield from (1, 1)
         step = 2
@@ -342,12 +348,16 @@ def _first_true(pred: Callable[[int], bool], top: int, hint: int) -> int | None:
             yield step
             step *= 2
 
-    x = min(max(int(hint), 0), top)
-    if pred(x):
-        good, bad = x, -1
+    low = min(max(int(low), 0), top)
+    if hint is None:
+        if not pred(top):
+            return None
+        good, bad = top, low - 1
+    elif pred(x := min(max(int(hint), low), top)):
+        good, bad = x, low - 1
         for step in steps():
             y = good - step
-            if y < 0:
+            if y < low:
                 break
             if not pred(y):
                 bad = y
@@ -506,7 +516,7 @@ def _search(data_for: Callable[[ReparamGrid], _GridData], eps: float, max_F: int
     t0 = time.perf_counter()
     notes: list[str] = []
     F_goal, P_goal = min(start_F, max_F), min(start_P, max_P)
-    hint = P_goal
+    hint: int | None = None  # the first grid: bisection above the view-order floor
     for _ in range(24):
         on = data_for(ReparamGrid.for_orders(F_goal, P_goal))
         at_caps = on.F0 >= max_F and on.P0 >= max_P
@@ -561,7 +571,7 @@ def _search(data_for: Callable[[ReparamGrid], _GridData], eps: float, max_F: int
     return _choice(on, F, P, eps, capped, converged, notes, time.perf_counter() - t0, criterion, max_view_deg)
 
 
-def _choose(on: _GridData, eps: float, hint: int) -> tuple[int, int, bool]:
+def _choose(on: _GridData, eps: float, hint: int | None) -> tuple[int, int, bool]:
     if on.criterion == "rh02":
         return choose_from_table(on.rh02_table, eps)
     return on.choose(eps, hint)

@@ -87,10 +87,15 @@ def legendre_f(lmax: int, mmax: int, cos_theta: np.ndarray) -> np.ndarray:
         out[m, m] = fmm
         if m + 1 <= lmax:
             out[m + 1, m] = np.sqrt(2.0 * m + 3.0) * x * fmm
-        for l in range(m + 2, lmax + 1):
-            a_l = np.sqrt((4.0 * l * l - 1.0) / (l * l - m * m))
-            a_lm1 = np.sqrt((4.0 * (l - 1) ** 2 - 1.0) / ((l - 1) ** 2 - m * m))
-            out[l, m] = a_l * (x * out[l - 1, m] - out[l - 2, m] / a_lm1)
+    # the three-term recurrence in l, every order m <= l − 2 at once (rows l − 1 and l − 2 are
+    # complete for those m: the diagonal, the first off-diagonal or an earlier step set them)
+    shape = (-1,) + (1,) * x.ndim
+    for l in range(2, lmax + 1):
+        m = np.arange(min(l - 2, mmax) + 1, dtype=np.float64)
+        a_l = np.sqrt((4.0 * l * l - 1.0) / (l * l - m * m)).reshape(shape)
+        a_lm1 = np.sqrt((4.0 * (l - 1) ** 2 - 1.0) / ((l - 1) ** 2 - m * m)).reshape(shape)
+        k = m.size
+        out[l, :k] = a_l * (x * out[l - 1, :k] - out[l - 2, :k] / a_lm1)
     return out
 
 

@@ -56,11 +56,12 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
+import scipy.fft
 from scipy.special import roots_legendre
 
 from ..brdf_io.brdf import BRDF
 from ..brdf_io.errors import BadInputError
-from ..brdf_io.reparam import ReparamGrid, sample_rho_hat_grid
+from ..brdf_io.reparam import ReparamGrid, sample_rho_hat_half
 from .brdf_coeffs import BRDFCoefficients, weighted_legendre
 from .sh import Lambda, legendre_f
 
@@ -226,6 +227,17 @@ class ViewProfile:
         return (self.weight * 2.0 * np.sin(2.0 * self.theta_v)) @ density
 
 
+def _cosine_transform(half: np.ndarray, n_phi: int) -> np.ndarray:
+    """Σ_j x_j cos(2π q j / n_phi) over the whole period for q = 0 .. n_phi // 2, from the half
+    period x_0 .. x_{n_phi // 2} of an even sequence on axis 2: the real part of its rfft. For
+    even n_phi a DCT-I of the half (half the points), for odd n_phi the rfft of the mirrored whole."""
+    if n_phi % 2 == 0 and half.shape[2] > 1:
+        return scipy.fft.dct(half, type=1, axis=2)
+    inner = np.arange(1, (n_phi + 1) // 2)
+    whole = np.concatenate([half, half[:, :, inner[::-1]]], axis=2)
+    return np.fft.rfft(whole, axis=2).real
+
+
 def view_profile(
     brdf: BRDF, grid: ReparamGrid, F0: int, P0: int, edges_deg: tuple[float, ...] = DEFAULT_BAND_EDGES_DEG
 ) -> ViewProfile:
@@ -252,22 +264,24 @@ def view_profile(
     T = np.empty((F0 + 1, K, P0 + 1, 3))
     energy = np.empty((K, 3))
     q_energy = np.empty((K, n_q, 3))
+    # the half period φ' ∈ [0, π] stands for the whole (ρ̂ is even in φ'): every node but 0 (and π)
+    # counts twice, as every cosine order q but 0 (and n_phi/2) does in Parseval's sum
     q_mult = np.where((np.arange(n_q) == 0) | (2 * np.arange(n_q) == grid.n_phi), 1.0, 2.0)
     missing = np.zeros(len(edges) - 1, dtype=np.int64)
     dphi = 2.0 * np.pi / grid.n_phi
     for b in range(len(edges) - 1):
         idx = np.nonzero(band == b)[0]
-        # (n_i, k, n_phi, 3), evaluated on φ' ∈ [0, π] (ρ̂ is even in φ')
-        values, n_missing = sample_rho_hat_grid(brdf, xi, np.cos(2.0 * theta_v[idx]), grid.n_phi)
+        # (n_i, k, n_phi // 2 + 1, 3): φ' ∈ [0, π] (ρ̂ is even in φ')
+        values, n_missing = sample_rho_hat_half(brdf, xi, np.cos(2.0 * theta_v[idx]), grid.n_phi)
         missing[b] = n_missing
-        g = np.fft.rfft(values, axis=2).real * dphi  # (n_i, k, n_q, 3)
+        g = _cosine_transform(values, grid.n_phi) * dphi  # (n_i, k, n_q, 3)
         n_i, k = g.shape[:2]
         # Σ_i fi[l, q, i] g[i, k, q, c]: one matrix product per q (BLAS), batched over q
         rhs = np.ascontiguousarray(g[:, :, : P0 + 1, :].transpose(2, 0, 1, 3)).reshape(P0 + 1, n_i, k * 3)
         per_q = np.matmul(fi.transpose(1, 0, 2), rhs).reshape(P0 + 1, F0 + 1, k, 3)  # [q, l, node, c]
         T[:, idx] = 2.0 * np.pi * per_q.transpose(1, 2, 0, 3)
         # 𝓔(θ_o') = 2π ∫ dω_i ρ̂²: the density whose sin θ_o' dθ_o' integral is ∫∫ ρ̂² (ReparamBRDF.energy)
-        energy[idx] = 2.0 * np.pi * dphi * np.tensordot(wi, (values**2).sum(axis=2), axes=(0, 0))
+        energy[idx] = 2.0 * np.pi * dphi * np.tensordot(wi, np.einsum("ikjc,j->ikc", values**2, q_mult), axes=(0, 0))
         # per q, all l (Bessel's equality in θ_i'): mult_q ∫ g_q² d cos θ_i'; Σ_q of it is 𝓔 (Parseval)
         q_energy[idx] = np.tensordot(wi, g * g, axes=(0, 0)) * q_mult[None, :, None]
     resolved = np.tensordot(T**2, _mult(P0 + 1), axes=(2, 0)).sum(axis=0) / (2.0 * np.pi)
@@ -372,9 +386,9 @@ def _view_fit(profile: ViewProfile, P: int, max_view_deg: float, F0: int) -> tup
     (K, F0+1, 3).
 
     Every q is solved at once: the basis columns 2π f_pq(cos 2θ_v) (p = q..P) of each q, padded
-    with zero columns to P+1, are stacked, and one stacked pseudo-inverse serves all (l, channel)
-    right-hand sides of all q (a zero column has a zero singular value, which the pseudo-inverse
-    drops: the padding changes nothing)."""
+    with zero columns to P+1, are stacked, and one stacked QR solve serves all (l, channel)
+    right-hand sides of all q (each padding column gets one extra unit row, so the system has full
+    rank and its solution there is zero: the padding changes nothing)."""
     inside = np.zeros(profile.n_bands, dtype=bool)
     inside[bands_inside(profile, max_view_deg)] = True
     signal = (profile.band_full.sum(axis=1) + profile.band_beyond).sum(axis=1)
@@ -384,25 +398,39 @@ def _view_fit(profile: ViewProfile, P: int, max_view_deg: float, F0: int) -> tup
     basis = np.zeros((P + 1, K, P + 1))  # [q, node, p − q]
     for q in range(P + 1):
         basis[q, :, : P + 1 - q] = 2.0 * np.pi * fo[q : P + 1, q, :].T
+    padding = np.zeros((P + 1, P + 1, P + 1))
+    for q in range(1, P + 1):
+        padding[q, np.arange(P + 1 - q, P + 1), np.arange(P + 1 - q, P + 1)] = 1.0
     n_cols = (F0 + 1) * 3
     rhs = profile.T_stack[: P + 1, :, :n_cols]  # (P+1, K, n_cols)
     mult = _mult(P + 1) / (2.0 * np.pi)
     at_F0 = _EpsAtF0(profile, F0, P)
+    # the reweighting passes need the residual summed over l only: Σ_l (R rhs)²[k] = (R G R^T)[k, k]
+    # with R = I − basis·M the fit's residual operator and G = Σ_l rhs rhs^T per (q, channel), so a
+    # pass costs O(K²) per (q, channel) instead of a pass over every (l, channel) column
+    by_channel = rhs.reshape(P + 1, K, F0 + 1, 3).transpose(0, 3, 1, 2)  # (P+1, 3, K, F0+1)
+    gram = by_channel @ by_channel.transpose(0, 1, 3, 2)  # (P+1, 3, K, K)
+    eye = np.eye(K)
     prev_worst = np.inf
     for npass in range(FIT_PASSES + 1):
         sw = np.sqrt(profile.weight * band_w[profile.band])
-        # weighted least squares through the pseudo-inverse of the small, well-conditioned matrices
-        sol = (np.linalg.pinv(basis * sw[None, :, None]) * sw[None, None, :]) @ rhs  # (P+1, P+1, n_cols)
-        diff = rhs - basis @ sol
-        residual = np.einsum("q,qkn->kn", mult, diff * diff).reshape(K, F0 + 1, 3)
+        # weighted least squares by QR of the small matrices, each q's zero padding columns held at
+        # zero by one extra unit row apiece (full rank; the solution there is 0, elsewhere unchanged)
+        Q, Rq = np.linalg.qr(np.concatenate([basis * sw[None, :, None], padding], axis=1))
+        M = np.linalg.solve(Rq, Q.transpose(0, 2, 1))[:, :, :K] * sw[None, None, :]  # (P+1, P+1, K)
         if npass == FIT_PASSES or not inside.any():
             break
-        eps = at_F0.eps(at_F0.fixed + residual.sum(axis=1))  # = _band_eps_all(profile, fitted, [P])[:, F0, 0]
+        R = eye - basis @ M  # (P+1, K, K)
+        per_node = np.einsum("q,qckj,qkj->kc", mult, R[:, None] @ gram, R)  # (K, 3), Σ over l
+        eps = at_F0.eps(at_F0.fixed + per_node)  # = _band_eps_all(profile, fitted, [P])[:, F0, 0]
         worst = eps[inside].max()
         if worst <= 0.0 or worst > 0.995 * prev_worst:  # nothing to gain (a view-independent lobe)
             break
         prev_worst = worst
         band_w = band_w * np.where(inside, np.sqrt(np.clip(eps / worst, 1e-3, 1.0)), 1.0)
+    sol = M @ rhs  # (P+1, P+1, n_cols)
+    diff = rhs - basis @ sol
+    residual = np.einsum("q,qkn->kn", mult, diff * diff).reshape(K, F0 + 1, 3)
     fit = np.zeros((F0 + 1, P + 1, P + 1, 3))
     by_l = sol.reshape(P + 1, P + 1, F0 + 1, 3)  # [q, p − q, l, c]
     for q in range(P + 1):
@@ -483,6 +511,29 @@ def resolution_tail(profile: ViewProfile, F: int, P: int, max_view_deg: float, n
     live = _live(total.sum(axis=0))[None, :] & (total >= CHANNEL_FLOOR * total.max(axis=1, keepdims=True))
     share = np.where(live & (total > 0), tail / np.where(total > 0, total, 1.0), 0.0)
     return float(share[inside].max(initial=0.0))
+
+
+def view_order_floor(profile: ViewProfile, tolerance: float, max_view_deg: float) -> int:
+    """The smallest view order P that can meet ``tolerance``: below it, the energy at azimuthal
+    orders q > P alone exceeds it in some band inside ``max_view_deg`` (worst live channel).
+
+    A lower bound on the ``"bands"`` rule's P, from the profile's ``q_energy`` without a fit:
+    ε_b(F, P) counts all energy at q > P as error (the fit has no term there, and what the table
+    leaves unresolved counts as error), so ε_b(F, P) >= Σ_{q>P} energy / total for every F. A
+    margin of 10⁻⁶ ε keeps rounding from raising the bound. 0 when the profile has no
+    ``q_energy``; P0 when no P <= P0 can meet the tolerance."""
+    if profile.q_energy is None:
+        return 0
+    full = profile.band_full
+    total = full.sum(axis=1) + profile.band_beyond  # (nb, 3)
+    live = _live(total.sum(axis=0))[None, :] & (total >= CHANNEL_FLOOR * total.max(axis=1, keepdims=True))
+    per_q = profile.band_sum(profile.q_energy)  # (nb, n_q, 3)
+    above = per_q[:, ::-1].cumsum(axis=1)[:, ::-1]  # [:, q] = energy at q' >= q
+    above = np.concatenate([above[:, 1:], np.zeros_like(above[:, :1])], axis=1)  # [:, P] = energy at q > P
+    share = np.where((live & (total > 0))[:, None, :], above / np.where(total > 0, total, 1.0)[:, None, :], 0.0)
+    worst = share.max(axis=-1)[bands_inside(profile, max_view_deg)].max(axis=0, initial=0.0)
+    ok = np.nonzero(worst[: profile.P0 + 1] <= tolerance * (1.0 + 1e-6))[0]
+    return int(ok[0]) if ok.size else profile.P0
 
 
 def band_eps_table(

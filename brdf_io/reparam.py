@@ -31,6 +31,7 @@ from .errors import BadInputError
 
 __all__ = [
     "ReparamGrid", "ReparamBRDF", "reparameterize", "reparam_directions", "sample_rho_hat", "sample_rho_hat_grid",
+    "sample_rho_hat_half",
 ]
 
 
@@ -216,12 +217,38 @@ def sample_rho_hat(
     return values, missing
 
 
+def sample_rho_hat_half(
+    brdf: BRDF, cos_theta_i: np.ndarray, cos_theta_o: np.ndarray, n_phi: int
+) -> tuple[np.ndarray, int]:
+    """ρ̂ at the uniform φ' nodes 2πk/n_phi with φ' ∈ [0, π] only, k = 0 .. n_phi // 2:
+    values (n_i, n_o, n_phi // 2 + 1, 3) and the number of points of the *whole* grid without
+    data (each mirrored point counted twice), as :func:`sample_rho_hat_grid` (which mirrors them).
+
+    Raises
+    ------
+    BadInputError
+        As :func:`sample_rho_hat`.
+    """
+    n_phi = int(n_phi)
+    ci = np.asarray(cos_theta_i, float)
+    co = np.asarray(cos_theta_o, float)
+    k = np.arange(n_phi // 2 + 1)
+    phi = 2.0 * np.pi * k / max(n_phi, 1)
+    values, missing = sample_rho_hat(brdf, ci, co, phi)
+    if missing:
+        # the nodes that are their own mirror image (0, and π for even n_phi) count once
+        ends = [0, n_phi // 2] if n_phi % 2 == 0 else [0]
+        _, end_missing = sample_rho_hat(brdf, ci, co, phi[ends]) if len(k) > len(ends) else (None, missing)
+        missing = end_missing + 2 * (missing - end_missing)
+    return values, missing
+
+
 def sample_rho_hat_grid(
     brdf: BRDF, cos_theta_i: np.ndarray, cos_theta_o: np.ndarray, n_phi: int
 ) -> tuple[np.ndarray, int]:
     """ρ̂ on the product of 1-D node sets and the uniform φ' nodes 2πk/n_phi, as
     :func:`sample_rho_hat` (values (n_i, n_o, n_phi, 3), points without data), evaluating
-    only φ' ∈ [0, π].
+    only φ' ∈ [0, π] (:func:`sample_rho_hat_half`).
 
     ρ̂ of an isotropic BRDF is even in φ' (DESIGN §3: the plane of R and L' is a mirror plane),
     so the nodes 2π − φ'_k repeat the values at φ'_k: about half the BRDF evaluations. Only the
@@ -231,21 +258,15 @@ def sample_rho_hat_grid(
     data is that of the whole grid (each mirrored point counted twice).
     """
     n_phi = int(n_phi)
-    phi = 2.0 * np.pi * np.arange(n_phi // 2 + 1) / n_phi  # 0 .. π (π only for even n_phi)
-    ci = np.asarray(cos_theta_i, float)
-    co = np.asarray(cos_theta_o, float)
-    n_end = 2 if n_phi % 2 == 0 else 1  # nodes that are their own mirror image: 0 (and π)
     if n_phi <= 2:
+        ci, co = np.asarray(cos_theta_i, float), np.asarray(cos_theta_o, float)
         return sample_rho_hat(brdf, ci, co, 2.0 * np.pi * np.arange(n_phi) / max(n_phi, 1))
-    ends = [0, n_phi // 2] if n_end == 2 else [0]
+    half, missing = sample_rho_hat_half(brdf, cos_theta_i, cos_theta_o, n_phi)
     inner = np.arange(1, (n_phi + 1) // 2)  # 1 .. ceil(n/2) − 1: each stands for itself and n − k
-    end_values, end_missing = sample_rho_hat(brdf, ci, co, phi[ends])
-    inner_values, inner_missing = sample_rho_hat(brdf, ci, co, phi[inner])
-    values = np.empty((ci.size, co.size, n_phi, 3))
-    values[:, :, ends] = end_values
-    values[:, :, inner] = inner_values
-    values[:, :, n_phi - inner] = inner_values
-    return values, end_missing + 2 * inner_missing
+    values = np.empty(half.shape[:2] + (n_phi, 3))
+    values[:, :, : half.shape[2]] = half
+    values[:, :, n_phi - inner] = half[:, :, inner]
+    return values, missing
 
 
 def _rho_hat_counted(brdf: BRDF, L: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, int]:
