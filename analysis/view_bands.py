@@ -513,6 +513,34 @@ def resolution_tail(profile: ViewProfile, F: int, P: int, max_view_deg: float, n
     return float(share[inside].max(initial=0.0))
 
 
+def projected_eps(profile: ViewProfile, F: int, P: int) -> float:
+    """RH02's ε(F, P) (§5.1: 1 − Σ_{l<=F, p<=P, q} mult ρ̂²_lpq / ∫∫ ρ̂², worst live channel) with
+    the projected ρ̂_lpq of eq. 13 taken from the profile: ρ̂_lpq = ∫ T_lq(θ_o') f_pq(θ_o')
+    sin θ_o' dθ_o' by the band nodes (sin θ_o' dθ_o' = 2 sin 2θ_v dθ_v), the energy by
+    :meth:`ViewProfile.energy`. Needs F <= F0 and P <= P0 of the profile.
+
+    Raises
+    ------
+    ValueError
+        (F, P) beyond the profile's orders.
+    """
+    F, P = int(F), int(P)
+    if F > profile.F0 or P > profile.P0 or F < 0 or P < 0:
+        raise ValueError(f"orders ({F}, {P}) outside the profile's (F0, P0) = ({profile.F0}, {profile.P0})")
+    fo = profile.view_legendre(P)  # (P+1, P+1, K) [p, q, node]
+    w = profile.weight * 2.0 * np.sin(2.0 * profile.theta_v)
+    T = profile.T[: F + 1, :, : P + 1, :]  # (F+1, K, P+1, 3) [l, node, q, c]
+    captured = np.zeros(3)
+    for q in range(P + 1):
+        c = np.tensordot(fo[q:, q, :] * w, T[:, :, q, :], axes=(1, 1))  # (p, l, channel), p = q..P
+        captured += (1.0 if q == 0 else 2.0) * (c * c).sum(axis=(0, 1))
+    energy = profile.energy()
+    live = energy > 1e-12 * max(float(energy.max()), 1e-300)
+    if not live.any():
+        return 0.0
+    return float((1.0 - captured[live] / energy[live]).max())
+
+
 def view_order_floor(profile: ViewProfile, tolerance: float, max_view_deg: float) -> int:
     """The smallest view order P that can meet ``tolerance``: below it, the energy at azimuthal
     orders q > P alone exceeds it in some band inside ``max_view_deg`` (worst live channel).

@@ -307,3 +307,19 @@ def test_view_fit_equals_the_direct_least_squares(spec, P):
     assert np.abs(fast.coeffs[:, P + 1 :]).max(initial=0.0) == 0.0
     np.testing.assert_allclose(_band_eps_all(profile, fast, p_list=[P]), _band_eps_all(profile, slow, p_list=[P]),
                                rtol=1e-8, atol=1e-14)
+
+
+@pytest.mark.parametrize("spec, F, P", [("microfacet:sigma=0.1", 72, 10), ("cook-torrance:alpha=0.1,dist=ggx", 60, 14),
+                                        ("lambert:albedo=0.5", 4, 5)])
+def test_projected_eps_from_the_profile_matches_the_3d_quadrature(spec, F, P):
+    """RH02's ε by the view profile's band nodes against eq. 13 on an oversampled 3-D grid."""
+    from shrmkit.analysis.brdf_coeffs import rho_lpq
+    from shrmkit.analysis.orders import eps_table
+    from shrmkit.analysis.view_bands import projected_eps
+
+    brdf = shrmkit.load_brdf(spec)
+    grid = ReparamGrid.for_orders(F, P)
+    profile = view_profile(brdf, grid, grid.n_theta_i - 1, P + 2)
+    fine = ReparamGrid.for_orders(F, P, oversample=1.5)
+    reference = eps_table(rho_lpq(reparameterize(brdf, fine), F, P))[F, P]
+    assert projected_eps(profile, F, P) == pytest.approx(reference, rel=0.01)
