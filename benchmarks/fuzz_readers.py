@@ -610,12 +610,15 @@ def _materialise(case: dict, content: bytes | str, seed_path: Path, work: Path) 
     return target, names
 
 
-def build_cases(readers: dict[str, Reader], seed: int, per_reader: int, only: set[str] | None) -> list[dict]:
+def build_cases(readers: dict[str, Reader], seed: int, per_reader: int, only: set[str] | None,
+                caps: dict[str, int] | None = None) -> list[dict]:
+    """Cases ``per_reader`` per reader (at most ``caps[reader]`` where given); case i of a reader is the
+    same for any count (its seed is (seed, reader index, i)), so a smaller count is a prefix."""
     cases = []
     for r_index, reader in enumerate(sorted(readers)):
         if (only and reader not in only) or not (readers[reader].seeds or readers[reader].text_seeds):
             continue
-        for i in range(per_reader):
+        for i in range(min(per_reader, (caps or {}).get(reader, per_reader))):
             cases.append({"reader": reader, "index": i, "seed": [seed, r_index, i]})
     return cases
 
@@ -708,15 +711,17 @@ def run_fuzz(
     memory_gib: float = 4.0,
     budget_mib: float = 1024.0,
     progress: Callable[[int, int], None] | None = None,
+    caps: dict[str, int] | None = None,
 ) -> list[dict]:
     """Run the fuzz cases; return one result dict per case (reader, index, mutation,
-    outcome, detail, seconds, peak_mib)."""
+    outcome, detail, seconds, peak_mib). ``caps``: fewer cases for the named readers (a MERL case
+    writes and reads a 35 MB file)."""
     work = Path(tempfile.mkdtemp(prefix="shrm_fuzz_"))
     try:
         (work / "seeds").mkdir()
         (work / "cases").mkdir()
         readers = _write_seeds(work / "seeds")
-        cases = build_cases(readers, seed, per_reader, readers_only)
+        cases = build_cases(readers, seed, per_reader, readers_only, caps)
         done = 0
 
         def finished(result: dict) -> None:

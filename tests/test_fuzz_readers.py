@@ -39,7 +39,10 @@ def test_harness_classifies_misbehaviour():
 def test_seeded_fuzz_subset_has_no_failures():
     harness = _harness()
     per_reader = int(os.environ.get("SHRM_FUZZ_CASES", "120"))
-    results = harness.run_fuzz(seed=20261130, per_reader=per_reader, workers=2, timeout=30.0)
+    # the two slowest readers per case (MERL writes and reads 35 MB, EXR ~90 ms) get fewer cases: each
+    # still draws every one of its <= 7 mutation kinds several times over
+    caps = {"merl": per_reader // 3, "exr": per_reader // 2}
+    results = harness.run_fuzz(seed=20261130, per_reader=per_reader, workers=2, timeout=30.0, caps=caps)
     failures = [r for r in results if r["outcome"] in harness.FAILURES or harness._seed_refused(r)]
     listing = "\n".join(
         f"{r['outcome']} {r['reader']}:{r['index']} [{r['mutation']}] {r['detail']}" for r in failures[:30]
@@ -49,4 +52,4 @@ def test_seeded_fuzz_subset_has_no_failures():
         f"--seed 20261130 --show READER:INDEX):\n{listing}\n\n{harness.outcome_table(results)}"
     )
     readers = {r["reader"] for r in results}
-    assert len(readers) >= 13 and len(results) == per_reader * len(readers)
+    assert len(readers) >= 13 and len(results) == sum(min(per_reader, caps.get(r, per_reader)) for r in readers)

@@ -68,7 +68,9 @@ def test_merl_roundtrip_lafortune_one_lobe(tmp_path):
 @pytest.mark.parametrize("noise", [False, True])
 def test_merl_roundtrip_lafortune_two_lobes(tmp_path, noise):
     brdf = merl_roundtrip(LAF2, tmp_path / "laf2.binary", noise=noise)
-    r = fit_brdf(brdf, "lafortune", lobes=2)
+    # half the default samples and two starts: the same recovery (rel. RMS 1e-9 / 0.021, measured) in a
+    # third of the time
+    r = fit_brdf(brdf, "lafortune", lobes=2, n_samples=16384, starts=2)
     assert_lafortune_close(r.params, LAF2, 0.05 if noise else 0.02)
     assert r.errors["rel_rms"] < (0.03 if noise else 0.01)
     assert r.n_dropped > 0 if noise else r.n_dropped == 0
