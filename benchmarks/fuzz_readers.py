@@ -75,6 +75,8 @@ NONFINITE_PATTERNS = (
     np.float32(np.nan).tobytes(), np.float32(np.inf).tobytes(), np.float32(-np.inf).tobytes(),
     np.float64(np.nan).tobytes(), np.float64(np.inf).tobytes(), np.float64(-1e300).tobytes(),
     np.float16(np.inf).tobytes(), np.float16(np.nan).tobytes(),
+    # finite magnitudes no measurement has (a flipped exponent): refused where read, never summed
+    np.float32(2.5e38).tobytes(), np.float32(-2.5e38).tobytes(), np.float64(1e39).tobytes(),
 )
 SPECIAL = ("fifo", "devzero", "empty", "folder")
 

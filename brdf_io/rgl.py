@@ -97,6 +97,10 @@ GRAZING_COS = 1e-6
 #: A negative RGB value larger than this fraction of the table's largest value is corruption, not an
 #: out-of-gamut colour (the RGL files of ../shared/data: at most 0.023).
 CORRUPT_NEGATIVE = 0.5
+#: Largest RGB value a measured file may hold: the spectral reflectance factor R of the format is at
+#: most a few units for real materials (the RGL files of ../shared/data: at most 4.7, paper_white); a value of
+#: 10⁶ or more is corruption (a flipped exponent), and it would overflow the sums of the analysis.
+MAX_MEASURED_RGB = 1e6
 
 
 class RGLGamutWarning(UserWarning):
@@ -505,6 +509,12 @@ class RGLBRDF(BRDF):
             raise BadInputError(where, f"field 'vndf' slice {k} (θ_i = {theta_i[k]!r}) is zero everywhere")
         self.n_negative = int(np.sum(rgb < 0))
         peak = float(rgb.max())
+        huge = rgb > MAX_MEASURED_RGB
+        if np.any(huge):
+            raise BadInputError(
+                where, f"field 'rgb' holds {int(huge.sum())} value(s) above {MAX_MEASURED_RGB:g} (largest {peak:.4g}): "
+                "no measured reflectance is that large; the file is corrupt"
+            )
         if self.n_negative and (peak <= 0.0 or -float(rgb.min()) > CORRUPT_NEGATIVE * peak):
             # an out-of-gamut channel is a small fraction of the colour beside it (≤ 0.023 of the
             # table's largest value in every RGL file of ../shared/data); −2.5e38 is corruption

@@ -615,3 +615,15 @@ def test_huge_negative_rgb_is_corruption_not_gamut(tmp_path: Path) -> None:
     assert str(path) in str(raised.value)
     with pytest.raises(BadInputError, match="corrupt"):
         read_rgl(_write(tmp_path, "negative_rgb.bsdf", rgb=-_fields()["rgb"]))
+
+
+@pytest.mark.parametrize("value", [2.5e38, 3.0e6])
+def test_huge_positive_rgb_is_corruption(tmp_path: Path, value: float) -> None:
+    """A positive RGB value no measured reflectance has (a flipped exponent): refused, naming the file
+    and the count, before any analysis sums its squares; the real files' largest value is 4.7."""
+    rgb = _fields()["rgb"].copy()
+    rgb[0, 1, 2, 0, 0] = value
+    path = _write(tmp_path, "huge_rgb.bsdf", rgb=rgb)
+    with pytest.raises(BadInputError, match=r"1 value\(s\) above 1e\+06.*corrupt") as raised:
+        read_rgl(path)
+    assert str(path) in str(raised.value)
