@@ -589,6 +589,12 @@ def _choose(on: _GridData, eps: float, hint: int | None) -> tuple[int, int, bool
 
 def _choice(on: _GridData, F: int, P: int, eps: float, capped: bool, converged: bool, notes: list[str],
             seconds: float, criterion: str, max_view_deg: float) -> OrderChoice:
+    achieved = float(on.column(P)[F])
+    if not achieved <= 1.0 + 1e-9:
+        # an energy fraction above 1 (or NaN): the truncation misses more than the BRDF holds, which only
+        # inconsistent samples make (values no reader should have let through); never a result
+        raise BadInputError(on.brdf.name, f"the order rule's error ε({F}, {P}) = {achieved:.4g} is not an energy "
+                            "fraction in [0, 1]: the BRDF's samples are inconsistent")
     return OrderChoice(
         F=F, P=P, eps=float(on.column(P)[F]), tolerance=float(eps), searched_table=on.table(), capped=capped,
         converged=converged, message="; ".join(notes), seconds=seconds, grid=on.grid,

@@ -237,3 +237,18 @@ def test_view_order_search_matches_a_linear_scan(spec):
             fresh = _GridData(brdf, grid, 500, 64, "bands", 80.0)
             fresh.__dict__["profile"] = on.profile  # the same samples; its columns computed afresh
             assert fresh.choose(tol, hint) == (F_scan, P_scan, capped), (tol, hint)
+
+
+def test_an_error_above_one_is_refused_not_reported():
+    """ε is an energy fraction: a rule's table holding ε > 1 (only inconsistent samples make one) is one
+    BadInputError naming the BRDF, never a result with ε = 1.02 and advice to raise --max-F (issue 30)."""
+    from shrmkit.analysis.orders import _choice, _GridData
+
+    brdf = shrmkit.load_brdf("phong:s=20")
+    on = _GridData(brdf, ReparamGrid.for_orders(24, 4), 500, 64, "bands", 80.0)
+    on._columns[0] = np.full(on.F0 + 1, 1.02)
+    with pytest.raises(BadInputError, match=r"ε\(3, 0\) = 1.02 is not an energy fraction") as raised:
+        _choice(on, 3, 0, 0.03, True, True, [], 0.0, "bands", 80.0)
+    assert "phong:s=20" in str(raised.value)
+    on._columns[0] = np.full(on.F0 + 1, 0.5)
+    assert _choice(on, 3, 0, 0.03, True, True, [], 0.0, "bands", 80.0).eps == 0.5
