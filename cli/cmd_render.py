@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from ..analysis.tolerance import DEFAULT_EPS, check_eps
-from ..brdf_io.atomic import check_writable
+from ..brdf_io.atomic import atomic_paths, check_writable
 from ..brdf_io.errors import BadInputError
 from ..render.api import SIZE_RANGE, SceneRender, render_scene
 from ..render.camera import Camera
@@ -162,23 +162,26 @@ def _write(args: argparse.Namespace, frames: list[Frame]) -> None:
         alpha = frame.alpha if frame.transparent else None
         return to_8bit(frame.linear, alpha, exposure=args.exposure, curve=args.tone)
 
+    # every output of one command is written together (atomic_paths): a full disk or a failing writer
+    # leaves none of them, and the error names the file
     if args.turntable:
         pngs, gif = turntable_paths(args.output, args.turntable)
-        exrs = turntable_paths(args.exr, args.turntable)[0] if args.exr else [None] * len(frames)
-        images = []
-        for frame, png_path, exr_path in zip(frames, pngs, exrs, strict=True):
-            image = png(frame)
-            images.append(image)
-            write_png(png_path, image)
-            if exr_path is not None:
-                write_exr(exr_path, frame.linear, frame.alpha)
-        write_gif(gif, images)
+        exrs = turntable_paths(args.exr, args.turntable)[0] if args.exr else []
+        images = [png(frame) for frame in frames]
+        with atomic_paths([*pngs, *exrs, gif]) as temps:
+            for image, tmp in zip(images, temps[: len(pngs)], strict=True):
+                write_png(tmp, image, atomic=False)
+            for frame, tmp in zip(frames, temps[len(pngs) : len(pngs) + len(exrs)], strict=True):
+                write_exr(tmp, frame.linear, frame.alpha, atomic=False)
+            write_gif(temps[-1], images, atomic=False)
         print(f"wrote {pngs[0]} ... {pngs[-1]} and {gif}")
     else:
-        write_png(args.output, png(frames[0]))
+        with atomic_paths([args.output, *([args.exr] if args.exr else [])]) as temps:
+            write_png(temps[0], png(frames[0]), atomic=False)
+            if args.exr:
+                write_exr(temps[1], frames[0].linear, frames[0].alpha, atomic=False)
         print(f"wrote {args.output}")
         if args.exr:
-            write_exr(args.exr, frames[0].linear, frames[0].alpha)
             print(f"wrote {args.exr} (linear radiance, channels R G B A)")
 
 

@@ -22,6 +22,7 @@ IEC 61966-2-1:1999, sRGB transfer function.
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -103,8 +104,10 @@ def to_8bit(
     return np.concatenate([rgb, a[..., None]], axis=-1)
 
 
-def write_exr(path: str | Path, radiance: np.ndarray, alpha: np.ndarray | None = None) -> None:
-    """Write linear float32 radiance (H, W, 3) [and coverage A] to OpenEXR, atomically.
+def write_exr(path: str | Path, radiance: np.ndarray, alpha: np.ndarray | None = None, *,
+              atomic: bool = True) -> None:
+    """Write linear float32 radiance (H, W, 3) [and coverage A] to OpenEXR, atomically (``atomic=False``:
+    straight to ``path``, for a caller's :func:`~shrmkit.brdf_io.atomic.atomic_paths` group).
 
     Channels R, G, B (and A), 32-bit float, ZIP compression (lossless).
     """
@@ -115,23 +118,27 @@ def write_exr(path: str | Path, radiance: np.ndarray, alpha: np.ndarray | None =
     if alpha is not None:
         channels["A"] = np.ascontiguousarray(np.asarray(alpha, dtype=np.float32))
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
-    with atomic_path(path) as tmp:
-        with OpenEXR.File(header, channels) as exr:
-            exr.write(str(tmp))
+    with _target(path, atomic) as tmp, OpenEXR.File(header, channels) as exr:
+        exr.write(str(tmp))
 
 
-def write_png(path: str | Path, image8: np.ndarray) -> None:
-    """Write a uint8 RGB or RGBA image to PNG, atomically."""
-    with atomic_path(path) as tmp:
+def write_png(path: str | Path, image8: np.ndarray, *, atomic: bool = True) -> None:
+    """Write a uint8 RGB or RGBA image to PNG, atomically (``atomic=False``: as :func:`write_exr`)."""
+    with _target(path, atomic) as tmp:
         Image.fromarray(np.asarray(image8, dtype=np.uint8)).save(tmp, format="PNG")
 
 
-def write_gif(path: str | Path, frames: Sequence[np.ndarray], *, fps: float = 20.0) -> None:
-    """Write uint8 RGB frames as a looping animated GIF (Pillow), atomically."""
+def _target(path: str | Path, atomic: bool) -> contextlib.AbstractContextManager[Path]:
+    return atomic_path(path) if atomic else contextlib.nullcontext(Path(path))
+
+
+def write_gif(path: str | Path, frames: Sequence[np.ndarray], *, fps: float = 20.0, atomic: bool = True) -> None:
+    """Write uint8 RGB frames as a looping animated GIF (Pillow), atomically (``atomic=False``: as
+    :func:`write_exr`)."""
     if not frames:
         raise ValueError("no frames")
     images = [Image.fromarray(np.asarray(f, dtype=np.uint8)[..., :3]) for f in frames]
-    with atomic_path(path) as tmp:
+    with _target(path, atomic) as tmp:
         images[0].save(
             tmp,
             format="GIF",

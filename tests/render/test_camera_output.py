@@ -14,6 +14,7 @@ import OpenEXR
 import pytest
 from PIL import Image
 
+from shrmkit.brdf_io.errors import BadInputError
 from shrmkit.render.camera import Camera, orbit_camera
 from shrmkit.render.output import (
     composite,
@@ -99,14 +100,16 @@ def test_exr_holds_float32_exactly(tmp_path: Path) -> None:
 
 
 def test_writers_are_atomic(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    """A failing write leaves neither the target nor a temporary file behind."""
+    """A failing write leaves neither the target nor a temporary file behind, and is one error naming
+    the target (the CLI's one line, exit 2)."""
 
     def boom(*args, **kwargs):
         raise OSError("disk full")
 
     monkeypatch.setattr(Image.Image, "save", boom)
-    with pytest.raises(OSError, match="disk full"):
+    with pytest.raises(BadInputError, match="cannot write .disk full.") as raised:
         write_png(tmp_path / "x.png", np.zeros((2, 2, 3), np.uint8))
+    assert str(tmp_path / "x.png") in str(raised.value)
     assert list(tmp_path.iterdir()) == []
 
 
