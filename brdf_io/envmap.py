@@ -567,7 +567,7 @@ def _load_file(
     else:
         if layer is not None or part is not None:
             raise BadInputError(path, "layer and part apply to OpenEXR files only")
-        image = read_image(path)
+        image = read_image(path, check_shape=lambda h, w: _plain_shape(path, h, w, probe))  # before decoding
     h, w = image.shape[:2]
     is_probe = _plain_shape(path, h, w, probe)
     image = _check_radiance(path, image)

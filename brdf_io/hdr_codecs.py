@@ -47,16 +47,21 @@ __all__ = [
 ]
 
 
-_READERS: dict[str, Callable[[Path], np.ndarray]] = {".exr": read_exr, ".hdr": read_hdr, ".pfm": read_pfm}
+_READERS: dict[str, Callable[..., np.ndarray]] = {".exr": read_exr, ".hdr": read_hdr, ".pfm": read_pfm}
 IMAGE_SUFFIXES = tuple(_READERS)
 
 
-def read_image(path: str | Path) -> np.ndarray:
-    """Read an HDR image by extension (``.exr``, ``.hdr``, ``.pfm``) as ``(H, W, 3)`` float32."""
+def read_image(path: str | Path, check_shape: Callable[[int, int], None] | None = None) -> np.ndarray:
+    """Read an HDR image by extension (``.exr``, ``.hdr``, ``.pfm``) as ``(H, W, 3)`` float32;
+    ``check_shape(height, width)``, when given, runs on the header's size before any pixel is
+    decoded (``.hdr``, ``.pfm``; an EXR's windows are checked by
+    :func:`~shrmkit.brdf_io.exr.read_exr_image`'s ``check_windows``)."""
     path = Path(path)
     reader = _READERS.get(path.suffix.lower())
     if reader is None:
         raise BadInputError(path, f"unknown HDR image type {path.suffix!r}; known: {', '.join(IMAGE_SUFFIXES)}")
+    if check_shape is not None and reader is not read_exr:
+        return reader(path, check_shape)
     return reader(path)
 
 

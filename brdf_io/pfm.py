@@ -7,6 +7,7 @@ Reference: P. Debevec, "PFM Portable Float Map", https://www.pauldebevec.com/Res
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -25,7 +26,7 @@ _SIZE_RE = re.compile(rb"\d{1,30}")
 _SCALE_RE = re.compile(rb"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 
 
-def read_pfm(path: str | Path) -> np.ndarray:
+def read_pfm(path: str | Path, check_shape: Callable[[int, int], None] | None = None) -> np.ndarray:
     r"""Read a Portable FloatMap (``PF`` colour or ``Pf`` grey).
 
     The header is ``PF``/``Pf``, width, height and a scale, separated by whitespace and
@@ -90,6 +91,8 @@ def read_pfm(path: str | Path) -> np.ndarray:
         raise BadInputError(path, f"bad PFM header values {shown!r} (need integer width and height, a number scale)")
     width, height, scale = int(width_text), int(height_text), float(scale_text)
     check_pixels(path, height, width)
+    if check_shape is not None:  # ``check_shape(height, width)`` before the pixels are read (read_hdr's)
+        check_shape(height, width)
     if scale == 0 or not np.isfinite(scale):
         raise BadInputError(path, f"bad PFM scale {scale_text[:32].decode()!r} (must be a non-zero finite number)")
     pos = match.end()

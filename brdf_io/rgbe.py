@@ -25,6 +25,7 @@ from __future__ import annotations
 import array
 import math
 import re
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -499,7 +500,7 @@ def _smallest_encoding(length: int) -> int:
 
 
 # ------------------------------------------------------------------------------------------- reading
-def read_hdr(path: str | Path) -> np.ndarray:
+def read_hdr(path: str | Path, check_shape: Callable[[int, int], None] | None = None) -> np.ndarray:
     """Read a Radiance picture (RGBE or XYZE; new-style run-length, pre-1991 run-length or flat).
 
     Follows the Radiance library (``header.c``, ``resolu.c``, ``color.c``):
@@ -525,6 +526,9 @@ def read_hdr(path: str | Path) -> np.ndarray:
     ----------
     path
         A regular file (FIFOs and devices are refused without opening them).
+    check_shape
+        Optional ``check_shape(height, width)`` called on the resolution line, before a scanline is
+        decoded (an environment map's 2:1 rule: a 17 MB run-length file may declare 2²⁸ pixels).
 
     Returns
     -------
@@ -558,6 +562,8 @@ def read_hdr(path: str | Path) -> np.ndarray:
     data = read_bytes(path, "image")
     head = _parse_header(path, data)
     check_pixels(path, head.height, head.width)
+    if check_shape is not None:
+        check_shape(head.height, head.width)
     scanlines, length = head.scanlines, head.scanline_length
     available, needed = len(data) - head.pos, scanlines * _smallest_encoding(length)
     if available < needed:

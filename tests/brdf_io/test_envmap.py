@@ -198,3 +198,32 @@ def test_bad_lat_long_files(tmp_path):
         load_env("builtin:sky", up="x")
     with pytest.raises(BadInputError, match="do not apply"):
         load_env("builtin:sky", flip=True)
+
+
+def _zero_rle_hdr(path, height: int, width: int) -> None:
+    """A new-style run-length Radiance file of zeros: ~2 bytes per 127 pixels and channel."""
+    line = bytes([2, 2, width >> 8, width & 255])
+    chan, left = b"", width
+    while left:
+        n = min(127, left)
+        chan, left = chan + bytes([128 + n, 0]), left - n
+    header = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y %d +X %d\n" % (height, width)
+    path.write_bytes(header + (line + chan * 4) * height)
+
+
+@pytest.mark.parametrize("suffix", [".hdr", ".pfm"])
+def test_map_shape_is_checked_from_the_header_before_decoding(tmp_path, monkeypatch, suffix):
+    """A small file declaring a large non-2:1 image (issue 30: a 17 MB RLE .hdr of 16384² pixels took
+    15 s and 4.3 GB before the 2:1 rule refused it): refused on the header, no scanline decoded."""
+    from shrmkit.brdf_io import pfm, rgbe
+
+    path = tmp_path / f"square{suffix}"
+    if suffix == ".hdr":
+        _zero_rle_hdr(path, 1024, 1024)
+        monkeypatch.setattr(rgbe, "_Decoder", None)  # decoding would raise TypeError
+    else:
+        path.write_bytes(b"PF\n1024 1024\n-1.0\n" + bytes(1024 * 1024 * 12))
+        monkeypatch.setattr(pfm.np, "frombuffer", None)
+    with pytest.raises(BadInputError, match="must be 2:1") as raised:
+        load_env(path)
+    assert str(path) in str(raised.value)

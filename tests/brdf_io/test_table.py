@@ -269,8 +269,9 @@ def test_failed_write_keeps_old_file(tmp_path: Path, monkeypatch: pytest.MonkeyP
 
     monkeypatch.setattr(np, "savez_compressed", failing)
     theta = np.array([0.0, 1.0])
-    with pytest.raises(OSError, match="disk full"):
+    with pytest.raises(BadInputError, match="cannot write .disk full.; nothing was written") as raised:
         write_table(path, np.ones((2, 2, 2)), theta_i=theta, theta_o=theta, phi_d=theta)
+    assert str(path) in str(raised.value)
     assert path.read_bytes() == b"old"
     assert [p.name for p in tmp_path.iterdir()] == ["keep.npz"]
 
