@@ -3,13 +3,19 @@
 Exit status: 0 when every report was made, 1 when some BRDFs failed (each failure is in
 ``summary.csv`` / ``index.html`` with its error, and has a ``report.json`` with
 ``status: failed``), 2 for bad usage (unknown options, bad values, unreachable Dask
-scheduler).
+scheduler), 128 + the signal when stopped by one: 130 for SIGINT (Ctrl-C), 143 for SIGTERM
+(the worker processes are stopped, the summary lists the reports written so far, and one
+line says how many).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import signal
+import threading
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
@@ -27,7 +33,7 @@ from .common import (
     stdout,
     tolerance,
 )
-from .report.batch import BRDF_SUFFIXES, run_batch
+from .report.batch import BRDF_SUFFIXES, BatchInterrupted, run_batch
 from .report.options import load_report_env, profile
 
 HELP = "accuracy reports (orders, scene errors, fits, speed vs error, preview) for BRDFs, with a summary"
@@ -111,7 +117,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_lights_option(p)
     add_order_rule(p)
     add_env_orientation(p)
-    p.epilog = "exit status: 0 all reports made, 1 some BRDFs failed (see summary), 2 bad usage"
+    p.epilog = ("exit status: 0 all reports made, 1 some BRDFs failed (see summary), 2 bad usage, 130/143 stopped by "
+                "SIGINT/SIGTERM (the reports written so far are kept and listed; rerun to make the rest). A worker "
+                "process that dies is replaced and its BRDF retried once.")
 
 
 def options_from_args(args: argparse.Namespace):
@@ -147,6 +155,9 @@ def run_with_progress(sources: list[str], out: str, options, *, workers: int = 1
                 bar.update(task, stage=f"{name}: {detail}")
                 if detail != "ok":
                     bar.console.print(f"failed: {name}", markup=False, soft_wrap=True)
+            elif event == "retry":
+                bar.console.print(f"worker died on {name} ({detail}); retried", markup=False, soft_wrap=True,
+                                  highlight=False)
 
         return run_batch(sources, out, options, workers=workers, scheduler=scheduler, progress=progress)
 
@@ -163,8 +174,15 @@ def run(args: argparse.Namespace) -> int:
     # a whole multi-BRDF file (the 61 CURET samples, a CSV's wavelengths) is one report per member
     sources = [member for source in args.brdfs for member in brdf_sources(source)]
     t0 = time.perf_counter()
-    result = run_with_progress(sources, args.out, options, workers=args.workers,
-                               scheduler=args.dask_scheduler, show=not args.no_progress)
+    try:
+        with _signals_stop_the_batch():
+            result = run_with_progress(sources, args.out, options, workers=args.workers,
+                                       scheduler=args.dask_scheduler, show=not args.no_progress)
+    except BatchInterrupted as stop:
+        stderr.print(f"shrm report: interrupted ({stop.signal_name}): {stop.written} of {stop.total} reports written "
+                     f"to {stop.out_dir or args.out}; rerun to make the rest", soft_wrap=True, markup=False,
+                     highlight=False)
+        return stop.exit_status
     for row in result.rows:
         where = result.out_dir / row["name"] / "report.html"
         if row["status"] == "ok":
@@ -175,6 +193,30 @@ def run(args: argparse.Namespace) -> int:
     say(f"{len(result.rows) - result.n_failed} of {len(result.rows)} reports made in "
                  f"{time.perf_counter() - t0:.1f} s ({result.engine})")
     return 0 if result.ok else 1
+
+
+@contextlib.contextmanager
+def _signals_stop_the_batch() -> Iterator[None]:
+    """While the batch runs, SIGINT and SIGTERM raise :class:`BatchInterrupted` (the batch then
+    stops its workers and keeps what it wrote); a second signal is ignored while it does so.
+    The handlers before are restored afterwards. Only in the main thread (where Python runs
+    signal handlers)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    signals = (signal.SIGINT, signal.SIGTERM)
+
+    def stop(signum: int, frame: object) -> None:
+        for s in signals:
+            signal.signal(s, signal.SIG_IGN)
+        raise BatchInterrupted(signum)
+
+    before = {s: signal.signal(s, stop) for s in signals}
+    try:
+        yield
+    finally:
+        for s, handler in before.items():
+            signal.signal(s, signal.SIG_DFL if handler is None else handler)
 
 
 def _check_brdf_files(sources: list[str]) -> None:

@@ -10,8 +10,9 @@ Three engines run the same task function:
 
 - serial (``workers=1``): in this process, with per-stage progress, every core for
   ducc0 and the BLAS (as the library functions use them);
-- ``workers=N``: :class:`concurrent.futures.ProcessPoolExecutor` with the ``spawn``
-  start method (no fork of a process holding threads or an OpenGL context);
+- ``workers=N``: N worker processes of our own (:func:`_processes`), started with the
+  ``spawn`` method (no fork of a process holding threads or an OpenGL context), one task
+  at a time each, over a pipe;
 - ``scheduler=ADDRESS``: a Dask ``distributed`` cluster (``Client.submit``); the
   workers need shrmkit installed and the BRDF files readable at the same paths. Results
   come back to this process, which writes them, so workers need no shared output folder.
@@ -32,12 +33,32 @@ Folder names are the file stem or the sanitized spec (:func:`report_names`), at 
 spec is added, so a 245-character file name still gives a folder (and its temporary
 siblings) the file system accepts, and two long names that share their first characters
 stay apart. A folder that cannot be written fails that BRDF alone; if the engine itself
-breaks (a worker process dies), the BRDFs without a result are marked failed. In every case
-the summary is written.
+breaks (the Dask cluster goes away), the BRDFs without a result are marked failed. In every
+case the summary is written.
+
+Lifetime of worker processes (issues 28 and 30):
+
+- A worker process that dies (killed, out of memory) loses only its task, which is retried
+  once on a new worker process (``progress("retry", …)``, a note in the summary); a task
+  whose second worker dies too is a failed report (:data:`TASK_TRIES`).
+- SIGINT or SIGTERM (``shrm report`` turns both into :class:`BatchInterrupted`; a library
+  caller's Ctrl-C is a ``KeyboardInterrupt``) stops the batch: the workers are terminated and
+  joined, the summary lists the reports written so far, and :class:`BatchInterrupted` tells
+  how many were written. Workers ignore SIGINT (Ctrl-C reaches the whole process group; the
+  driver stops them), and exit by themselves when the driver is gone, even killed with
+  SIGKILL (``PR_SET_PDEATHSIG`` on Linux, and a thread that watches ``os.getppid()``): no
+  worker is left computing, or holding the caller's stdout/stderr pipes open.
+- The temporary files and folders of a run killed while writing (``.NAME.XXXXXXXX.tmp``,
+  ``.NAME.XXXXXXXX.old``, ``.summary.csv.XXXXXXXX.csv``, ``.index.html.XXXXXXXX.html``) are
+  removed by the next run into the same folder, unless another run into that folder is
+  alive: each run holds a lock on its own ``.shrm-report-run.XXXXXXXX.lock`` there, removed
+  when it ends (:func:`_remove_stale_temporaries`).
 """
 
 from __future__ import annotations
 
+import contextlib
+import ctypes
 import dataclasses
 import fcntl
 import hashlib
@@ -46,12 +67,17 @@ import math
 import multiprocessing
 import os
 import re
+import shutil
+import signal
 import socket
+import sys
+import tempfile
+import threading
 import time
-from collections import defaultdict
-from collections.abc import Callable, Iterable, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from collections import defaultdict, deque
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
+from multiprocessing.connection import wait as wait_ready
 from pathlib import Path
 from typing import Any
 
@@ -65,10 +91,11 @@ from .options import ReportOptions
 from .threads import configure_worker, threads_per_worker, usable_cores, worker_initializer
 from .writer import report_files, summary_row, write_folder, write_summary
 
-__all__ = ["BRDF_SUFFIXES", "MAX_NAME_CHARS", "ReportTask", "ReportOutcome", "BatchResult", "report_names", "run_task",
-           "run_batch", "estimate_cost", "largest_first"]
+__all__ = ["BRDF_SUFFIXES", "MAX_NAME_CHARS", "TASK_TRIES", "ReportTask", "ReportOutcome", "BatchResult",
+           "BatchInterrupted", "report_names", "run_task", "run_batch", "estimate_cost", "largest_first"]
 
-#: ``progress(event, name, detail)``: event ``"start"``, ``"stage"`` (serial only) or ``"done"``.
+#: ``progress(event, name, detail)``: event ``"start"``, ``"stage"`` (serial only), ``"retry"``
+#: (worker processes: the worker of this BRDF died, ``detail`` says how; it is queued again) or ``"done"``.
 BatchProgress = Callable[[str, str, str], None]
 
 #: File suffixes of the BRDF files `shrm report` takes (MERL, our table, Cornell, a fitted model).
@@ -115,6 +142,29 @@ class BatchResult:
     @property
     def ok(self) -> bool:
         return self.n_failed == 0
+
+
+class BatchInterrupted(KeyboardInterrupt):
+    """A batch stopped by a signal: ``signum`` (SIGINT, SIGTERM), and, as raised by
+    :func:`run_batch`, the reports ``written`` (their folders, and the summary listing them)
+    out of ``total``. ``shrm report`` raises it from its SIGINT and SIGTERM handlers and exits
+    with :attr:`exit_status` (128 + the signal: 130, 143)."""
+
+    def __init__(self, signum: int = signal.SIGINT, written: int = 0, total: int = 0,
+                 out_dir: Path | None = None) -> None:
+        super().__init__(signum)
+        self.signum, self.written, self.total, self.out_dir = int(signum), written, total, out_dir
+
+    @property
+    def signal_name(self) -> str:
+        try:
+            return signal.Signals(self.signum).name
+        except ValueError:
+            return f"signal {self.signum}"
+
+    @property
+    def exit_status(self) -> int:
+        return 128 + self.signum
 
 
 def _is_file_name(path: Path) -> bool:
@@ -165,6 +215,12 @@ def run_task(task: ReportTask, progress: Callable[[str], None] | None = None) ->
                             time.perf_counter() - t0)
         files = report_files(doc, [])
     return ReportOutcome(task.name, doc["status"] == "ok", summary_row(doc), files)
+
+
+def _failed_outcome(task: ReportTask, error: str) -> ReportOutcome:
+    """A failed report of ``task`` made by the driver (its worker processes died)."""
+    doc = failed_report(task.source, task.name, task.options, error)
+    return ReportOutcome(task.name, False, summary_row(doc), report_files(doc, []))
 
 
 def _serial(tasks: Sequence[ReportTask], progress: BatchProgress | None) -> Iterable[ReportOutcome]:
@@ -239,18 +295,204 @@ def largest_first(tasks: Sequence[ReportTask]) -> list[ReportTask]:
 # ------------------------------------------------------------------------------ worker processes
 
 
-def _processes(tasks: Sequence[ReportTask], workers: int, progress: BatchProgress | None) -> Iterable[ReportOutcome]:
+#: Worker processes a task may use up: a task whose worker dies is retried once on a new
+#: worker; when that one dies too, the task is a failed report.
+TASK_TRIES = 2
+
+#: Seconds between two checks of a worker's thread that its driver is still there.
+PARENT_POLL_SECONDS = 0.5
+
+#: Seconds a stopped worker gets to exit after SIGTERM, then SIGKILL.
+STOP_SECONDS = 5.0
+
+_PR_SET_NAME, _PR_SET_PDEATHSIG = 15, 1  # prctl options (linux/prctl.h)
+
+#: Name of a worker's thread that watches its driver (Linux: in ``/proc/PID/task/*/comm``, ``top -H``).
+WATCH_THREAD_NAME = "shrm-ppid-watch"
+
+
+def _exit_with_parent(parent_pid: int) -> None:
+    """End this worker process when its driver ``parent_pid`` is gone, even killed with SIGKILL:
+    the kernel's parent-death signal on Linux (SIGKILL), and on every system a daemon thread
+    (:data:`WATCH_THREAD_NAME`) that polls ``os.getppid()`` (a process whose parent died is
+    adopted by another)."""
+    prctl = None
+    if sys.platform.startswith("linux"):
+        try:
+            prctl = ctypes.CDLL(None, use_errno=True).prctl
+            prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
+        except (OSError, AttributeError):  # pragma: no cover - a libc without prctl
+            prctl = None
+    if os.getppid() != parent_pid:  # the driver died before the watch was set
+        os._exit(1)
+
+    def watch() -> None:
+        if prctl is not None:
+            prctl(_PR_SET_NAME, WATCH_THREAD_NAME.encode()[:15], 0, 0, 0)
+        while os.getppid() == parent_pid:
+            time.sleep(PARENT_POLL_SECONDS)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="shrm-parent-watch", daemon=True).start()
+
+
+def _worker_main(conn: Any, threads: int, preview_mode: str | None, parent_pid: int) -> None:
+    """A worker process: take tasks from ``conn`` one at a time, send back each outcome, stop
+    at ``None`` or when the driver's end of the pipe is closed."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C: the driver stops its workers
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    _exit_with_parent(parent_pid)
+    try:
+        worker_initializer(threads, preview_mode)
+        start_error = None
+    except Exception as err:  # every task then fails with this error, instead of a worker dying per task
+        start_error = f"the worker process could not start: {type(err).__name__}: {err}"
+    while True:
+        try:
+            task = conn.recv()
+        except (EOFError, OSError):
+            return
+        if task is None:
+            return
+        try:
+            outcome = _failed_outcome(task, start_error) if start_error else run_task(task)
+        except Exception as err:  # run_task reports a bad BRDF itself; this is anything else
+            outcome = _failed_outcome(task, f"{type(err).__name__}: {err}")
+        try:
+            conn.send(outcome)
+        except (OSError, ValueError):  # the driver is gone
+            return
+
+
+@contextlib.contextmanager
+def _sigint_blocked() -> Iterator[None]:
+    """SIGINT held back while a worker process starts: the worker inherits the mask, so that a
+    Ctrl-C (sent to the whole process group) during its start, while it imports, leaves no
+    traceback; the worker then ignores SIGINT. A SIGINT to this process meanwhile is delivered
+    afterwards. (Not SIGTERM: a worker must stay stoppable by SIGTERM all along.)"""
+    if not hasattr(signal, "pthread_sigmask"):  # pragma: no cover - not POSIX
+        yield
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
+@dataclass
+class _Worker:
+    process: Any
+    conn: Any
+    task: ReportTask | None = None
+
+
+def _death(process: Any) -> str:
+    """How a worker process ended: ``killed by SIGKILL``, ``exit status 1``."""
+    process.join(STOP_SECONDS)
+    code = process.exitcode
+    if code is None:  # its pipe closed, yet it runs on: ended here
+        process.kill()
+        process.join(STOP_SECONDS)
+        return "closed its pipe"
+    if code < 0:
+        try:
+            return f"killed by {signal.Signals(-code).name}"
+        except ValueError:
+            return f"killed by signal {-code}"
+    return f"exit status {code}"
+
+
+def _stop(workers: Iterable[_Worker], kill: bool) -> None:
+    """Join every worker process (``kill``: after SIGTERM; SIGKILL past :data:`STOP_SECONDS`)
+    and close its pipe."""
+    workers = list(workers)
+    for w in [w for w in workers if w.process.pid is None]:  # not started: nothing to stop (a process
+        w.conn.close()  # interrupted within its start exits by itself, its driver gone: _exit_with_parent)
+    workers = [w for w in workers if w.process.pid is not None]
+    for w in workers:
+        if kill and w.process.is_alive():
+            w.process.terminate()
+    deadline = time.monotonic() + STOP_SECONDS
+    for w in workers:
+        w.process.join(max(0.0, deadline - time.monotonic()))
+        if w.process.is_alive():
+            w.process.kill()
+            w.process.join(STOP_SECONDS)
+        w.conn.close()
+
+
+def _processes(tasks: Sequence[ReportTask], workers: int, progress: BatchProgress | None,
+               retried: list[str] | None = None) -> Iterable[ReportOutcome]:
+    """The tasks in ``workers`` spawned processes, largest first, one task per worker at a
+    time; outcomes as they come. A worker that dies is replaced by a new one, and its task
+    queued again (:data:`TASK_TRIES`; ``retried`` collects a note per retry). Leaving the
+    generator early (an exception, ``close()``) terminates the workers."""
+    context = multiprocessing.get_context("spawn")
     threads = threads_per_worker(workers)
     preview_mode = tasks[0].preview_mode if tasks else None
-    with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
-                             initializer=worker_initializer, initargs=(threads, preview_mode)) as pool:
-        futures = []
-        for task in largest_first(tasks):
-            futures.append(pool.submit(run_task, dataclasses.replace(task, nthreads=threads)))
-            if progress is not None:
-                progress("start", task.name, "queued")
-        for future in as_completed(futures):
-            yield future.result()
+    pending = deque(dataclasses.replace(task, nthreads=threads) for task in largest_first(tasks))
+    if progress is not None:
+        for task in pending:
+            progress("start", task.name, "queued")
+    tries: dict[str, int] = defaultdict(int)
+    running: list[_Worker] = []
+    stopping: list[_Worker] = []  # sent None: exiting by themselves
+    finished = False
+
+    def give(worker: _Worker, task: ReportTask) -> None:
+        worker.task = task
+        tries[task.name] += 1
+        try:
+            worker.conn.send(task)
+        except OSError:  # the worker is dead: found by the wait below, and the task retried
+            pass
+
+    try:
+        while pending or running:
+            while pending and len(running) < workers:
+                parent_conn, child_conn = context.Pipe()
+                process = context.Process(target=_worker_main, name="shrm-report-worker", daemon=True,
+                                          args=(child_conn, threads, preview_mode, os.getpid()))
+                worker = _Worker(process, parent_conn)
+                running.append(worker)  # before its start: a SIGTERM during the start still stops it
+                with _sigint_blocked():
+                    process.start()
+                child_conn.close()
+                give(worker, pending.popleft())
+            ready = set(wait_ready([w.conn for w in running] + [w.process.sentinel for w in running]))
+            for worker in [w for w in running if w.conn in ready or w.process.sentinel in ready]:
+                try:
+                    outcome = worker.conn.recv() if worker.conn.poll() else None
+                except (EOFError, OSError):  # the pipe closed: the worker died
+                    outcome = None
+                task, worker.task = worker.task, None
+                if outcome is not None:
+                    if pending:
+                        give(worker, pending.popleft())
+                    else:
+                        running.remove(worker)
+                        stopping.append(worker)
+                        with contextlib.suppress(OSError):
+                            worker.conn.send(None)
+                    yield outcome
+                    continue
+                running.remove(worker)  # the worker died (its pipe closed without an outcome)
+                how = _death(worker.process)
+                worker.conn.close()
+                if task is None:
+                    continue
+                if tries[task.name] < TASK_TRIES:
+                    pending.appendleft(task)
+                    if retried is not None:
+                        retried.append(f"the worker process of {task.name} died ({how}); retried")
+                    if progress is not None:
+                        progress("retry", task.name, how)
+                else:
+                    yield _failed_outcome(task, f"its worker process died {tries[task.name]} times (last: {how})")
+        finished = True
+    finally:
+        _stop(running + stopping, kill=not finished)
 
 
 # ------------------------------------------------------------------------------------- Dask
@@ -352,57 +594,180 @@ def run_batch(
     mode, note = resolve_preview_mode(options.preview)
     names = report_names([str(s) for s in sources])
     tasks = [ReportTask(str(s), n, options, mode) for s, n in zip(sources, names, strict=True)]
-    if scheduler:
-        outcomes, engine = _dask(tasks, scheduler, progress), f"dask ({scheduler})"
-    elif workers > 1 and len(tasks) > 1:
-        n = min(workers, len(tasks))
-        engine = f"{workers} processes, {threads_per_worker(n)} thread(s) each"
-        outcomes = _processes(tasks, n, progress)
-    else:
-        outcomes, engine = _serial(tasks, progress), "serial"
     rows: dict[str, dict[str, Any]] = {}
-    broken = None
+    written, retried = 0, []
+    outcomes: Iterable[ReportOutcome] = ()
+    lock = _lock_run(out)
     try:
-        for outcome in outcomes:
-            row, ok = outcome.row, outcome.ok
-            try:
-                write_folder(out, outcome.name, outcome.files)
-            except OSError as err:  # this folder alone: the batch goes on
-                ok = False
-                row = _failed_row(outcome.name, row.get("source", ""), row.get("total_seconds"),
-                                  f"cannot write the report folder {out / outcome.name}: {err.strerror or err}")
-            rows[outcome.name] = row
-            if progress is not None:
-                progress("done", outcome.name, "ok" if ok else "failed")
-    except Exception as err:  # the engine broke (a worker died): the rest fail, the summary is written
-        if isinstance(err, BadInputError) and not rows:
-            raise  # bad usage (an unreachable Dask scheduler): exit 2, nothing to summarize
-        reason = str(err) if isinstance(err, BadInputError) else f"{type(err).__name__}: {err}"
-        broken = f"the {engine} engine stopped: {reason}"
-    for task in tasks:
-        if task.name not in rows:
-            rows[task.name] = _failed_row(task.name, task.source, None, f"no result: {broken}")
-            if progress is not None:
-                progress("done", task.name, "failed")
-    ordered = [rows[n] for n in names]
-    notes = [f"{len(ordered)} BRDFs, engine: {engine}, profile {options.profile}, eps {options.eps:g}."]
-    if note:
-        notes.append(note)
-    if broken:
-        notes.append(f"Incomplete: {broken}.")
-    _write_index(out, ordered, notes)
-    n_failed = sum(1 for r in ordered if r["status"] != "ok")
-    return BatchResult(out, ordered, n_failed, time.perf_counter() - t0, engine)
+        _remove_stale_temporaries(out, lock[1] if lock else None)
+        if scheduler:
+            outcomes, engine = _dask(tasks, scheduler, progress), f"dask ({scheduler})"
+        elif workers > 1 and len(tasks) > 1:
+            n = min(workers, len(tasks))
+            engine = f"{workers} processes, {threads_per_worker(n)} thread(s) each"
+            outcomes = _processes(tasks, n, progress, retried)
+        else:
+            outcomes, engine = _serial(tasks, progress), "serial"
+        broken = None
+        try:
+            for outcome in outcomes:
+                row, ok = outcome.row, outcome.ok
+                try:
+                    write_folder(out, outcome.name, outcome.files)
+                    written += 1
+                except OSError as err:  # this folder alone: the batch goes on
+                    ok = False
+                    row = _failed_row(outcome.name, row.get("source", ""), row.get("total_seconds"),
+                                      f"cannot write the report folder {out / outcome.name}: {err.strerror or err}")
+                rows[outcome.name] = row
+                if progress is not None:
+                    progress("done", outcome.name, "ok" if ok else "failed")
+        except Exception as err:  # the engine broke (the Dask cluster went away): the rest fail, the summary is written
+            if isinstance(err, BadInputError) and not rows:
+                raise  # bad usage (an unreachable Dask scheduler): exit 2, nothing to summarize
+            reason = str(err) if isinstance(err, BadInputError) else f"{type(err).__name__}: {err}"
+            broken = f"the {engine} engine stopped: {reason}"
+        finally:
+            _close(outcomes)  # the engine's workers stop (an exception here, or a generator left early)
+        for task in tasks:
+            if task.name not in rows:
+                rows[task.name] = _failed_row(task.name, task.source, None, f"no result: {broken}")
+                if progress is not None:
+                    progress("done", task.name, "failed")
+        ordered = [rows[n] for n in names]
+        notes = [f"{len(ordered)} BRDFs, engine: {engine}, profile {options.profile}, eps {options.eps:g}."]
+        if note:
+            notes.append(note)
+        notes.extend(f"{r[0].upper()}{r[1:]}." for r in retried)
+        if broken:
+            notes.append(f"Incomplete: {broken}.")
+        _write_index(out, ordered, notes)
+        n_failed = sum(1 for r in ordered if r["status"] != "ok")
+        return BatchResult(out, ordered, n_failed, time.perf_counter() - t0, engine)
+    except KeyboardInterrupt as stop:  # SIGINT, or SIGTERM turned into BatchInterrupted by `shrm report`
+        _close(outcomes)
+        interrupted = BatchInterrupted(getattr(stop, "signum", signal.SIGINT), written, len(tasks), out)
+        done = [rows[n] for n in names if n in rows]
+        notes = [f"Interrupted ({interrupted.signal_name}) after {written} of {len(tasks)} reports: "
+                 "this run's reports so far, then the other report folders already here."]
+        with contextlib.suppress(Exception):  # best effort, never waiting on a lock held by another run
+            _write_index(out, done, notes, wait=False)
+        raise interrupted from None
+    finally:
+        _unlock_run(lock)
 
 
-def _write_index(out: Path, rows: list[dict[str, Any]], notes: list[str]) -> None:
+def _close(outcomes: Iterable[ReportOutcome]) -> None:
+    """Close an engine's generator: its ``finally`` stops its worker processes or client."""
+    close = getattr(outcomes, "close", None)
+    if close is not None:
+        close()
+
+
+# ------------------------------------------------------------------------ the output folder
+
+#: A run's lock file in its output folder (its own, held for the run, removed at the end).
+_RUN_LOCK_PREFIX, _RUN_LOCK_SUFFIX = ".shrm-report-run.", ".lock"
+#: The random part of a temporary name: ``tempfile``'s 8 characters of ``[a-z0-9_]``, or
+#: hexadecimal digits (``secrets.token_hex``) of up to 128 bits.
+_RANDOM = r"[a-z0-9_]{8,32}"
+#: Temporary folders of :func:`~.writer.write_folder` (``.NAME.XXXXXXXX.tmp``, and ``.old``
+#: holding the report it replaces), temporary files of the summary (``atomic_path``), and
+#: the lock files of runs: report names never start with ``.`` (:func:`report_names`).
+_TEMP_FOLDER = re.compile(rf"\..+\.{_RANDOM}\.(tmp|old)")
+_TEMP_FILE = re.compile(rf"\.(summary\.csv\.{_RANDOM}\.csv|index\.html\.{_RANDOM}\.html)")
+_RUN_LOCK = re.compile(rf"{re.escape(_RUN_LOCK_PREFIX)}{_RANDOM}{re.escape(_RUN_LOCK_SUFFIX)}")
+
+
+def _lock_run(out: Path) -> tuple[int, Path] | None:
+    """This run's lock file in ``out``, created and locked (``flock``, exclusive) for the whole
+    run: another run that finds it locked leaves the temporaries there alone. None if the
+    folder cannot be written (the report folders then fail and say why)."""
+    for _ in range(3):
+        try:
+            fd, name = tempfile.mkstemp(prefix=_RUN_LOCK_PREFIX, suffix=_RUN_LOCK_SUFFIX, dir=out)
+        except OSError:
+            return None
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        try:  # still ours? (another run's cleanup may have taken it for a dead run's before the flock)
+            if os.stat(name).st_ino == os.fstat(fd).st_ino:
+                return fd, Path(name)
+        except OSError:
+            pass
+        os.close(fd)
+    return None  # pragma: no cover - lost three times to other runs' cleanups
+
+
+def _unlock_run(lock: tuple[int, Path] | None) -> None:
+    if lock is not None:
+        with contextlib.suppress(OSError):
+            lock[1].unlink()
+        os.close(lock[0])
+
+
+def _dead_run(path: str) -> bool:
+    """Whether the run of lock file ``path`` is over (then the file is removed): nobody holds its lock."""
+    try:
+        fd = os.open(path, os.O_RDONLY)
+    except OSError:
+        return True  # removed meanwhile
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:  # locked: that run is alive
+        os.close(fd)
+        return False
+    with contextlib.suppress(OSError):
+        os.unlink(path)
+    os.close(fd)
+    return True
+
+
+def _remove_stale_temporaries(out: Path, own_lock: Path | None) -> list[str]:
+    """Remove what runs killed while writing left in ``out``: the temporary report folders and
+    summary files of :data:`_TEMP_FOLDER` and :data:`_TEMP_FILE`, and their lock files; nothing
+    while another run into ``out`` is alive (its lock file is locked). A report that a killed
+    run had moved aside (``.old``) and not yet replaced is put back first. Returns the names
+    removed."""
+    try:
+        entries = list(os.scandir(out))
+    except OSError:
+        return []
+    stale, removed = [], []
+    for entry in entries:
+        if _RUN_LOCK.fullmatch(entry.name):
+            if own_lock is not None and entry.name == own_lock.name:
+                continue
+            if not _dead_run(entry.path):
+                return removed  # another run into this folder is alive: its temporaries are its own
+            removed.append(entry.name)
+        elif (_TEMP_FOLDER.fullmatch(entry.name) and entry.is_dir(follow_symlinks=False)) or (
+                _TEMP_FILE.fullmatch(entry.name) and entry.is_file(follow_symlinks=False)):
+            stale.append(entry)
+    for entry in stale:
+        try:
+            if entry.name.endswith(".old"):
+                for kept in os.scandir(entry.path):  # the report a killed run had moved aside
+                    if not (out / kept.name).exists():
+                        os.replace(kept.path, out / kept.name)
+            if entry.is_dir(follow_symlinks=False):
+                shutil.rmtree(entry.path)
+            else:
+                os.unlink(entry.path)
+            removed.append(entry.name)
+        except OSError:
+            continue  # not ours to remove after all (permissions): left as it is
+    return removed
+
+
+def _write_index(out: Path, rows: list[dict[str, Any]], notes: list[str], wait: bool = True) -> None:
     """``summary.csv`` and ``index.html`` of every report in ``out``: this run's rows (input order),
     then those of the other report folders already there (earlier or concurrent runs into the
     same ``--out``), rebuilt from their ``report.json``, under an exclusive lock on the folder, so
-    two runs at once never lose a row (issue 28: the last writer's index listed 2 of 3)."""
+    two runs at once never lose a row (issue 28: the last writer's index listed 2 of 3). Not
+    ``wait``: nothing written when another run holds the lock (``BlockingIOError``)."""
     fd = os.open(out, os.O_RDONLY)
     try:
-        fcntl.flock(fd, fcntl.LOCK_EX)
+        fcntl.flock(fd, fcntl.LOCK_EX if wait else fcntl.LOCK_EX | fcntl.LOCK_NB)
         names = {row["name"] for row in rows}
         others = []
         for folder in sorted(p for p in out.iterdir() if p.is_dir() and not p.name.startswith(".")):
