@@ -77,6 +77,7 @@ import time
 from collections import defaultdict, deque
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
+from multiprocessing import resource_tracker
 from multiprocessing.connection import wait as wait_ready
 from pathlib import Path
 from typing import Any
@@ -456,6 +457,9 @@ def _processes(tasks: Sequence[ReportTask], workers: int, progress: BatchProgres
                                           args=(child_conn, threads, preview_mode, os.getpid()))
                 worker = _Worker(process, parent_conn)
                 running.append(worker)  # before its start: a SIGTERM during the start still stops it
+                # multiprocessing's resource tracker, which a spawn starts first, started out of the block:
+                # its start unblocks SIGINT when done, and the worker started next would inherit that
+                resource_tracker.ensure_running()
                 with _sigint_blocked():
                     process.start()
                 child_conn.close()

@@ -88,6 +88,14 @@ def _workers(pid: int) -> list[int]:
                   and _alive(p, start))
 
 
+def _sigint_held_off(pid: int) -> bool:
+    """Whether SIGINT is blocked or ignored in process ``pid`` (/proc/PID/status SigBlk, SigIgn)."""
+    fields = dict(line.split(":\t", 1) for line in Path(f"/proc/{pid}/status").read_text().splitlines()
+                  if ":\t" in line)
+    bit = 1 << (signal.SIGINT - 1)
+    return bool((int(fields["SigBlk"], 16) | int(fields["SigIgn"], 16)) & bit)
+
+
 def _watching(pid: int) -> bool:
     """Whether worker ``pid`` started its driver watch (past its start-up imports, in its own code)."""
     try:
@@ -254,9 +262,13 @@ def test_sigterm_stops_the_batch_with_one_line_and_no_process_left(start):
 
 def test_ctrl_c_while_workers_start_leaves_no_traceback(start):
     """SIGINT to the whole process group (what Ctrl-C in a terminal does) while the workers are
-    still starting (importing): exit 130, one line, no traceback of any worker, nothing left."""
+    still starting (importing): exit 130, one line, no traceback of any worker, nothing left.
+    Every worker holds SIGINT off from its first instruction (blocked, then ignored): the first
+    one once inherited the mask that multiprocessing's resource tracker unblocks after its own
+    start, and a Ctrl-C during its imports printed "Fatal Python error: init_import_site"."""
     run = start()
-    run.workers()
+    workers = run.workers()
+    assert all(_sigint_held_off(pid) for pid in workers), [Path(f"/proc/{p}/status").read_text() for p in workers]
     os.killpg(run.proc.pid, signal.SIGINT)
     code, out, err = run.finish(STOP_TIMEOUT)
     assert code == 130, (out, err[-3000:])
