@@ -30,6 +30,7 @@ from ..brdf_io.latlong import bilinear_lookup
 from ..brdf_io.specs import load_brdf
 from .lights import DEFAULT_LIGHTS, LightSet, check_lights, extract_lights, merge_error_by_band
 from .orders import DEFAULT_MAX_F, DEFAULT_MAX_P, OrderChoice, choose_orders, orders_on_grid_for
+from .pixels import pixel_orders, pixel_sampler, pixel_statement
 from .scene import lighting_for, reflected_error_parts, residual_bound, scene_for
 from .sh import real_sph_harm
 from .shrm_file import read_shrm_fields, save_shrm
@@ -51,6 +52,7 @@ from .window import (
     WINDOW_BUDGET_EPS,
     WINDOW_THRESHOLD,
     WINDOWS,
+    WindowChoice,
     check_window,
     choose_window,
     gibbs_negative,
@@ -367,6 +369,7 @@ def prefilter(
     max_view_deg: float = DEFAULT_MAX_VIEW_DEG,
     orders: OrderChoice | None = None,
     lights: str | int = DEFAULT_LIGHTS,
+    pixel_rule: bool = True,
 ) -> SHRM:
     """Prefilter an environment into a global SHRM (RH02 §4–5, Appendix C).
 
@@ -432,6 +435,13 @@ def prefilter(
         signal) — and :meth:`SHRM.radiance` adds the lights' exact reflection. Lights merged from
         more pixels than :data:`~shrmkit.analysis.lights.MAX_SAMPLES_PER_LIGHT` add their merge
         error, measured against their pixels, to the per-band statement.
+    pixel_rule
+        ``"bands"`` rule only (default True): F_B is then raised to the smallest order whose reflected
+        field has its per-direction relative error at most √ε at 90 % of the sampled directions and
+        views (:func:`~shrmkit.analysis.pixels.pixel_orders`; the energy rules bound an average that
+        a high dynamic range map lets dark regions miss by 100 %). Either rule states the per-direction
+        errors of the map as made in ``meta["pixel_errors"]`` (median, 90th percentile, against a
+        higher reference order).
     progress
         Optional callable ``progress(stage: str)`` told when each stage starts.
 
@@ -506,6 +516,9 @@ def prefilter(
     base = orders.coefficients_for(P_B)  # projected (rh02) or fitted to the views that matter (bands)
     band_energy = lighting.band_energy_all()
     q_max = 0 if azimuth_free else None
+    top = min(lighting.lmax, orders.F0)
+    pixel_choice, pixel_from = None, None
+    sampler = pixel_sampler(lighting, base, P_B, q_max=q_max, nthreads=max(nthreads, 1))
     stage("window")
     t0 = time.perf_counter()
     # the window (and, under the bands rule, the F it needs) from the coefficients and a coarse
@@ -522,15 +535,30 @@ def prefilter(
         return map_rows(orders.profile, base, band_energy, F_, P_B, eps, q_max=q_max, lighting_rows=lighting_rows,
                         max_view_deg=orders.max_view_deg)[0]
 
-    choice = choose_window(
-        window, lighting, base, F_B, P_B, eps, criterion=orders.criterion,
-        profile=orders.profile if orders.criterion != "rh02" else None, max_view_deg=orders.max_view_deg,
-        band_energy=band_energy, projected=orders.coefficients if orders.criterion == "rh02" else None,
-        q_max=q_max, top=None if F is not None else min(lighting.lmax, orders.F0), map_rows=rows_for,
-        nthreads=max(nthreads, 1),
-    )
+    def window_at(F_: int, top_: int | None) -> WindowChoice:
+        return choose_window(
+            window, lighting, base, F_, P_B, eps, criterion=orders.criterion,
+            profile=orders.profile if orders.criterion != "rh02" else None, max_view_deg=orders.max_view_deg,
+            band_energy=band_energy, projected=orders.coefficients if orders.criterion == "rh02" else None,
+            q_max=q_max, top=top_, map_rows=rows_for, nthreads=max(nthreads, 1),
+        )
+
+    choice = window_at(F_B, None if F is not None else top)
     F_B, sigma, strength = choice.F, choice.sigma, choice.strength
     timings["window"] = time.perf_counter() - t0
+    if pixel_rule and F is None and orders.criterion != "rh02" and F_B < top:
+        # the map as windowed so far, per direction; when its 90th percentile passes √ε, the smallest
+        # order of the pixel rule's ladder that meets it (bare fields), and the window again there
+        stage("pixels")
+        t0 = time.perf_counter()
+        pixel_from = F_B
+        pixel_choice = pixel_statement(lighting, base, F_B, P_B, sigma, eps, top=top, q_max=q_max, fields=sampler)
+        if not pixel_choice.p90 <= pixel_choice.tolerance and pixel_choice.F_reference > F_B:
+            pixel_choice = pixel_orders(lighting, base, F_B, P_B, eps, top=top, q_max=q_max, fields=sampler)
+            if pixel_choice.F > F_B:
+                choice = window_at(pixel_choice.F, None)
+                F_B, sigma, strength = choice.F, choice.sigma, choice.strength
+        timings["pixels"] = time.perf_counter() - t0
     coefficients = windowed(base, sigma, F_B, P_B)
     t0 = time.perf_counter()
     budget_bound = False
@@ -614,6 +642,8 @@ def prefilter(
             orders.profile, base, band_energy, F_B, P_B, q_max=q_max, map_rows=S,
             lighting_rows=(lighting.rows, lighting.source_rows), max_view_deg=orders.max_view_deg,
         ).eps_predicted
+    # per direction (what a pixel shows), against a higher order: pixels.py
+    pixels = pixel_statement(lighting, base, F_B, P_B, sigma, eps, top=top, q_max=q_max, fields=sampler)
     eps_info = {
         "brdf": orders.eps_at(min(F_B, orders.F0), P_B),
         "lighting": float(lighting.eps()[min(F_B, lighting.lmax)]),
@@ -623,6 +653,7 @@ def prefilter(
     }
     timings["errors"] = time.perf_counter() - t0
     timings["total"] = time.perf_counter() - t
+    pixel_capped = pixel_choice is not None and pixel_choice.capped
     size_note = "" if not budget_bound else (
         f"map rows held at {S} by the 256 MiB default budget (use size=)"
     )
@@ -665,11 +696,15 @@ def prefilter(
         "scene_capped": bool(scene.capped),
         # one summary of every budget that stops the rule from meeting ε (orders' caps, the map's
         # resolution of the lighting, the window, the map's memory budget)
-        "capped": bool(orders.capped or scene.capped or choice.capped or budget_bound),
+        "capped": bool(orders.capped or scene.capped or choice.capped or budget_bound or pixel_capped),
         "capped_by": [name for name, hit in (
             ("orders: --max-F/--max-P", orders.capped), ("lighting: the map's resolution (F_B at its lmax)",
                                                            scene.capped),
-            ("window budget", choice.capped), ("map budget: 256 MiB", budget_bound)) if hit],
+            ("window budget", choice.capped), ("map budget: 256 MiB", budget_bound),
+            ("pixel rule: no order the lighting holds meets √ε per direction", pixel_capped)) if hit],
+        # the rule's check: from F_B (the energy rule's, after the window) to F (raised when it failed)
+        "pixel_rule": {**pixel_choice.to_dict(), "F_from": pixel_from} if pixel_choice is not None else None,
+        "pixel_errors": pixels.to_dict(),
         "view_bands": statement.bands,
         "extrapolated_samples": int(orders.n_without_data),
     }

@@ -13,6 +13,7 @@ from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
 from ..analysis.orders import DEFAULT_MAX_F, DEFAULT_MAX_P
+from ..analysis.pixels import pixel_line
 from ..analysis.shrm import prefilter
 from ..analysis.tolerance import DEFAULT_EPS
 from ..brdf_io.atomic import check_writable
@@ -110,6 +111,7 @@ def run(args: argparse.Namespace) -> int:
     before = "not measured" if meta["negative_before"] is None else f"{meta['negative_before']:.3%}"
     used = meta["window"] if meta["window"] == "none" else f"{meta['window']} x{meta['window_strength']:.3g}"
     stdout.print(f"window: {used} ({meta['window_reason']})", markup=False, soft_wrap=True)
+    stdout.print(pixel_line(meta), markup=False, soft_wrap=True)
     stdout.print(f"undershoot (most negative radiance / peak): before {before}, after {meta['negative_after']:.3%}; "
                  f"eps reflected {shrm.eps['reflected']:.3g} includes the window's {meta['window_cost']:.3g}",
                  markup=False, soft_wrap=True)

@@ -171,7 +171,7 @@ def _write(args: argparse.Namespace, frames: list[Frame]) -> None:
         with atomic_paths([*pngs, *exrs, gif]) as temps:
             for image, tmp in zip(images, temps[: len(pngs)], strict=True):
                 write_png(tmp, image, atomic=False)
-            for frame, tmp in zip(frames, temps[len(pngs) : len(pngs) + len(exrs)], strict=True):
+            for frame, tmp in zip(frames if exrs else [], temps[len(pngs) : len(pngs) + len(exrs)], strict=True):
                 write_exr(tmp, frame.linear, frame.alpha, atomic=False)
             write_gif(temps[-1], images, atomic=False)
         print(f"wrote {pngs[0]} ... {pngs[-1]} and {gif}")

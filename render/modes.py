@@ -43,6 +43,7 @@ from ..analysis.baselines.gaussian_lobes import GaussianLobeModel, fit_gaussian_
 from ..analysis.baselines.rsibr import RSIBRMaps, rsibr_from_shrm
 from ..analysis.baselines.selfshadow import vertex_visibility_sh
 from ..analysis.lights import DEFAULT_LIGHTS, check_lights
+from ..analysis.pixels import pixel_line
 from ..analysis.shrm import DEFAULT_WINDOW, SHRM, check_window, prefilter
 from ..analysis.view_bands import DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG, check_criterion, check_max_view
 from ..brdf_io.brdf import BRDF
@@ -101,6 +102,9 @@ class RenderOptions:
         N lights; validated by :func:`~shrmkit.analysis.lights.check_lights`): the compact bright
         regions of the map are taken out and shaded exactly per pixel (``render.brdf_glsl``).
         ``rsibr`` reflects them into its twelve maps instead (Cabral et al.'s maps hold everything).
+    pixel_rule
+        The SHRM modes' pixel rule (``prefilter(pixel_rule=)``, default True: F_B raised until 90 %
+        of the directions are within √ε; :mod:`shrmkit.analysis.pixels`).
     """
 
     lobes: int = 3
@@ -110,9 +114,12 @@ class RenderOptions:
     criterion: str = DEFAULT_CRITERION
     max_view_deg: float = DEFAULT_MAX_VIEW_DEG
     lights: str | int = DEFAULT_LIGHTS
+    pixel_rule: bool = True
 
     def __post_init__(self) -> None:
         check_window(self.window)
+        if not isinstance(self.pixel_rule, bool):
+            raise BadInputError(None, f"pixel_rule must be True or False, got {self.pixel_rule!r}")
         check_criterion(self.criterion)
         object.__setattr__(self, "lights", check_lights(self.lights))
         object.__setattr__(self, "max_view_deg", check_max_view(self.max_view_deg))
@@ -224,19 +231,20 @@ def _prefiltered(
 ) -> BuiltModel:
     t0 = time.perf_counter()
     shrm = prefilter(env, brdf, eps=eps, azimuth_free=azimuth_free, window=options.window,
-                     criterion=options.criterion, max_view_deg=options.max_view_deg, lights=options.lights)
+                     criterion=options.criterion, max_view_deg=options.max_view_deg, lights=options.lights,
+                     pixel_rule=options.pixel_rule)
     seconds = time.perf_counter() - t0
     light_info, light_line = lights_info(shrm, per_pixel=per_pixel_lights)
     info = {"F": shrm.F, "P": shrm.P, "height": shrm.height, "width": shrm.width, "eps": eps,
             "achieved_eps": dict(shrm.eps), "azimuth_free": azimuth_free, "prefilter_seconds": seconds,
             "criterion": shrm.meta["criterion"], "max_view_deg": shrm.meta["max_view_deg"],
             "view_bands": shrm.meta["view_bands"], **{key: shrm.meta[key] for key in WINDOW_INFO_KEYS},
-            "lights": light_info}
+            "pixel_errors": shrm.meta["pixel_errors"], "pixel_rule": shrm.meta["pixel_rule"], "lights": light_info}
     meta = shrm.meta
     used = meta["window"] if meta["window"] == "none" else f"{meta['window']} x{meta['window_strength']:.3g}"
     lines = (f"SHRM F={shrm.F} P={shrm.P} on {shrm.height}x{shrm.width} (eps {eps:g}, achieved eps_B "
-             f"{shrm.eps['reflected']:.3g})", f"window: {used} ({meta['window_reason']})", light_line,
-             f"prefilter: {seconds:.3f} s")
+             f"{shrm.eps['reflected']:.3g})", f"window: {used} ({meta['window_reason']})", pixel_line(meta),
+             light_line, f"prefilter: {seconds:.3f} s")
     return BuiltModel(shrm, info, lines)
 
 

@@ -4,7 +4,7 @@ For a fixed BRDF and map, ``prefilter`` at ε = 0.1 … 0.005 with the defaults 
 window, explicit lights, error-driven map size): the stated (predicted) worst-band error inside the
 view limit falls as ε falls, and so does the error measured against brute-force angular integration
 (``analysis.reference``) on one fixed set of (R, V) pairs, up to its Monte Carlo error; the bound
-stays above the measured error and below the loosest tolerance's. Cases: the demo's materials under
+stays above the measured error and below the loosest tolerance's (or √ε of its own). Cases: the demo's materials under
 ``builtin:studio`` — the gold metal is the case where the window used to make ε = 0.01 worse than
 ε = 0.03 (F_B 18 / 25 / 16 / 18 for ε 0.1 / 0.03 / 0.01 / 0.005) — and a view-dependent
 microfacet lobe under the sun of ``builtin:sky``.
@@ -58,8 +58,11 @@ def test_tighter_tolerance_never_gives_a_larger_error(env_spec, spec):
         assert b <= a + 1e-12, stated
     # the bound holds whatever the tolerance (it is never below the measured error) but is not a
     # function of ε alone: its worst-case lighting weight multiplies the energy the order search's
-    # grid leaves unresolved, which changes with the grid. It never exceeds the loosest one's.
-    assert max(bounds) <= bounds[0] + 1e-12, bounds
+    # grid leaves unresolved, which changes with the grid, and the pixel rule raises F_B most at the
+    # loosest tolerances (sky, σ 0.2: F_B 1 → 5 at ε 0.1, bound 0.057 → 0.016). No bound exceeds the
+    # loosest tolerance's, unless it meets the relative RMS its own tolerance stands for.
+    for bound, eps in zip(bounds, TOLERANCES, strict=True):
+        assert bound <= max(bounds[0] + 1e-12, np.sqrt(eps)), (bounds, TOLERANCES)
     for (m, se), bound in zip(measured, bounds, strict=True):
         assert m - 2.0 * se <= bound, (measured, bounds)
     for (a, sa), (b, sb) in itertools.pairwise(measured):

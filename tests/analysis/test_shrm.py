@@ -135,8 +135,10 @@ def test_shrm_matches_angular_reference_sky(brdf_spec):
         err_none = _rel_rms(bare.radiance(R2, V2, clamp=False), ref2)
         assert err_none <= 2 * np.sqrt(eps) + 0.01
         errors_none.append(err_none)
-    assert errors[0] > errors[1] > errors[2]
-    assert errors_none[0] > errors_none[1] > errors_none[2]
+    # never worse at a tighter tolerance (the pixel rule may settle two tolerances on the same rung of
+    # its ladder: the same map), and better across the range
+    assert errors[0] >= errors[1] >= errors[2] and errors[0] > errors[2]
+    assert errors_none[0] >= errors_none[1] >= errors_none[2] and errors_none[0] > errors_none[2]
 
 
 def test_shrm_matches_reference_grace_and_merl(shared_data, tmp_path):
@@ -209,8 +211,10 @@ def test_lanczos_window_damps_ringing_and_reports_its_cost():
     """DESIGN §7: a sharp lobe against a one-pixel sun rings; the Lanczos window reduces the
     negative lobes, and its blur shows up in the reported error."""
     env = shrmkit.load_env("builtin:sun,height=64")
-    plain = shrmkit.prefilter(env, "phong:s=200", eps=0.03, window="none", lights="none")
-    damped = shrmkit.prefilter(env, "phong:s=200", eps=0.03, window="lanczos", lights="none")
+    # the energy rule's orders for both (the pixel rule would raise F_B differently with and without
+    # the window; here the window is compared at fixed orders)
+    plain = shrmkit.prefilter(env, "phong:s=200", eps=0.03, window="none", lights="none", pixel_rule=False)
+    damped = shrmkit.prefilter(env, "phong:s=200", eps=0.03, window="lanczos", lights="none", pixel_rule=False)
     assert plain.eps["gibbs_negative"] > 0.01
     assert damped.eps["gibbs_negative"] < 0.2 * plain.eps["gibbs_negative"]
     assert damped.eps["reflected"] > plain.eps["reflected"]
