@@ -14,8 +14,9 @@ smallest F >= F_B (on a fixed ladder of orders, so that the choice is monotone i
 at most √ε, over a sample of reflection directions R (a :data:`ROWS` × 2·ROWS lat-long grid of pixel
 centres) at the normal view V = R and, for P > 0, the oblique views of
 :data:`~shrmkit.analysis.synthesis.LOCAL_VIEWS_DEG` (up to θ_v = 80°). The error of order F is
-measured against the same field at a reference order F_ref = min(top, 3 F + 24) (top: the largest
-order the lighting and the BRDF coefficients hold); the reference is raised with the choice.
+measured against the same field at a reference order F_ref = min(top, 4 F + 32) (top: the largest
+order the lighting and the BRDF coefficients hold); the reference is raised with the choice when it
+falls below 3 F + 12.
 Directions whose reference luminance is below 10⁻⁴ of the sample's largest (black: nothing to be
 relatively wrong about) do not count.
 
@@ -53,7 +54,13 @@ MAX_REFERENCE_RAISES = 3
 
 
 def _reference_order(F: int, top: int) -> int:
-    return int(min(top, 3 * F + 24))
+    """The reference order for a field of order F: min(top, 4 F + 32)."""
+    return int(min(top, 4 * F + 32))
+
+
+def _reference_holds(F_ref: int, F: int, top: int) -> bool:
+    """A reference is high enough for order F when it is at least 3 F + 12 (or the top order)."""
+    return F_ref >= min(top, 3 * F + 12)
 
 
 def _global_ladder(top: int) -> list[int]:
@@ -153,9 +160,8 @@ class _Fields:
         if sigma is None and F in self.cache:
             return self.cache[F]
         self.count += 1
-        field = local_view_field(self.lighting, windowed(self.coefficients, sigma, F, self.P), F, self.P, ROWS,
-                                 q_max=self.q_max, nthreads=self.nthreads)
-        value = self.luma.astype(np.float32) @ field
+        value = local_view_field(self.lighting, windowed(self.coefficients, sigma, F, self.P), F, self.P, ROWS,
+                                 q_max=self.q_max, nthreads=self.nthreads, channel_weights=self.luma)[0]
         if sigma is None:
             self.cache[F] = value
         return value
@@ -217,10 +223,9 @@ def pixel_orders(
         found = _first_on_ladder(_ladder(F, F_ref), passes)
         chosen = F_ref if found is None else found
         # the reference must stay well above the choice (its own error at the choice's scale)
-        wanted = _reference_order(chosen, top)
-        if wanted <= F_ref or F_ref >= top:
+        if _reference_holds(F_ref, chosen, top) or F_ref >= top:
             break
-        F_ref = wanted
+        F_ref = _reference_order(chosen, top)
     errors = pixel_errors(fields(chosen), reference)
     median, p90 = _stats(errors) if chosen < F_ref else (float("nan"), float("nan"))  # never "0" against itself
     return PixelCheck(F=int(chosen), F_reference=int(F_ref), median=median, p90=p90, tolerance=tolerance,
@@ -230,11 +235,15 @@ def pixel_orders(
 def pixel_statement(
     lighting: LightingCoefficients, coefficients: BRDFCoefficients, F: int, P: int, sigma: np.ndarray | None,
     eps: float, *, top: int, q_max: int | None = None, nthreads: int = 1, fields: _Fields | None = None,
+    F_reference: int | None = None,
 ) -> PixelCheck:
     """The per-direction errors of the map as made (order ``F``, window ``sigma``) against the
-    reference order of :func:`pixel_orders`: what a user reads per pixel (module docs)."""
+    reference order of :func:`pixel_orders` (``F_reference`` when given and high enough for F: the
+    rule's own, already synthesized): what a user reads per pixel (module docs)."""
     fields = fields or pixel_sampler(lighting, coefficients, P, q_max=q_max, nthreads=nthreads)
-    F_ref = _reference_order(F, max(top, F))
+    top = max(top, F)
+    F_ref = F_reference if F_reference is not None and _reference_holds(F_reference, F, top) else \
+        _reference_order(F, top)
     errors = pixel_errors(fields(F, sigma), fields(F_ref))
     # no higher order to measure against: unknown, not 0
     median, p90 = _stats(errors) if F_ref > F else (float("nan"), float("nan"))

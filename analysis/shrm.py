@@ -643,7 +643,8 @@ def prefilter(
             lighting_rows=(lighting.rows, lighting.source_rows), max_view_deg=orders.max_view_deg,
         ).eps_predicted
     # per direction (what a pixel shows), against a higher order: pixels.py
-    pixels = pixel_statement(lighting, base, F_B, P_B, sigma, eps, top=top, q_max=q_max, fields=sampler)
+    pixels = pixel_statement(lighting, base, F_B, P_B, sigma, eps, top=top, q_max=q_max, fields=sampler,
+                             F_reference=pixel_choice.F_reference if pixel_choice is not None else None)
     eps_info = {
         "brdf": orders.eps_at(min(F_B, orders.F0), P_B),
         "lighting": float(lighting.eps()[min(F_B, lighting.lmax)]),

@@ -309,6 +309,7 @@ def local_view_field(
     views_deg: tuple[tuple[float, float], ...] = LOCAL_VIEWS_DEG,
     q_max: int | None = None,
     nthreads: int = 1,
+    channel_weights: np.ndarray | None = None,
 ) -> np.ndarray:
     """The reflected radiance B(R, V) on a rows × 2·rows lat-long grid of R (pixel centres, F1) at
     the normal view V = R and at fixed local views V' = (2θ_v, ψ) in the frame R_{α,β} of each R
@@ -320,7 +321,9 @@ def local_view_field(
     (−1)^s conj(B_{p,−s}), Σ_q B_pq Y_pq = Σ_s w_s [Re B_{·,−s} cos sψ + Im B_{·,−s} sin sψ] with
     w_0 = 1, w_s = 2, where B_{·,−s} is one spin-s synthesis of Σ_p (−1)^s f_ps(θ') E^{p,s}
     (:func:`_spin_terms`): (P+1) syntheses per view and channel instead of (P+1)(P+2)/2, and no
-    rotation to the global SHRM. ``q_max=0`` keeps the azimuth-free terms only.
+    rotation to the global SHRM. ``q_max=0`` keeps the azimuth-free terms only. With
+    ``channel_weights`` (3,), the weighted sum of the channels (luminance) as (1, n_views·rows·2·rows):
+    the coefficients are summed before the synthesis, a third of the transforms.
     """
     height, width = int(rows), 2 * int(rows)
     views = [(0.0, 0.0)] + (list(views_deg) if P > 0 else [])
@@ -328,27 +331,40 @@ def local_view_field(
     psi = np.array([np.radians(v[1]) for v in views])
     f = legendre_f(P, P, np.cos(theta_o))  # (P+1, P+1, n_views)
     s_top = P if q_max is None else min(P, q_max)
-    # combined alm per (view, s, channel)
+    # combined alm per (view, s, channel): for each spin s, Σ_p (−1)^s f_ps(θ'_v) E^{p,s}_lm, all p, views
+    # and channels at once (the same sums as _spin_terms' per (p, s, channel) inputs)
+    lmax = min(F, lighting.lmax, coefficients.F0)
+    if P > coefficients.P0:
+        raise ValueError(f"P={P} exceeds the computed P0={coefficients.P0}")
+    l_of_index = np.concatenate([np.arange(m, lmax + 1) for m in range(lmax + 1)])
+    m_of_index = np.concatenate([np.full(lmax + 1 - m, m) for m in range(lmax + 1)])
+    alm_light = lighting.alm[:, alm_index(l_of_index, m_of_index, lighting.lmax)] * Lambda(l_of_index)[None, :]
     combined: dict[tuple[int, int, int], np.ndarray] = {}
     lmaxes: dict[int, int] = {}
-    for p, s, c, alm, lmax in _spin_terms(lighting, coefficients, F, P):
-        if s > s_top:
-            continue
-        lmaxes[s] = lmax
+    for s_ in range(min(s_top, lmax) + 1):
+        p = np.arange(s_, P + 1)
+        rho = coefficients.coeffs[l_of_index[:, None], p[None, :], s_, :]  # (nalm, p, c)
+        rho = np.where((l_of_index >= s_)[:, None, None], rho, 0.0)
+        sign = 1.0 if s_ == 0 else -((-1.0) ** s_)
+        weights = ((-1.0) ** s_) * f[p, s_, :] * sign  # (p, views)
+        terms = rho * alm_light.T[:, None, :]  # E^{p,s}_lm per channel: (nalm, p, c)
+        if channel_weights is not None:  # Σ_c w_c E^{p,s}_lm: (nalm, p)
+            terms = terms @ np.asarray(channel_weights, dtype=terms.real.dtype)
+            mixed = (weights.T @ terms.T)[:, None, :]  # (views, 1, nalm)
+        else:
+            mixed = np.tensordot(weights.T, terms, axes=(1, 1)).transpose(0, 2, 1)  # (views, c, nalm)
+        lmaxes[s_] = lmax
         for v in range(len(views)):
-            weight = ((-1.0) ** s) * f[p, s, v]
-            if weight == 0.0:
+            if not np.any(weights[:, v]):
                 continue
-            key = (v, s, c)
-            if key in combined:
-                combined[key] += weight * alm
-            else:
-                combined[key] = weight * alm
-    out = np.zeros((3, len(views), height, width), dtype=np.float32)
+            for c in range(mixed.shape[1]):
+                combined[(v, s_, c)] = mixed[v, c]
+    n_out = 3 if channel_weights is None else 1
+    out = np.zeros((n_out, len(views), height, width), dtype=np.float32)
     for (v, s, c), alm in combined.items():
         field = _synthesize_latlong(alm, s, lmaxes[s], height, width, nthreads)
         if s == 0:
             out[c, v] += field[0]
         else:
             out[c, v] += 2.0 * (field[0] * np.cos(s * psi[v]) + field[1] * np.sin(s * psi[v]))
-    return out.reshape(3, -1)
+    return out.reshape(n_out, -1)
