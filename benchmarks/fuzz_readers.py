@@ -150,7 +150,8 @@ def _write_seeds(folder: Path) -> dict[str, Reader]:
     write_exr(folder / "seed_half.exr", image, half=True)
     exr = [folder / "seed.exr", folder / "seed_half.exr"]
     exr += [SHARED / "env" / "openexr_images" / n for n in ("OrientationLatLong.exr", "OrientationCube.exr")]
-    add("exr", ".exr", exr)
+    add("exr", ".exr", exr, mutations=("truncate", "flip", "int32", "nonfinite", "append", "zero", "special",
+                                        "exr_window"))
 
     wide = rng.uniform(0.0, 4.0, (8, 16, 3)).astype(np.float32)
     write_hdr(folder / "seed_rle.hdr", wide)
@@ -250,11 +251,38 @@ def _mutate_npy_header(rng: np.random.Generator, payload: bytes) -> bytes:
     return payload[:8] + size + body + payload[start + head_len:]
 
 
+#: Values an OpenEXR window corner is set to: a huge display window beside a small data window, a
+#: 1 × 20,000 strip, inverted and extreme boxes (issue 30's small files that asked for 2–149 GiB).
+EXR_WINDOW_VALUES = (0, -1, 1, 7, 19_999, 20_000, 65_535, 1_000_000, 2**30, 2**31 - 1, -(2**31))
+
+
+def _mutate_exr_window(rng: np.random.Generator, seed: bytes) -> tuple[bytes, str]:
+    """Rewrite an OpenEXR header's ``displayWindow`` or ``dataWindow`` (box2i: xMin yMin xMax yMax), or
+    flip the ``envmap`` attribute between lat-long and cube (its aspect rule then no longer holds)."""
+    data = bytearray(seed)
+    targets = [name for name in (b"displayWindow", b"dataWindow", b"envmap") if name + b"\x00" in data[:4096]]
+    if not targets:
+        return bytes(data), "exr_window: no window attribute"
+    name = targets[int(rng.integers(0, len(targets)))]
+    at = data.index(name + b"\x00")
+    type_end = data.index(b"\x00", at + len(name) + 1)
+    value = type_end + 1 + 4  # after the type name and the int32 size
+    if name == b"envmap":
+        data[value] = 1 - data[value] if data[value] in (0, 1) else 0
+        return bytes(data), f"exr_window: envmap flipped to {data[value]}"
+    corner = int(rng.integers(0, 4))
+    number = int(rng.choice(EXR_WINDOW_VALUES))
+    data[value + 4 * corner : value + 4 * corner + 4] = (number & 0xFFFFFFFF).to_bytes(4, "little")
+    return bytes(data), f"exr_window: {name.decode()}[{corner}] = {number}"
+
+
 def mutate(reader: Reader, rng: np.random.Generator, seed: bytes, kind: str) -> tuple[bytes | str, str]:
     """Return (mutated content or a special-file kind, description)."""
     n = len(seed)
     if kind == "none":
         return seed, "unchanged seed"
+    if kind == "exr_window":
+        return _mutate_exr_window(rng, seed)
     if kind == "truncate":
         cut = int(rng.integers(0, min(n, 2048))) if rng.random() < 0.5 else int(rng.integers(0, max(n, 1)))
         return seed[:cut], f"truncate to {cut} of {n} bytes"
