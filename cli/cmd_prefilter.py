@@ -23,6 +23,7 @@ from .common import (
     add_env_orientation,
     add_lights_option,
     add_order_rule,
+    add_pixel_rule_option,
     add_window_option,
     load_env_arg,
     order_rule,
@@ -48,6 +49,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--cube", action="store_true", help="also store the SHRM on a 6 x S x S cube map")
     parser.add_argument("--cube-size", type=int, help="cube face size S (default: rows // 2)")
     add_window_option(parser)
+    add_pixel_rule_option(parser)
     add_lights_option(parser)
     add_order_rule(parser)
     parser.add_argument("--json", action="store_true",
@@ -70,7 +72,8 @@ def run(args: argparse.Namespace) -> int:
         task = bar.add_task("prefiltering", total=None)
         shrm = prefilter(
             env, brdf, eps=args.eps, size=args.size, max_F=args.max_F, max_P=args.max_P, cube=args.cube,
-            cube_size=args.cube_size, window=args.window, lights=args.lights, **order_rule(args),
+            cube_size=args.cube_size, window=args.window, lights=args.lights, pixel_rule=args.pixel_rule == "on",
+            **order_rule(args),
             progress=lambda stage: bar.update(task, description=f"prefiltering: {stage}"),
         )
     shrm.save(out)

@@ -34,6 +34,7 @@ from .common import (
     add_env_orientation,
     add_lights_option,
     add_order_rule,
+    add_pixel_rule_option,
     add_window_option,
     load_env_arg,
     order_rule,
@@ -89,6 +90,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--self-shadow", action="store_true",
                    help=f"{shadow}: per-vertex self-shadowing by ray casting (Green et al. 2007 eq. 7)")
     add_window_option(p)
+    add_pixel_rule_option(p)
     add_lights_option(p)
     add_order_rule(p)
     p.add_argument("--size", type=int, default=512, help="image width and height in pixels (default 512)")
@@ -140,7 +142,8 @@ def _validate(args: argparse.Namespace) -> tuple[list[Camera], RenderOptions]:
     cameras = turntable_cameras(camera, args.turntable) if args.turntable else [camera]
     # RenderOptions checks --lobes/--elevations (its ranges, one home) before anything is loaded
     options = RenderOptions(lobes=args.lobes, elevations=args.elevations, self_shadow=args.self_shadow,
-                            window=args.window, lights=args.lights, **order_rule(args))
+                            window=args.window, lights=args.lights, pixel_rule=args.pixel_rule == "on",
+                            **order_rule(args))
     return cameras, options
 
 

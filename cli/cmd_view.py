@@ -30,6 +30,7 @@ from .common import (
     add_env_orientation,
     add_lights_option,
     add_order_rule,
+    add_pixel_rule_option,
     add_window_option,
     load_env_arg,
     number_in,
@@ -51,6 +52,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="SHRM rows S (S x 2S lat-long) for the prefilter; default: what the error needs "
                    "(shrm prefilter), then lowered to fit the page")
     add_window_option(p)
+    add_pixel_rule_option(p)
     add_lights_option(p)
     add_order_rule(p)
     p.add_argument("--mode", choices=VIEW_MODES, default="distant", help="initial render mode (default distant)")
@@ -82,7 +84,7 @@ def run(args: argparse.Namespace) -> int:
     env = load_env_arg(args.env, args)
     brdf = load_brdf(args.brdf)
     shrm = prefilter(env, brdf, eps=args.eps, size=args.size, window=args.window, lights=args.lights,
-                     **order_rule(args))
+                     pixel_rule=args.pixel_rule == "on", **order_rule(args))
     page = build_view(
         shrm, env, mesh=args.mesh, mode=args.mode, exposure=args.exposure, tone=args.tone, azimuth=args.azimuth,
         elevation=args.elevation, zoom=args.zoom, background=not args.no_background, budget=budget, still=args.still,

@@ -24,6 +24,7 @@ __all__ = [
     "add_env_orientation",
     "add_window_option",
     "add_lights_option",
+    "add_pixel_rule_option",
     "add_order_rule",
     "order_rule",
     "env_orientation",
@@ -132,6 +133,17 @@ def add_window_option(parser: argparse.ArgumentParser) -> None:
         "until the windowed field meets eps in every view band (the rh02 rule: within "
         f"{WINDOW_BUDGET_EPS:g} eps of added error); lanczos: full Lanczos; none: the bare truncation. What is left "
         "is clamped to 0 at the output",
+    )
+
+
+def add_pixel_rule_option(parser: argparse.ArgumentParser) -> None:
+    """``--pixel-rule on|off``: the bands rule's per-direction check (``analysis.pixels``), for the verbs
+    that prefilter one SHRM (``prefilter``, ``render``, ``view``)."""
+    parser.add_argument(
+        "--pixel-rule", choices=("on", "off"), default="on",
+        help="on (default): raise F_B until 90%% of the sampled directions have a relative error within sqrt(eps) "
+        "(the band statements bound an average that dark regions of a high dynamic range map miss); off: the "
+        "energy rule's F_B only (faster, rings in dark regions)",
     )
 
 

@@ -33,3 +33,17 @@ def test_prefilter_eps_is_validated_by_the_one_rule(tmp_path, capsys, run_main):
                          "-o", str(out))
     assert code == 2 and "eps must be in (0, 1), got 1.5" in err
     assert not out.exists()
+
+
+def test_pixel_rule_on_and_off(tmp_path, capsys):
+    """`--pixel-rule off` keeps the energy rule's F_B (no per-direction check), `on` (default) raises it
+    under a sun left in the map; both print the per-pixel statement."""
+    shrms = {}
+    for rule in ("on", "off"):
+        out = tmp_path / f"{rule}.shrm.npz"
+        assert main(["prefilter", "--env", "builtin:sun,height=32", "--brdf", "phong:s=100", "--lights", "none",
+                     "--pixel-rule", rule, "-o", str(out)]) == 0
+        assert "per pixel:" in capsys.readouterr().out
+        shrms[rule] = shrmkit.load_shrm(out)
+    assert shrms["off"].meta["pixel_rule"] is None
+    assert shrms["on"].meta["pixel_rule"]["F_from"] == shrms["off"].F < shrms["on"].F
