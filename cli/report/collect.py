@@ -303,6 +303,11 @@ def _environments(brdf: BRDF, options: ReportOptions, choices: dict[float, Order
                 "lights": len(shrm.meta["lights"]),
                 "capped": bool(shrm.meta["capped"]),
                 "capped_by": list(shrm.meta["capped_by"]),
+                # per direction (analysis/pixels.py): the estimate, and where the pixel rule took F_B from
+                "pixel_median": shrm.meta["pixel_errors"]["median"],
+                "pixel_p90": shrm.meta["pixel_errors"]["p90"],
+                "pixel_F_from": (shrm.meta["pixel_rule"] or {}).get("F_from"),
+                "pixels_seconds": t.get("pixels", 0.0),
                 # the angular reference for the same S x 2S output, extrapolated from the pairs
                 "reference_map_seconds": ref_seconds / options.n_pairs * n_out,
             }
@@ -327,6 +332,8 @@ def _environments(brdf: BRDF, options: ReportOptions, choices: dict[float, Order
                     "lights_flux_share": shrm.meta["lights_flux_share"],
                     "capped": row["capped"],
                     "capped_by": row["capped_by"],
+                    "pixel_errors": shrm.meta["pixel_errors"],
+                    "pixel_rule": shrm.meta["pixel_rule"],
                     "n_pairs": options.n_pairs,
                     "max_view_deg": options.max_view_deg,
                 })
