@@ -26,6 +26,11 @@ for the whole, since the lights only add (exactly shaded) signal. The synthesis 
 sample points (a coarse grid of an exact band-limited field; measured: the 48-row statistics agree
 with the full-resolution sample's within 0.01 for Grace, sky, Venice under Phong, microfacet and
 GGX lobes).
+
+The statement is an estimate, not a bound: it leaves out the maps' bilinear lookup (stated per band
+in ``view_bands``) and what the reference order itself misses. Against brute force on 600 pixels of
+a rendered sphere the measured 90th percentile was 0.75–1.07 × the estimate (sky, Grace, Venice;
+README, "Per pixel as well as per band").
 """
 
 from __future__ import annotations
