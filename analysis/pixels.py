@@ -158,24 +158,23 @@ class _Fields:
                  q_max: int | None, nthreads: int) -> None:
         self.lighting, self.coefficients, self.P, self.q_max, self.nthreads = lighting, coefficients, P, q_max, nthreads
         self.luma = luminance_weights()
-        self.cache: dict[int, np.ndarray] = {}
+        self.cache: dict[tuple[int, bytes | None], np.ndarray] = {}
         self.count = 0
 
     def __call__(self, F: int, sigma: np.ndarray | None = None) -> np.ndarray:
-        if sigma is None and F in self.cache:
-            return self.cache[F]
-        self.count += 1
-        value = local_view_field(self.lighting, windowed(self.coefficients, sigma, F, self.P), F, self.P, ROWS,
-                                 q_max=self.q_max, nthreads=self.nthreads, channel_weights=self.luma)[0]
-        if sigma is None:
-            self.cache[F] = value
-        return value
+        key = (int(F), None if sigma is None else np.asarray(sigma, dtype=np.float64).tobytes())
+        if key not in self.cache:
+            self.count += 1
+            self.cache[key] = local_view_field(
+                self.lighting, windowed(self.coefficients, sigma, F, self.P), F, self.P, ROWS, q_max=self.q_max,
+                nthreads=self.nthreads, channel_weights=self.luma)[0]
+        return self.cache[key]
 
 
 def pixel_sampler(lighting: LightingCoefficients, coefficients: BRDFCoefficients, P: int, *,
                   q_max: int | None = None, nthreads: int = 1) -> _Fields:
     """The sample's luminance per order, ``sampler(F, sigma=None)`` (:data:`ROWS` rows; computed once
-    per order when unwindowed), to share between :func:`pixel_orders` and :func:`pixel_statement`."""
+    per order and window), to share between :func:`pixel_orders` and :func:`pixel_statement`."""
     return _Fields(lighting, coefficients, P, q_max, nthreads)
 
 

@@ -42,6 +42,26 @@ def _full_m_lighting(lighting: LightingCoefficients, l: int) -> np.ndarray:
     return np.concatenate([neg[:, :0:-1], pos], axis=1)
 
 
+def _scaled_lighting(
+    lighting: LightingCoefficients, coefficients: BRDFCoefficients, F: int, P: int
+) -> tuple[int, np.ndarray, np.ndarray]:
+    """(lmax, l of each index, Λ_l L_lm as (3, n_alm)) in ducc0's m-major order up to
+    lmax = min(F, the lighting's, the coefficients'): what every synthesis of (F, P) multiplies by ρ̂.
+
+    Raises
+    ------
+    ValueError
+        P above the coefficients' P0.
+    """
+    lmax = min(F, lighting.lmax, coefficients.F0)
+    if P > coefficients.P0:
+        raise ValueError(f"P={P} exceeds the computed P0={coefficients.P0}")
+    l_of_index = np.concatenate([np.arange(m, lmax + 1) for m in range(lmax + 1)])
+    m_of_index = np.concatenate([np.full(lmax + 1 - m, m) for m in range(lmax + 1)])
+    alm_light = lighting.alm[:, alm_index(l_of_index, m_of_index, lighting.lmax)] * Lambda(l_of_index)[None, :]
+    return lmax, l_of_index, alm_light
+
+
 def _spin_terms(
     lighting: LightingCoefficients, coefficients: BRDFCoefficients, F: int, P: int, only_p: int | None = None
 ):
@@ -53,12 +73,7 @@ def _spin_terms(
     E_lm = −(−1)^s Λ_l L_lm ρ̂_lps, and B_{p,s} = (−1)^s conj(B_{p,−s}). For s = 0 the
     input is the plain spin-0 set Λ_l L_lm ρ̂_lp0.
     """
-    lmax = min(F, lighting.lmax, coefficients.F0)
-    if P > coefficients.P0:
-        raise ValueError(f"P={P} exceeds the computed P0={coefficients.P0}")
-    l_of_index = np.concatenate([np.arange(m, lmax + 1) for m in range(lmax + 1)])
-    m_of_index = np.concatenate([np.full(lmax + 1 - m, m) for m in range(lmax + 1)])
-    alm_light = lighting.alm[:, alm_index(l_of_index, m_of_index, lighting.lmax)] * Lambda(l_of_index)[None, :]
+    lmax, l_of_index, alm_light = _scaled_lighting(lighting, coefficients, F, P)
     for p in range(P + 1) if only_p is None else (only_p,):
         for s in range(min(p, lmax) + 1):  # spin s needs l >= s: B_{p,±s} = 0 when s > lmax
             rho = np.where(l_of_index[None, :] >= s, coefficients.coeffs[l_of_index, p, s, :].T, 0.0)
@@ -333,12 +348,7 @@ def local_view_field(
     s_top = P if q_max is None else min(P, q_max)
     # combined alm per (view, s, channel): for each spin s, Σ_p (−1)^s f_ps(θ'_v) E^{p,s}_lm, all p, views
     # and channels at once (the same sums as _spin_terms' per (p, s, channel) inputs)
-    lmax = min(F, lighting.lmax, coefficients.F0)
-    if P > coefficients.P0:
-        raise ValueError(f"P={P} exceeds the computed P0={coefficients.P0}")
-    l_of_index = np.concatenate([np.arange(m, lmax + 1) for m in range(lmax + 1)])
-    m_of_index = np.concatenate([np.full(lmax + 1 - m, m) for m in range(lmax + 1)])
-    alm_light = lighting.alm[:, alm_index(l_of_index, m_of_index, lighting.lmax)] * Lambda(l_of_index)[None, :]
+    lmax, l_of_index, alm_light = _scaled_lighting(lighting, coefficients, F, P)
     combined: dict[tuple[int, int, int], np.ndarray] = {}
     lmaxes: dict[int, int] = {}
     for s_ in range(min(s_top, lmax) + 1):

@@ -232,14 +232,16 @@ def sample_rho_hat_half(
     n_phi = int(n_phi)
     ci = np.asarray(cos_theta_i, float)
     co = np.asarray(cos_theta_o, float)
-    k = np.arange(n_phi // 2 + 1)
-    phi = 2.0 * np.pi * k / max(n_phi, 1)
-    values, missing = sample_rho_hat(brdf, ci, co, phi)
-    if missing:
-        # the nodes that are their own mirror image (0, and π for even n_phi) count once
-        ends = [0, n_phi // 2] if n_phi % 2 == 0 else [0]
-        _, end_missing = sample_rho_hat(brdf, ci, co, phi[ends]) if len(k) > len(ends) else (None, missing)
-        missing = end_missing + 2 * (missing - end_missing)
+    phi = 2.0 * np.pi * np.arange(n_phi // 2 + 1) / max(n_phi, 1)
+    # the nodes that are their own mirror image (0, and π for even n_phi) count once, the others twice
+    ends = [0, n_phi // 2] if n_phi % 2 == 0 and n_phi > 0 else [0]
+    inner = np.arange(1, (n_phi + 1) // 2)
+    values = np.empty((ci.size, co.size, phi.size, 3))
+    values[:, :, ends], end_missing = sample_rho_hat(brdf, ci, co, phi[ends])
+    missing = end_missing
+    if inner.size:
+        values[:, :, inner], inner_missing = sample_rho_hat(brdf, ci, co, phi[inner])
+        missing += 2 * inner_missing
     return values, missing
 
 
