@@ -172,11 +172,13 @@ def _write(args: argparse.Namespace, frames: list[Frame]) -> None:
         exrs = turntable_paths(args.exr, args.turntable)[0] if args.exr else []
         images = [png(frame) for frame in frames]
         with atomic_paths([*pngs, *exrs, gif]) as temps:
-            for image, tmp in zip(images, temps[: len(pngs)], strict=True):
+            png_temps, exr_temps, gif_temp = temps[: len(pngs)], temps[len(pngs) : -1], temps[-1]
+            for image, tmp in zip(images, png_temps, strict=True):
                 write_png(tmp, image, atomic=False)
-            for frame, tmp in zip(frames if exrs else [], temps[len(pngs) : len(pngs) + len(exrs)], strict=True):
-                write_exr(tmp, frame.linear, frame.alpha, atomic=False)
-            write_gif(temps[-1], images, atomic=False)
+            if exr_temps:
+                for frame, tmp in zip(frames, exr_temps, strict=True):
+                    write_exr(tmp, frame.linear, frame.alpha, atomic=False)
+            write_gif(gif_temp, images, atomic=False)
         print(f"wrote {pngs[0]} ... {pngs[-1]} and {gif}")
     else:
         with atomic_paths([args.output, *([args.exr] if args.exr else [])]) as temps:
