@@ -79,11 +79,11 @@ def atomic_paths(paths: Sequence[str | os.PathLike[str]], suffix: str | None = N
             temps.append(_temporary(target, suffix))
         try:
             yield list(temps)
-        except OSError as err:
-            raise _write_error(targets[0], err) from None
-        except RuntimeError as err:
-            which = next((t for t, tmp in zip(targets, temps, strict=False) if tmp.name in str(err)), targets[0])
-            raise _write_error(which, err, dict(zip(temps, targets, strict=False))) from None
+        except (OSError, RuntimeError) as err:
+            # the file the error names (an OSError's filename, or a library's message), else the first
+            mentioned = f"{err} {getattr(err, 'filename', None) or ''}"
+            which = next((t for t, tmp in zip(targets, temps, strict=True) if tmp.name in mentioned), targets[0])
+            raise _write_error(which, err, dict(zip(temps, targets, strict=True))) from None
         for target, tmp in zip(targets, temps, strict=True):
             try:
                 os.replace(tmp, target)
