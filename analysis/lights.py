@@ -177,6 +177,13 @@ class LightSet:
         """Σ_k E_k per channel (3,)."""
         return self.power.sum(axis=0)
 
+    def rotated(self, rotation: np.ndarray) -> LightSet:
+        """The lights of the environment rotated by the (3, 3) rotation Q (``brdf_io.env_rotation``):
+        sample directions Q ω_k, powers unchanged; the per-light summaries (:class:`Light`) are kept as
+        extracted (they describe the map as loaded)."""
+        q = np.asarray(rotation, dtype=np.float64)
+        return LightSet(self.directions @ q.T, self.power, self.light, self.lights)
+
     def radiance(self, brdf: BRDF, R: np.ndarray, V: np.ndarray) -> np.ndarray:
         """Σ_k ρ̂(ω_k; V, N) E_k at unit (n, 3) R and V, N = normalize(R + V): (n, 3).
 

@@ -24,6 +24,7 @@ import numpy as np
 
 from .._version import __version__
 from ..brdf_io.cubemap import cube_map_directions
+from ..brdf_io.env_rotation import check_env_rotation, to_map_frame
 from ..brdf_io.envmap import EnvironmentMap, load_env
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.latlong import bilinear_lookup
@@ -158,7 +159,8 @@ class SHRM:
         """True when the scene has explicit lights beside the maps."""
         return self.lights is not None and len(self.lights) > 0
 
-    def radiance(self, R: np.ndarray, V: np.ndarray, *, clamp: bool = True, lights: bool = True) -> np.ndarray:
+    def radiance(self, R: np.ndarray, V: np.ndarray, *, clamp: bool = True, lights: bool = True,
+                 env_rotation: Any = None) -> np.ndarray:
         """Predicted reflected radiance B(R, V), shape (n, 3): the SHRM (RH02 eq. 8) plus the
         explicit lights' exact reflection Σ_k ρ̂(ω_k; V, N) E_k (DESIGN §5a).
 
@@ -176,14 +178,20 @@ class SHRM:
         lights
             Add the lights (default). ``lights=False`` gives the SHRM part alone;
             :meth:`light_radiance` gives the lights alone.
+        env_rotation
+            The environment rotated by Q at view time (``brdf_io.env_rotation``): a (3, 3)
+            rotation, Euler angles (AZ, EL[, ROLL]) in degrees, or None. The radiance under the
+            rotated map (and lights moved to Q ω_k) is this SHRM's at (Qᵀ R, Qᵀ V); nothing is
+            prefiltered again.
 
         Raises
         ------
         BadInputError
-            Bad directions; lights whose BRDF cannot be loaded (``meta["lights_brdf"]``).
+            Bad directions or rotation; lights whose BRDF cannot be loaded (``meta["lights_brdf"]``).
         """
-        R = _unit_rows(R, "R")
-        V = _unit_rows(V, "V")
+        rotation = check_env_rotation(env_rotation)
+        R = to_map_frame(_unit_rows(R, "R"), rotation)
+        V = to_map_frame(_unit_rows(V, "V"), rotation)
         if R.shape != V.shape:
             raise BadInputError(None, f"R and V must have the same shape (n, 3), got {R.shape} and {V.shape}")
         maps = np.moveaxis(self.coeffs, 0, 2)  # (H, W, n_coef, 3)
@@ -196,10 +204,12 @@ class SHRM:
             out += self.lights.radiance(self.lights_brdf(), R, V)
         return out
 
-    def light_radiance(self, R: np.ndarray, V: np.ndarray) -> np.ndarray:
-        """The explicit lights' reflection alone, (n, 3) (zeros without lights)."""
-        R = _unit_rows(R, "R")
-        V = _unit_rows(V, "V")
+    def light_radiance(self, R: np.ndarray, V: np.ndarray, *, env_rotation: Any = None) -> np.ndarray:
+        """The explicit lights' reflection alone, (n, 3) (zeros without lights); ``env_rotation`` as
+        in :meth:`radiance` (the lights move with their map)."""
+        rotation = check_env_rotation(env_rotation)
+        R = to_map_frame(_unit_rows(R, "R"), rotation)
+        V = to_map_frame(_unit_rows(V, "V"), rotation)
         if not self.has_lights:
             return np.zeros(R.shape)
         return self.lights.radiance(self.lights_brdf(), R, V)
@@ -218,14 +228,17 @@ class SHRM:
         """Write the SHRM to a ``.shrm.npz`` file (atomic; see ``data_specs/shrm_file.md``)."""
         return save_shrm(path, self)
 
-    def view_map(self, view: np.ndarray, *, clamp: bool = True) -> np.ndarray:
+    def view_map(self, view: np.ndarray, *, clamp: bool = True, env_rotation: Any = None) -> np.ndarray:
         """Distant-viewer map Σ B̃_pq(α, β) Y^r_pq(V) for one view direction (RH02 eq. 12): the SHRM
         part only — a light's highlight is sharper than the map resolves, so renderers shade the
         lights per pixel (:meth:`light_radiance`).
 
-        Returns float32 (H, W, 3); ``clamp`` as in :meth:`radiance`.
+        Returns float32 (H, W, 3); ``clamp`` as in :meth:`radiance`. With ``env_rotation`` Q (as in
+        :meth:`radiance`) the map is that of the view Qᵀ V, in the unrotated map's frame: look it up
+        at Qᵀ R (``brdf_io.env_rotation.to_map_frame``), as the renderers do.
         """
-        basis = real_sph_harm(self.P, np.asarray(view, dtype=np.float64).reshape(3)).astype(np.float32)
+        view = to_map_frame(np.asarray(view, dtype=np.float64).reshape(3), check_env_rotation(env_rotation))
+        basis = real_sph_harm(self.P, view).astype(np.float32)
         out = np.tensordot(basis, self.coeffs, axes=(0, 0))
         return np.maximum(out, 0.0, out=out) if clamp else out
 

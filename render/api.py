@@ -118,6 +118,8 @@ def render_scene(
         against Gibbs ringing: ``RenderOptions(window="auto" | "lanczos" | "none")``); default
         ``RenderOptions()`` (window ``"auto"``). The SHRM modes clamp the radiance at 0 in the
         shader; ``built.info`` has the window used and the undershoot before and after it.
+        ``RenderOptions(env_rotation=...)`` rotates the environment at view time, one rotation for
+        every frame or one per camera (built once; the lights and background turn with it).
     progress
         Optional callable told the stage as each starts: ``"load"``, ``"build"``, ``"render"``.
 
@@ -125,7 +127,8 @@ def render_scene(
     ------
     BadInputError
         Unknown mode, ε outside (0, 1), size, background or frame count out of range,
-        self-shadowing in a mode without it, and anything the loaders and builders refuse.
+        self-shadowing in a mode without it, several environment rotations but not one per camera,
+        and anything the loaders and builders refuse.
     OffscreenError
         No offscreen OpenGL context.
 
@@ -151,6 +154,10 @@ def render_scene(
         raise BadInputError(None, f"fps_frames must be an integer >= 0, got {fps_frames!r}")
     size, fps_frames = int(size), int(fps_frames)
     cameras = _cameras(camera)
+    rotations = options.rotations()
+    if isinstance(rotations, list) and len(rotations) != len(cameras):
+        raise BadInputError(None, f"options.env_rotation holds {len(rotations)} rotations for {len(cameras)} "
+                            "camera(s): give one, or one per camera")
 
     def stage(name: str) -> None:
         if progress is not None:
@@ -165,6 +172,6 @@ def render_scene(
     stage("render")
     frames, timings = render_frames(
         mesh, built.model, cameras, size=size, mode=record.name, env_radiance=env.radiance,
-        background=background, fps_frames=fps_frames, visibility_sh=built.visibility_sh,
+        background=background, fps_frames=fps_frames, visibility_sh=built.visibility_sh, env_rotation=rotations,
     )
     return SceneRender(mesh, record.name, built, cameras, frames, timings, size)

@@ -14,9 +14,11 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
+from ..brdf_io.env_rotation import check_env_rotation, to_map_frame
 from .camera import Camera
 from .mesh import Mesh
 
@@ -130,10 +132,19 @@ def interpolate_vertex_data(geometry: HitGeometry, mesh: Mesh, values: np.ndarra
     return b[:, 0:1] * values[f[:, 0]] + b[:, 1:2] * values[f[:, 1]] + b[:, 2:3] * values[f[:, 2]]
 
 
-def shade(geometry: HitGeometry, radiance: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> np.ndarray:
-    """Radiance image (H, W, 3) float64: ``radiance(R, V)`` at hit pixels, 0 elsewhere."""
+def shade(
+    geometry: HitGeometry, radiance: Callable[[np.ndarray, np.ndarray], np.ndarray], *, env_rotation: Any = None
+) -> np.ndarray:
+    """Radiance image (H, W, 3) float64: ``radiance(R, V)`` at hit pixels, 0 elsewhere.
+
+    ``env_rotation``: the environment rotated by Q (a (3, 3) rotation, Euler angles (AZ, EL[, ROLL])
+    in degrees, or None; ``brdf_io.env_rotation``): ``radiance`` of the unrotated scene is called at
+    (Qᵀ R, Qᵀ V), which is the radiance under the rotated map for any B (an SHRM, the angular
+    reference, a baseline), as the shaders do. BadInputError for a bad rotation.
+    """
+    rotation = check_env_rotation(env_rotation)
     out = np.zeros(geometry.hit.shape + (3,))
     m = geometry.hit
     if m.any():
-        out[m] = radiance(geometry.R[m], geometry.V[m])
+        out[m] = radiance(to_map_frame(geometry.R[m], rotation), to_map_frame(geometry.V[m], rotation))
     return out

@@ -27,7 +27,9 @@ Optional self-shadowing (Green et al. 2007 eq. 7, :mod:`shrmkit.analysis.baselin
 ``render.glsl.varying``), and each lobe is multiplied
 by V(d_nk) = clamp(Σ c_i Y^r_i(d_nk), 0, 1), or (``normalized``) the attributes hold the
 occlusion coefficients o = step(n_vertex) − c and V = clamp(1 − Σ o_i Y^r_i(d) / S(max(N·d, 0)), 0, 1)
-with S the SH-4 truncated hemisphere step (``selfshadow.visibility_at``).
+with S the SH-4 truncated hemisphere step (``selfshadow.visibility_at``). Under a rotated
+environment (``render.glsl.TO_MAP_UNIFORM``) the lobes are read in the map's frame and the
+visibility, the mesh's own, at the world direction Q d_nk.
 """
 
 from __future__ import annotations
@@ -38,6 +40,7 @@ from ..analysis.baselines.gaussian_lobes import GaussianLobeModel, GaussianLobes
 from ..analysis.baselines.selfshadow import hemisphere_step_sh
 from .glsl import (
     LATLONG_GLSL,
+    TO_MAP_UNIFORM,
     Shading,
     check_texture_size,
     fragment_replacements,
@@ -190,7 +193,10 @@ def gaussian_fragment_replacements(
     ]
     if shadow:
         dec += [f"#define GLOBE_NORMALIZED {1 if normalized else 0}", sh_glsl(4), _SHADOW,
-                "#define GLOBE_LOBE_VALUE (sg_lookup(idx, d) * globe_visibility(d, shrmN))"]
+                # the visibility is the mesh's, in the world frame: d and N back from the (rotated)
+                # environment's frame, Q d = d * Qᵀ (render.glsl.TO_MAP_UNIFORM)
+                f"#define GLOBE_LOBE_VALUE (sg_lookup(idx, d) * globe_visibility(d * {TO_MAP_UNIFORM}, "
+                f"shrmN * {TO_MAP_UNIFORM}))"]
     else:
         dec.append("#define GLOBE_LOBE_VALUE sg_lookup(idx, d)")
     return fragment_replacements(dec, _BODY, VIS_ATTRIBUTES if shadow else ())

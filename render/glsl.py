@@ -22,7 +22,12 @@ computes V as the prelude does (the quad's point lies on the same pixel ray as t
 point, so eye − P has the same direction) and runs the same body.
 
 Uniforms (set per frame by the renderer): ``shrmEye`` (vec3), ``shrmOrtho`` (int),
-``shrmViewDir`` (vec3, toward the camera, used when ortho).
+``shrmViewDir`` (vec3, toward the camera, used when ortho), and :data:`TO_MAP_UNIFORM`
+(mat3 Qᵀ): the environment rotated by Q at view time (``brdf_io.env_rotation``). The prelude
+of every shading body turns N, V and R into the unrotated map's frame (Qᵀ N, Qᵀ V, Qᵀ R), so
+every mode's lookup, its lights and its per-frame map read B_Q(R, V) = B(Qᵀ R, Qᵀ V); the
+identity when nothing rotates. The deferred geometry pass writes the world R (unrotated), and
+the screen pass rotates what it reads back.
 
 Lat-long lookup (:data:`LATLONG_GLSL`) is the bilinear interpolation of
 :func:`shrmkit.brdf_io.latlong.bilinear_lookup` done with ``texelFetch`` (four exact float
@@ -59,6 +64,7 @@ __all__ = [
     "glsl_float",
     "sh_glsl",
     "LATLONG_GLSL",
+    "TO_MAP_UNIFORM",
 ]
 
 #: Largest texture edge we rely on (llvmpipe and current GPUs allow at least 16384).
@@ -137,12 +143,20 @@ def vertex_replacements(attributes: Sequence[str] = ()) -> Replacements:
 #: V: toward the eye (perspective) or the constant direction toward the camera (ortho)
 _VIEW_LINE = "  vec3 shrmV = (shrmOrtho != 0) ? normalize(shrmViewDir) : normalize(shrmEye - shrmPosWC);"
 
+#: The mat3 uniform Qᵀ taking world directions into the unrotated environment's frame (module docstring;
+#: column-major as OpenGL stores it); a shader that reads it declares nothing: the renderer sets it.
+TO_MAP_UNIFORM = "shrmToMap"
+_TO_MAP_LINES = [f"  shrmN = {TO_MAP_UNIFORM} * shrmN;", f"  shrmV = {TO_MAP_UNIFORM} * shrmV;",
+                 f"  shrmR = {TO_MAP_UNIFORM} * shrmR;"]
+
 
 def fragment_replacements(
-    declarations: Sequence[str], body: Sequence[str], attributes: Sequence[str] = ()
+    declarations: Sequence[str], body: Sequence[str], attributes: Sequence[str] = (), *, to_map: bool = True
 ) -> Replacements:
     """(tag, replacement) pairs for the fragment shader: the prelude, the mode's ``declarations``
-    and ``body`` (which sets ``vec3 shrmRad`` from ``shrmN``, ``shrmV``, ``shrmR``), the output."""
+    and ``body`` (which sets ``vec3 shrmRad`` from ``shrmN``, ``shrmV``, ``shrmR``), the output.
+    ``to_map`` (default): N, V, R are turned into the unrotated environment's frame by the uniform
+    :data:`TO_MAP_UNIFORM` before the body; False leaves them in the world frame (the geometry pass)."""
     dec = [
         "//VTK::Edges::Dec",
         "in vec3 shrmPosWC;",
@@ -155,6 +169,7 @@ def fragment_replacements(
         "  if (!gl_FrontFacing) shrmN = -shrmN;",
         _VIEW_LINE,
         "  vec3 shrmR = normalize(2.0 * dot(shrmN, shrmV) * shrmN - shrmV);",
+        *(_TO_MAP_LINES if to_map else []),
         *body,
         "  gl_FragData[0] = vec4(shrmRad, 1.0);",
     ]
@@ -167,7 +182,7 @@ def gbuffer_fragment_replacements() -> Replacements:
     """(tag, replacement) pairs of the deferred geometry pass: the prelude's R (unit, z-up
     world frame) times the object's tag, the uniform ``shrmGScale`` (2^(k+1), exact), as the
     colour; alpha 1. The screen pass (:func:`screen_fragment_replacements`) divides it out."""
-    return fragment_replacements([], ["  vec3 shrmRad = shrmR * shrmGScale;"])
+    return fragment_replacements([], ["  vec3 shrmRad = shrmR * shrmGScale;"], to_map=False)
 
 
 def screen_fragment_replacements(declarations: Sequence[str], body: Sequence[str]) -> Replacements:
@@ -176,8 +191,9 @@ def screen_fragment_replacements(declarations: Sequence[str], body: Sequence[str
     Reads the geometry pass at the fragment's pixel (sampler ``shrmGbuf``, texel = pixel), keeps
     the pixels whose |texel / shrmGScale| is 1 (the object's tag; discards the others), with
     R = texel / shrmGScale (exact: a power of two), and V as :func:`fragment_replacements` does from the quad's
-    world position (on the pixel's ray, like the surface point), then runs ``body`` (which
-    must not read ``shrmN``) and writes ``vec4(shrmRad, 1)``.
+    world position (on the pixel's ray, like the surface point), turns R and V into the unrotated
+    environment's frame (:data:`TO_MAP_UNIFORM`), then runs ``body`` (which must not read ``shrmN``)
+    and writes ``vec4(shrmRad, 1)``.
     """
     dec = ["//VTK::Edges::Dec", "in vec3 shrmPosWC;", "in vec3 shrmNormWC;", *declarations]
     impl = [
@@ -186,6 +202,7 @@ def screen_fragment_replacements(declarations: Sequence[str], body: Sequence[str
         "  vec3 shrmR = shrmG.xyz / shrmGScale;",
         "  if (abs(length(shrmR) - 1.0) > 0.25) discard;",
         _VIEW_LINE,
+        *_TO_MAP_LINES[1:],
         *body,
         "  gl_FragData[0] = vec4(shrmRad, 1.0);",
     ]

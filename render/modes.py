@@ -47,6 +47,7 @@ from ..analysis.pixels import pixel_line
 from ..analysis.shrm import DEFAULT_WINDOW, SHRM, check_window, prefilter
 from ..analysis.view_bands import DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG, check_criterion, check_max_view
 from ..brdf_io.brdf import BRDF
+from ..brdf_io.env_rotation import check_env_rotation
 from ..brdf_io.envmap import EnvironmentMap
 from ..brdf_io.errors import BadInputError
 from .gaussian_shader import gaussian_shading
@@ -105,6 +106,13 @@ class RenderOptions:
     pixel_rule
         The SHRM modes' pixel rule (``prefilter(pixel_rule=)``, default True: F_B raised until 90 %
         of the directions are within √ε; :mod:`shrmkit.analysis.pixels`).
+    env_rotation
+        Every mode: the environment rotated at view time (``brdf_io.env_rotation``; nothing is
+        prefiltered or fitted again): None; one rotation for every frame, a (3, 3) matrix or Euler
+        angles (AZ, EL[, ROLL]) in degrees (AZ in the sense of ``load_env(azimuth=)``); or a
+        sequence of (3, 3) matrices, one per camera (a lighting turntable,
+        ``pipeline.light_turntable_rotations``). Stored as row-major 9-tuples; :meth:`rotations`
+        gives the matrices. The lights and the ``"env"`` background turn with the map.
     """
 
     lobes: int = 3
@@ -115,8 +123,10 @@ class RenderOptions:
     max_view_deg: float = DEFAULT_MAX_VIEW_DEG
     lights: str | int = DEFAULT_LIGHTS
     pixel_rule: bool = True
+    env_rotation: Any = None
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "env_rotation", _rotation_tuples(self.env_rotation))
         check_window(self.window)
         if not isinstance(self.pixel_rule, bool):
             raise BadInputError(None, f"pixel_rule must be True or False, got {self.pixel_rule!r}")
@@ -127,6 +137,29 @@ class RenderOptions:
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, Integral) or not lo <= value <= hi:
                 raise BadInputError(None, f"{name} must be an integer in [{lo}, {hi}], got {value!r}")
+
+    def rotations(self) -> np.ndarray | list[np.ndarray] | None:
+        """``env_rotation`` as ``render_frames`` takes it: None, one (3, 3) matrix, or a list of them."""
+        if self.env_rotation is None:
+            return None
+        matrices = [np.array(r, dtype=np.float64).reshape(3, 3) for r in self.env_rotation]
+        return matrices[0] if len(matrices) == 1 else matrices
+
+
+def _rotation_tuples(value: Any) -> tuple[tuple[float, ...], ...] | None:
+    """:attr:`RenderOptions.env_rotation` normalized: None, or row-major 9-tuples (one, or one per camera)."""
+    if value is None:
+        return None
+    if isinstance(value, tuple) and value and all(isinstance(r, tuple) and len(r) == 9 for r in value):
+        value = [np.reshape(r, (3, 3)) for r in value]  # already normalized (dataclasses.replace)
+    try:
+        many = np.ndim(value) == 3
+    except ValueError:  # ragged
+        many = False
+    rotations = [check_env_rotation(r) for r in value] if many else [check_env_rotation(value)]
+    if not rotations:
+        raise BadInputError(None, "env_rotation: an empty sequence of rotations")
+    return tuple(tuple(float(x) for x in r.reshape(-1)) for r in rotations)
 
 
 @dataclass(frozen=True, eq=False)

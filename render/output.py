@@ -31,6 +31,7 @@ import OpenEXR
 from PIL import Image
 
 from ..brdf_io.atomic import atomic_path
+from ..brdf_io.env_rotation import to_map_frame
 from ..brdf_io.latlong import bilinear_lookup
 from .camera import Camera
 
@@ -50,12 +51,16 @@ __all__ = [
 TONE_MAPS = ("srgb", "filmic")
 
 
-def environment_background(env_radiance: np.ndarray, camera: Camera, width: int, height: int) -> np.ndarray:
+def environment_background(
+    env_radiance: np.ndarray, camera: Camera, width: int, height: int, *, env_rotation: np.ndarray | None = None
+) -> np.ndarray:
     """The environment seen along each camera ray: bilinear lat-long lookup, float32 (H, W, 3).
 
-    ``env_radiance`` is an (h, w, 3) lat-long map in the z-up frame (DESIGN §2).
+    ``env_radiance`` is an (h, w, 3) lat-long map in the z-up frame (DESIGN §2); ``env_rotation``
+    a (3, 3) rotation Q of the map (``brdf_io.env_rotation``): the ray d sees L(Qᵀ d).
     """
     _, dirs = camera.rays(width, height)
+    dirs = to_map_frame(dirs, env_rotation)
     return bilinear_lookup(np.asarray(env_radiance, dtype=np.float64), dirs).astype(np.float32)
 
 

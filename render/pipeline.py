@@ -15,13 +15,14 @@ from typing import Any
 
 import numpy as np
 
+from ..brdf_io.env_rotation import check_env_rotation, rotation_about_z
 from .camera import Camera, orbit_camera
 from .mesh import Mesh
 from .modes import DEFAULT_MODE
 from .output import composite, environment_background
 from .vtk_renderer import SHRMRenderer
 
-__all__ = ["Frame", "FrameTimings", "BACKGROUNDS", "turntable_cameras", "render_frames"]
+__all__ = ["Frame", "FrameTimings", "BACKGROUNDS", "turntable_cameras", "light_turntable_rotations", "render_frames"]
 
 BACKGROUNDS = ("env", "black", "transparent")
 
@@ -39,12 +40,21 @@ class Frame:
 @dataclass(frozen=True)
 class FrameTimings:
     """Seconds for the first frame (context, shaders, upload, draw, readback), frames per second
-    over ``fps_frames`` repeated draws, and the OpenGL back end."""
+    over ``fps_frames`` repeated draws, the OpenGL back end, and ``frame_seconds``: each frame's
+    own cost (per-frame map update, draw, readback and its background), the first one included."""
 
     first_frame_s: float
     fps: float
     fps_frames: int
     backend: str
+    frame_seconds: tuple[float, ...] = ()
+
+    @property
+    def later_frame_s(self) -> float:
+        """Mean seconds of the frames after the first (the first compiles shaders and uploads
+        textures); the first frame's own cost when there is one frame only."""
+        later = self.frame_seconds[1:] or self.frame_seconds
+        return float(np.mean(later)) if later else float("nan")
 
 
 def turntable_cameras(base: Camera, n_frames: int, center: np.ndarray = (0.0, 0.0, 0.0)) -> list[Camera]:
@@ -53,6 +63,28 @@ def turntable_cameras(base: Camera, n_frames: int, center: np.ndarray = (0.0, 0.
         raise ValueError(f"turntable needs at least 1 frame, got {n_frames}")
     c = np.asarray(center, dtype=np.float64)
     return [orbit_camera(base, c, 2.0 * np.pi * k / n_frames) for k in range(n_frames)]
+
+
+def light_turntable_rotations(n_frames: int, base: np.ndarray | None = None) -> list[np.ndarray]:
+    """``n_frames`` rotations of the environment about the up axis (+z): frame k is
+    R_z(360° k / n) · Q_base (``brdf_io.env_rotation``; the sense of ``--env-azimuth``), Q_base
+    the identity for None. The lighting turns while the camera stays (``shrm render --light-turntable``)."""
+    if n_frames < 1:
+        raise ValueError(f"light turntable needs at least 1 frame, got {n_frames}")
+    q = np.eye(3) if base is None else check_env_rotation(base)
+    return [rotation_about_z(360.0 * k / n_frames) @ q for k in range(n_frames)]
+
+
+def _rotations(env_rotation: Any, n: int) -> list[np.ndarray | None]:
+    """One rotation (or None) per camera from ``render_frames``' ``env_rotation``."""
+    if env_rotation is None:
+        return [None] * n
+    if np.ndim(env_rotation) != 3:  # one rotation for every frame
+        return [check_env_rotation(env_rotation)] * n
+    rotations = [check_env_rotation(r) for r in env_rotation]
+    if len(rotations) != n:
+        raise ValueError(f"env_rotation: {len(rotations)} rotations for {n} cameras (give one, or one per camera)")
+    return rotations
 
 
 def render_frames(
@@ -66,6 +98,7 @@ def render_frames(
     background: str = "env",
     fps_frames: int = 10,
     visibility_sh: np.ndarray | None = None,
+    env_rotation: Any = None,
 ) -> tuple[list[Frame], FrameTimings]:
     """Render ``mesh`` shaded by ``model`` in render ``mode`` from each camera into size × size frames.
 
@@ -81,26 +114,40 @@ def render_frames(
     visibility_sh
         Modes with self-shadowing only: per-vertex order-4 SH visibility
         (``analysis.baselines.selfshadow.vertex_visibility_sh``).
+    env_rotation
+        The environment rotated at view time (``brdf_io.env_rotation``): None, one rotation for
+        every frame (a (3, 3) matrix or Euler angles (AZ, EL[, ROLL]) in degrees), or a sequence of
+        (3, 3) matrices, one per camera (:func:`light_turntable_rotations`). The object and the
+        ``"env"`` background are drawn under it; the model is not built again.
+
+    Raises
+    ------
+    ValueError
+        A bad background, or as many rotations as cameras not given (BadInputError for a rotation
+        that is not one).
     """
     if background not in BACKGROUNDS:
         raise ValueError(f"background must be one of {BACKGROUNDS}, got {background!r}")
     if background == "env" and env_radiance is None:
         raise ValueError("background 'env' needs env_radiance")
+    rotations = _rotations(env_rotation, len(cameras))
     t0 = time.perf_counter()
     with SHRMRenderer(size, size) as renderer:
         renderer.add_object(mesh, model, mode=mode, visibility_sh=visibility_sh)
-        results = [renderer.render(cameras[0])]
+        results = [renderer.render(cameras[0], env_rotation=rotations[0])]
         first = time.perf_counter() - t0
-        results += [renderer.render(cam) for cam in cameras[1:]]
+        results += [renderer.render(cam, env_rotation=q) for cam, q in zip(cameras[1:], rotations[1:], strict=True)]
         fps = renderer.frames_per_second(cameras[0], fps_frames) if fps_frames > 0 else float("nan")
         backend = renderer.backend
-    frames = []
-    for cam, res in zip(cameras, results, strict=True):
+    frames, seconds = [], []
+    for cam, q, res in zip(cameras, rotations, results, strict=True):
+        t = time.perf_counter()
         if background == "env":
-            bg = environment_background(env_radiance, cam, size, size)
+            bg = environment_background(env_radiance, cam, size, size, env_rotation=q)
             frames.append(Frame(composite(res.radiance, res.alpha, bg), res.alpha, False))
         elif background == "black":
             frames.append(Frame(composite(res.radiance, res.alpha, (0.0, 0.0, 0.0)), res.alpha, False))
         else:
             frames.append(Frame(res.radiance, res.alpha, True))
-    return frames, FrameTimings(first, fps, fps_frames, backend)
+        seconds.append(res.seconds + time.perf_counter() - t)
+    return frames, FrameTimings(first, fps, fps_frames, backend, tuple(seconds))

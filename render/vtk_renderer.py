@@ -9,9 +9,12 @@ once for every mode, and dispatches through the record. Rendering returns linear
 read back as float32, never clamped or quantized.
 
 Frame: VTK world coordinates are the z-up math frame (``camera`` module docstring); meshes
-are uploaded in world coordinates with an identity actor matrix.
+are uploaded in world coordinates with an identity actor matrix. The environment may be rotated
+per frame (``draw``/``render``'s ``env_rotation`` Q, ``brdf_io.env_rotation``): the shaders look
+up at Qᵀ R, Qᵀ V (``glsl.TO_MAP_UNIFORM``) and the per-frame maps are made for Qᵀ Ṽ; no texture
+changes.
 
-Per frame, ``draw`` only sets the camera, three uniforms and each object's back-face culling,
+Per frame, ``draw`` only sets the camera, four uniforms and each object's back-face culling,
 runs the modes' texture updates and calls VTK's Render; shader replacements, textures and
 geometry are set up once in ``add_object``. Back faces are culled for an object whose mesh is
 closed and outward oriented (:func:`closed_outward`) while its bounding sphere lies wholly
@@ -48,8 +51,9 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
+from ..brdf_io.env_rotation import check_env_rotation, to_map_frame
 from .camera import Camera, orbit_camera
-from .glsl import Shading, gbuffer_fragment_replacements, vertex_replacements
+from .glsl import TO_MAP_UNIFORM, Shading, gbuffer_fragment_replacements, vertex_replacements
 from .mesh import Mesh, make_mesh
 from .modes import DEFAULT_MODE, RenderMode, get_mode
 from .offscreen import is_software_rasterizer, make_render_window, read_rgba_float
@@ -217,6 +221,14 @@ class _Object:
     closed: bool  # closed, consistently and outward oriented: back faces never visible from outside
     deferred: _Deferred | None = None  # the deferred passes' actors, when the mode has them
     geometry: Any = None  # vtkActor writing R (the geometry pass's shader, tag 1), made by reflection_directions
+
+
+def _to_map_values(env_rotation: np.ndarray | None) -> list[float]:
+    """The 9 floats of the uniform :data:`~shrmkit.render.glsl.TO_MAP_UNIFORM` (the GLSL matrix Qᵀ):
+    OpenGL reads them column by column (glUniformMatrix3fv, no transpose), and the columns of Qᵀ
+    are the rows of Q."""
+    q = np.eye(3) if env_rotation is None else np.asarray(env_rotation, dtype=np.float64)
+    return [float(x) for x in q.reshape(-1)]
 
 
 class SHRMRenderer:
@@ -387,6 +399,7 @@ class SHRMRenderer:
         uni.SetUniform3f("shrmEye", [0.0, 0.0, 0.0])
         uni.SetUniform3f("shrmViewDir", [1.0, 0.0, 0.0])
         uni.SetUniformi("shrmOrtho", 0)
+        uni.SetUniformMatrix3x3(TO_MAP_UNIFORM, _to_map_values(None))
         if scale is not None:
             uni.SetUniformf("shrmGScale", scale)
         _set_uniforms(actor, uniforms or {})
@@ -425,17 +438,19 @@ class SHRMRenderer:
         SHRMRenderer._shader(actor, shading.vertex, shading.fragment, uniforms=shading.uniforms)
         return actor, tex, data, buf
 
-    def update_view_maps(self, camera: Camera) -> None:
+    def update_view_maps(self, camera: Camera, env_rotation: np.ndarray | None = None) -> None:
         """Run each object's per-frame texture update (its mode's ``update``) and mark the texture for upload.
 
         The update gets Ṽ, the direction from the object's bounding-sphere centre toward the
-        camera (distant: the map Σ B̃_pq Y^r_pq(Ṽ) of RH02 eq. 12; rsibr: the blended view map).
+        camera (distant: the map Σ B̃_pq Y^r_pq(Ṽ) of RH02 eq. 12; rsibr: the blended view map),
+        in the unrotated environment's frame (Qᵀ Ṽ for ``env_rotation`` Q, a (3, 3) rotation).
         """
         for obj in self._objects:
             if obj.mode.update is None:
                 continue
+            view = to_map_frame(camera.view_direction(obj.center), env_rotation)
             # obj.buffer is shared with the vtkImageData (no copy); Modified() re-uploads it
-            obj.mode.update(obj.state, camera.view_direction(obj.center), obj.buffer)
+            obj.mode.update(obj.state, view, obj.buffer)
             obj.image.Modified()
 
     def _clipping(self, camera: Camera) -> tuple[float, float]:
@@ -461,13 +476,14 @@ class SHRMRenderer:
         return bool(obj.closed and depth - obj.radius >= near)
 
     @staticmethod
-    def _set_view_uniforms(actor, camera: Camera) -> None:
+    def _set_view_uniforms(actor, camera: Camera, env_rotation: np.ndarray | None = None) -> None:
         uni = actor.GetShaderProperty().GetFragmentCustomUniforms()
         uni.SetUniform3f("shrmEye", camera.eye.tolist())
         uni.SetUniform3f("shrmViewDir", (-camera.forward).tolist())
         uni.SetUniformi("shrmOrtho", 1 if camera.projection == "ortho" else 0)
+        uni.SetUniformMatrix3x3(TO_MAP_UNIFORM, _to_map_values(env_rotation))
 
-    def _setup(self, camera: Camera, update_maps: bool = True) -> None:
+    def _setup(self, camera: Camera, update_maps: bool = True, env_rotation: np.ndarray | None = None) -> None:
         near, far = self._clipping(camera)
         camera.apply_to(self._renderer.GetActiveCamera(), (near, far))
         self._deferred_frame = self.deferred
@@ -483,12 +499,16 @@ class SHRMRenderer:
                 obj.actor.GetProperty().SetBackfaceCulling(cull)
                 actors = (obj.actor,)
             for actor in actors:
-                self._set_view_uniforms(actor, camera)
+                self._set_view_uniforms(actor, camera, env_rotation)
         if update_maps:
-            self.update_view_maps(camera)
+            self.update_view_maps(camera, env_rotation)
 
-    def draw(self, camera: Camera, *, update_maps: bool = True) -> None:
+    def draw(self, camera: Camera, *, update_maps: bool = True, env_rotation: Any = None) -> None:
         """Render one frame into the offscreen framebuffer (no readback; for timing).
+
+        ``env_rotation``: the environment rotated by Q for this frame (a (3, 3) rotation, Euler
+        angles (AZ, EL[, ROLL]) in degrees, or None; ``brdf_io.env_rotation``, BadInputError for
+        anything else): every object is shaded at Qᵀ R, Qᵀ V, its lights moved with the map.
 
         A deferred frame (:attr:`deferred`) is two VTK renders: the geometry pass, then the
         screen pass (module docstring).
@@ -496,7 +516,7 @@ class SHRMRenderer:
         ``update_maps=False`` keeps the distant-mode maps of the previous frame (only for
         measuring the cost of the per-frame map update).
         """
-        self._setup(camera, update_maps)
+        self._setup(camera, update_maps, check_env_rotation(env_rotation))
         if not self._deferred_frame:
             self._show(forward=True, gbuffer=False, screen=False)
             self._window.Render()
@@ -536,10 +556,10 @@ class SHRMRenderer:
         self.finish()
         return n_frames / (time.perf_counter() - t0)
 
-    def render(self, camera: Camera) -> RenderResult:
-        """Render one frame and read back linear radiance and coverage."""
+    def render(self, camera: Camera, *, env_rotation: Any = None) -> RenderResult:
+        """Render one frame and read back linear radiance and coverage (``env_rotation`` as in :meth:`draw`)."""
         t0 = time.perf_counter()
-        self.draw(camera)
+        self.draw(camera, env_rotation=env_rotation)
         rgba = read_rgba_float(self._window)
         return RenderResult(rgba[..., :3].copy(), rgba[..., 3].copy(), time.perf_counter() - t0)
 
