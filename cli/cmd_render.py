@@ -29,13 +29,14 @@ from ..render.modes import (
 )
 from ..render.offscreen import skipped_window_classes
 from ..render.output import to_8bit, turntable_paths, write_exr, write_gif, write_png
-from ..render.pipeline import BACKGROUNDS, Frame, turntable_cameras
+from ..render.pipeline import BACKGROUNDS, Frame, light_turntable_rotations, turntable_cameras
 from .common import (
     add_env_orientation,
     add_lights_option,
     add_order_rule,
     add_pixel_rule_option,
     add_window_option,
+    env_rotation_arg,
     load_env_arg,
     order_rule,
 )
@@ -103,6 +104,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="environment seen behind the object, black, or transparent PNG (default env)")
     p.add_argument("--turntable", type=int, default=0, metavar="N",
                    help="render N frames around the z axis to OUT_0000.png ... and OUT.gif")
+    p.add_argument("--env-rotation", default=None, metavar="AZ,EL[,ROLL]",
+                   help="rotate the environment at view time, degrees: AZ about the up axis (the sense of "
+                   "--env-azimuth), then EL raises the horizon point at azimuth 0, ROLL about it first; "
+                   "nothing is prefiltered again (README, 'Lighting that moves')")
+    p.add_argument("--light-turntable", type=int, default=0, metavar="N",
+                   help="render N frames with the environment turning about the up axis (360/N degrees a frame, "
+                   "after --env-rotation) and the camera still, to OUT_0000.png ... and OUT.gif; built once, "
+                   "per-frame cost printed")
     p.add_argument("--fps-frames", type=int, default=10, help="repeated frames for the fps figure (default 10)")
     p.add_argument("-o", "--output", required=True, help="output PNG")
     add_env_orientation(p)
@@ -118,8 +127,12 @@ def _validate(args: argparse.Namespace) -> tuple[list[Camera], RenderOptions]:
     check_eps(args.eps, "--eps")
     if not np.isfinite(args.exposure):
         raise BadInputError(None, f"--exposure must be finite, got {args.exposure}")
-    if args.turntable < 0 or args.fps_frames < 0:
-        raise BadInputError(None, "--turntable and --fps-frames must be >= 0")
+    if args.turntable < 0 or args.fps_frames < 0 or args.light_turntable < 0:
+        raise BadInputError(None, "--turntable, --light-turntable and --fps-frames must be >= 0")
+    if args.turntable and args.light_turntable:
+        raise BadInputError(None, "--turntable (the camera turns) and --light-turntable (the lighting turns): "
+                            "choose one")
+    rotation = env_rotation_arg(args.env_rotation) if args.env_rotation is not None else None
     if Path(args.output).suffix.lower() != ".png":
         raise BadInputError(args.output, "output must be a .png file")
     if args.exr and Path(args.exr).suffix.lower() != ".exr":
@@ -140,10 +153,13 @@ def _validate(args: argparse.Namespace) -> tuple[list[Camera], RenderOptions]:
     except ValueError as err:
         raise BadInputError(None, f"--view/--up: {err}") from None
     cameras = turntable_cameras(camera, args.turntable) if args.turntable else [camera]
+    if args.light_turntable:
+        cameras = [camera] * args.light_turntable
+        rotation = light_turntable_rotations(args.light_turntable, rotation)
     # RenderOptions checks --lobes/--elevations (its ranges, one home) before anything is loaded
     options = RenderOptions(lobes=args.lobes, elevations=args.elevations, self_shadow=args.self_shadow,
                             window=args.window, lights=args.lights, pixel_rule=args.pixel_rule == "on",
-                            **order_rule(args))
+                            env_rotation=rotation, **order_rule(args))
     return cameras, options
 
 
@@ -158,6 +174,22 @@ def _report(args: argparse.Namespace, result: SceneRender) -> None:
     print(f"first frame: {timings.first_frame_s:.3f} s")
     if timings.fps_frames:
         print(f"frames per second: {timings.fps:.1f} (over {timings.fps_frames} frames)")
+    if args.light_turntable:
+        built = _build_seconds(result.built.info)
+        again = "" if built is None else (
+            f"; built once in {built:.3f} s = {built / timings.later_frame_s:.3g} frames "
+            f"(building anew per frame would cost {args.light_turntable * built:.3f} s)")
+        print(f"light turntable: {args.light_turntable} frames, {1e3 * timings.later_frame_s:.1f} ms per frame "
+              f"after the first (view-time rotation, per-frame map, draw, readback, background){again}")
+
+
+def _build_seconds(info: dict) -> float | None:
+    """Seconds the mode's model took to build (the SHRM's prefilter; the lobes' fit and mip stack)."""
+    if "prefilter_seconds" in info:
+        return float(info["prefilter_seconds"]) + float(info.get("rsibr_seconds", 0.0))
+    if "fit_seconds" in info:
+        return float(info["fit_seconds"]) + float(info.get("mip_seconds", 0.0))
+    return None
 
 
 def _write(args: argparse.Namespace, frames: list[Frame]) -> None:
@@ -167,9 +199,10 @@ def _write(args: argparse.Namespace, frames: list[Frame]) -> None:
 
     # every output of one command is written together (atomic_paths): a full disk or a failing writer
     # leaves none of them, and the error names the file
-    if args.turntable:
-        pngs, gif = turntable_paths(args.output, args.turntable)
-        exrs = turntable_paths(args.exr, args.turntable)[0] if args.exr else []
+    n_frames = args.turntable or args.light_turntable
+    if n_frames:
+        pngs, gif = turntable_paths(args.output, n_frames)
+        exrs = turntable_paths(args.exr, n_frames)[0] if args.exr else []
         images = [png(frame) for frame in frames]
         with atomic_paths([*pngs, *exrs, gif]) as temps:
             png_temps, exr_temps, gif_temp = temps[: len(pngs)], temps[len(pngs) : -1], temps[-1]

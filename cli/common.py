@@ -16,6 +16,7 @@ from ..analysis.lights import DEFAULT_LIGHTS, LIGHT_CONTRAST, MAX_LIGHT_RADIUS_D
 from ..analysis.shrm import DEFAULT_WINDOW, WINDOW_BUDGET_EPS, WINDOW_THRESHOLD, WINDOWS
 from ..analysis.tolerance import check_eps
 from ..analysis.view_bands import CRITERIA, DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG
+from ..brdf_io.env_rotation import env_rotation_matrix
 from ..brdf_io.envmap import load_env
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.jsonutil import to_jsonable
@@ -28,6 +29,7 @@ __all__ = [
     "add_order_rule",
     "order_rule",
     "env_orientation",
+    "env_rotation_arg",
     "load_env_arg",
     "load_oriented_env",
     "stdout",
@@ -189,6 +191,20 @@ def env_orientation(args: argparse.Namespace) -> dict[str, Any]:
     """Keyword arguments of ``load_env`` from :func:`add_env_orientation`'s options."""
     return {"up": args.env_up, "flip": args.env_flip, "azimuth": args.env_azimuth,
             "layer": getattr(args, "env_layer", None), "part": getattr(args, "env_part", None)}
+
+
+def env_rotation_arg(text: str, option: str = "--env-rotation") -> np.ndarray:
+    """``AZ,EL[,ROLL]`` (degrees) as the rotation matrix of ``brdf_io.env_rotation.env_rotation_matrix``;
+    :class:`BadInputError` (one line, exit 2) echoing the text otherwise."""
+    parts = str(text).split(",")
+    try:
+        angles = [float(p) for p in parts]
+    except ValueError:
+        angles = []
+    if len(angles) not in (2, 3) or not all(np.isfinite(angles)):
+        raise BadInputError(None, f"{option} must be two or three finite numbers AZ,EL[,ROLL] in degrees, "
+                            f"got {text!r}")
+    return env_rotation_matrix(*angles)
 
 
 def load_oriented_env(spec: str, *, up: str | None, flip: bool, azimuth: float, layer: str | None = None,
