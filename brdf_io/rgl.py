@@ -14,25 +14,34 @@ both pointing away from the surface) with half vector H = normalize(L + V)::
     R   = rgb_{θ_L}(s)                                        bilinear in s, linear in θ_L
     ρ(L, V) = R · D(u) / (4 σ(L) cos θ_V)                     D = ``ndf``, σ = ``sigma``
 
-(without the factor D/(4σ) when the file's ``jacobian`` flag is 0). The table direction
-is L, the measured incident (illumination) direction (``table_direction="view"`` swaps
-the roles); the stored R is the Monte Carlo weight f_r cos θ_o / p(ω_o | ω_i) of VNDF
-sampling, whose density is p = D(ω_h) / (4 σ(ω_i)), so dividing by cos θ_V gives ρ
-without the cosine. R · D/(4σ) is what Mitsuba 3's ``measured`` plugin (and the authors'
-reference code ``powitacq``) returns as ``eval(wi=L, wo=V)`` = ρ · cos θ_V; this module
-reproduces it to float32 precision. R does not vanish at the horizon, so ρ grows like
-1/cos θ_V at grazing V (floored at :data:`GRAZING_COS`); θ_L outside the measured
-θ_i range uses the nearest measured slice.
+(without the factor D/(4σ) when the file's ``jacobian`` flag is 0), written here with
+the table direction ω_i = L. The stored R is the Monte Carlo weight
+f_r cos θ_o / p(ω_o | ω_i) of VNDF sampling, whose density is p = D(ω_h) / (4 σ(ω_i)), so
+dividing by cos θ_o gives ρ without the cosine. R · D/(4σ) is what Mitsuba 3's
+``measured`` plugin (and the authors' reference code ``powitacq``) returns as
+``eval(si.wi, wo)`` = ρ · cos θ_o; this module reproduces it to float32 precision.
+
+**Which direction is ω_i.** Mitsuba's integrators call ``eval`` with ``si.wi`` pointing
+toward the camera (the previous path vertex) and ``wo`` toward the light, so Mitsuba
+renders the data with ω_i = V. The default ``table_direction="view"`` does the same
+(``eval(L, V)`` = the formula above at ω_i = V, ω_o = L), so renders agree with Mitsuba's;
+``table_direction="light"`` (ω_i = L, the direction the gonio-photometer lit the sample
+from) is the explicit alternative. The data are not reciprocal (8–19 % for the vinyls),
+so the two differ; the choice and its sources are in data_specs/rgl_bsdf.md. R does not
+vanish at the horizon, so ρ grows like 1/cos θ_o at grazing ω_o (floored at
+:data:`GRAZING_COS`); θ_i outside the measured range uses the nearest measured slice.
 
 Public objects: :class:`RGLBRDF`, :func:`read_rgl`, :func:`read_tensor_file`,
 :func:`write_tensor_file`, :class:`RGLGamutWarning`, :data:`TENSOR_DTYPES`,
-:data:`GRAZING_COS`.
+:data:`GRAZING_COS`, :data:`RGL_INCIDENT`, :data:`DEFAULT_TABLE_DIRECTION`.
 
 References
 ----------
 J. Dupuy, W. Jakob, "An Adaptive Parameterization for Efficient Material Acquisition and
 Rendering", ACM Trans. Graph. 37(6) (SIGGRAPH Asia 2018), doi:10.1145/3272127.3275059;
-Mitsuba 3, ``src/bsdfs/measured.cpp`` (the ``measured`` BSDF),
+Mitsuba 3, ``src/bsdfs/measured.cpp`` (the ``measured`` BSDF: ω_i = ``si.wi``),
+``include/mitsuba/render/interaction.h`` (``si.wi = to_local(-ray.d)``: toward the camera),
+``src/integrators/path.cpp`` (``bsdf->eval_pdf(ctx, si, wo = to_local(ds.d))``: wo toward the light),
 ``include/mitsuba/core/distr_2d.h`` (``Marginal2D``, continuous variant) and
 ``src/core/tensor.cpp`` (the ``tensor_file`` container).
 """
@@ -53,8 +62,10 @@ from .errors import BadInputError
 from .limits import check_elements, read_bytes
 
 __all__ = [
+    "DEFAULT_TABLE_DIRECTION",
     "GRAZING_COS",
     "RGLBRDF",
+    "RGL_INCIDENT",
     "RGLGamutWarning",
     "TENSOR_DTYPES",
     "read_rgl",
@@ -92,6 +103,14 @@ _BLOCK = 1 << 16  # query points per evaluation block
 #: like 1/cos θ there; the floor keeps it finite (it acts only within 0.00006° of the
 #: horizon).
 GRAZING_COS = 1e-6
+
+
+#: Which argument of ``RGLBRDF.eval(L, V)`` plays the file's incident direction ω_i by default:
+#: ``"view"``, as Mitsuba 3 renders the format (data_specs/rgl_bsdf.md, "Which direction is incident").
+DEFAULT_TABLE_DIRECTION: Literal["light", "view"] = "view"
+#: The command line's and spec strings' names (``--rgl-incident``, ``file.bsdf#light``) -> ``table_direction``.
+RGL_INCIDENT: dict[str, Literal["light", "view"]] = {"camera": "view", "light": "light"}
+_INCIDENT_NAME = {direction: name for name, direction in RGL_INCIDENT.items()}
 
 
 #: A negative RGB value larger than this fraction of the table's largest value is corruption, not an
@@ -435,17 +454,21 @@ class RGLBRDF(BRDF):
         Clamp negative (out-of-gamut) RGB values to 0 with a :class:`RGLGamutWarning`
         (the count stays in ``n_negative``); if false they are kept.
     table_direction
-        Which argument of ``eval`` plays the file's incident direction ω_i: ``"light"``
-        (default; L, as measured: ρ(L, V) = R(θ_L, …) D / (4 σ(L) cos θ_V)) or
-        ``"view"`` (ρ(L, V) is the light-mode value at (V, L): ρ cos θ_L is then exactly
-        what Mitsuba renders with ``si.wi`` toward the camera, bounded at grazing L).
+        Which argument of ``eval`` plays the file's incident direction ω_i: ``"view"``
+        (default, :data:`DEFAULT_TABLE_DIRECTION`; ρ(L, V) = R(θ_V, …) D / (4 σ(V) cos θ_L):
+        ρ cos θ_L is exactly what Mitsuba 3 renders, ``eval(si.wi = V, wo = L)`` with
+        ``si.wi`` toward the camera, bounded at grazing L) or ``"light"`` (ω_i = L, the
+        direction the sample was lit from: ρ(L, V) = R(θ_L, …) D / (4 σ(L) cos θ_V), the
+        view-mode value at (V, L)).
 
     Attributes
     ----------
     n_negative
         Number of negative values in the stored RGB table (before any clamping).
     description, name, source
-        The file's description text, the file stem and path (or a given name, ``None``).
+        The file's description text, the file stem (``read_rgl`` appends ``#light`` for
+        ``table_direction="light"``, the spec string that loads it) and path (or a given
+        name, ``None``).
     theta_i, ndf, sigma, vndf, rgb, luminance, jacobian
         The tables as float64 (``rgb`` after clamping); ``luminance`` (the sampling
         density of Mitsuba's ``sample``) is kept when given, not used by ``eval``.
@@ -472,7 +495,7 @@ class RGLBRDF(BRDF):
         description: str = "",
         luminance: np.ndarray | None = None,
         valid: np.ndarray | None = None,
-        table_direction: Literal["light", "view"] = "light",
+        table_direction: Literal["light", "view"] = DEFAULT_TABLE_DIRECTION,
         name: str = "rgl",
         source: str | None = None,
     ) -> None:
@@ -582,8 +605,9 @@ class RGLBRDF(BRDF):
     def eval(self, L: np.ndarray, V: np.ndarray) -> np.ndarray:
         """RGB ρ(L, V) in 1/sr, shape (..., 3); 0 unless L_z > 0 and V_z > 0.
 
-        With ``table_direction="light"`` L is the file's incident direction ω_i and
-        ρ = R · D / (4 σ(L) cos θ_V); with ``"view"`` the roles of L and V swap.
+        With ``table_direction="view"`` (default) V is the file's incident direction ω_i
+        and ρ = R(θ_V, …) · D / (4 σ(V) cos θ_L), as Mitsuba renders it; with ``"light"``
+        the roles of L and V swap.
         Directions are normalized first. Where the stored R does not fall to 0 at the
         horizon ρ grows like 1/cos θ of the other direction; cos θ is floored at
         :data:`GRAZING_COS`, so ρ is finite for every pair above the surface.
@@ -631,7 +655,7 @@ def read_rgl(
     path: str | os.PathLike[str],
     *,
     clip_negative: bool = True,
-    table_direction: Literal["light", "view"] = "light",
+    table_direction: Literal["light", "view"] = DEFAULT_TABLE_DIRECTION,
 ) -> RGLBRDF:
     """Read an isotropic RGB RGL material (``*_rgb.bsdf``; data_specs/rgl_bsdf.md).
 
@@ -643,8 +667,9 @@ def read_rgl(
         Clamp negative (out-of-gamut) RGB values to 0, with a :class:`RGLGamutWarning`
         naming the count (kept in ``n_negative`` either way).
     table_direction
-        ``"light"`` (default) or ``"view"``: which of L, V is the table's ω_i
-        (:class:`RGLBRDF`).
+        ``"view"`` (default: V is the table's ω_i, as Mitsuba 3 renders the format) or
+        ``"light"`` (L is ω_i) (:class:`RGLBRDF`). ``load_brdf("file.bsdf#light")`` and
+        ``--rgl-incident light`` on the command line select ``"light"``.
 
     Raises
     ------
@@ -674,10 +699,15 @@ def read_rgl(
     >>> brdf.name, brdf.description, brdf.kind
     ('flat_rgb', 'flat', 'tabulated')
 
-    ρ = R · D / (4 σ cos θ_V); at V = normal, 0.5/(4π) = 0.0398 in red:
+    With the default ``table_direction="view"`` the view V is ω_i and
+    ρ = R · D / (4 σ cos θ_L); at cos θ_L = 0.8, 0.5/(4π · 0.8) = 0.0497 in red, and with
+    ``"light"`` (ω_i = L) ρ = R · D / (4 σ cos θ_V) = 0.5/(4π) = 0.0398 at V = normal:
 
     >>> brdf.eval(np.array([0.6, 0.0, 0.8]), np.array([0.0, 0.0, 1.0])).round(5)
-    array([0.03979, 0.01989, 0.00995])
+    array([0.04974, 0.02487, 0.01243])
+    >>> lit = read_rgl(path, table_direction="light")
+    >>> lit.name, lit.eval(np.array([0.6, 0.0, 0.8]), np.array([0.0, 0.0, 1.0])).round(5)
+    ('flat_rgb#light', array([0.03979, 0.01989, 0.00995]))
     >>> brdf.eval(np.array([0.6, 0.0, 0.8]), np.array([0.0, 0.0, -1.0]))  # V below the surface
     array([0., 0., 0.])
     >>> folder.cleanup()
@@ -738,6 +768,8 @@ def read_rgl(
         luminance=luminance,
         valid=fields.get("valid"),
         table_direction=table_direction,
-        name=path.stem,
+        # the convention is part of the name where it is not the default: "paper_white_rgb#light"
+        name=path.stem if table_direction == DEFAULT_TABLE_DIRECTION
+        else f"{path.stem}#{_INCIDENT_NAME.get(table_direction)}",
         source=str(path),
     )

@@ -49,7 +49,7 @@ from .models import (
     SimplifiedMicrofacet,
     lafortune_lobe_peak,
 )
-from .rgl import read_rgl
+from .rgl import RGL_INCIDENT, read_rgl
 from .spec_params import SpecParams, parse_params
 from .table import read_table
 
@@ -187,6 +187,20 @@ class BrdfFileType:
     members: Callable[[Path], list[str]] | None = None
 
 
+def _read_rgl_selected(path: Path, selector: str | None = None) -> BRDF:
+    """An RGL file; ``file.bsdf#camera`` / ``file.bsdf#light`` names the direction that plays
+    the file's incident direction ω_i (:data:`~shrmkit.brdf_io.rgl.RGL_INCIDENT`; default camera,
+    as Mitsuba 3 renders the format: data_specs/rgl_bsdf.md)."""
+    if selector is None:
+        return read_rgl(path)
+    key = selector.strip().lower()
+    if key not in RGL_INCIDENT:
+        raise BadInputError(
+            f"{path}#{selector}", f"unknown RGL incident direction {selector!r}; valid: {', '.join(RGL_INCIDENT)}"
+        )
+    return read_rgl(path, table_direction=RGL_INCIDENT[key])
+
+
 def _curet_members(path: Path) -> list[str]:
     return [str(n) for n in curet_samples(path)]
 
@@ -200,7 +214,8 @@ BRDF_FILE_TYPES: dict[str, BrdfFileType] = {
     ".binary": BrdfFileType(read_merl, "MERL table (data_specs/merl_binary.md)"),
     ".npz": BrdfFileType(read_table, "shrmkit table (data_specs/brdf_table.md)"),
     ".brdf": BrdfFileType(read_cornell, "Cornell scattered measurements (data_specs/cornell_brdf.md)"),
-    ".bsdf": BrdfFileType(read_rgl, "RGL measured material, Mitsuba tensor_file (data_specs/rgl_bsdf.md)"),
+    ".bsdf": BrdfFileType(_read_rgl_selected, "RGL measured material, Mitsuba tensor_file (data_specs/rgl_bsdf.md)",
+                          selector="incident direction: camera (default, as Mitsuba renders) or light"),
     ".dat": BrdfFileType(read_curet, "CURET abrdf.dat beside table.txt (data_specs/curet.md)",
                          selector="sample number 1..61 or name", members=_curet_members),
     ".csv": BrdfFileType(read_gonio_csv, "gonioreflectometer CSV (data_specs/gonio_csv.md)",
@@ -241,8 +256,10 @@ def load_brdf(spec_or_path: str | Path) -> BRDF:
 
     Files are recognised by extension (:data:`BRDF_FILE_TYPES`): ``.binary`` (MERL),
     ``.npz`` (shrmkit table), ``.brdf`` (Cornell scattered measurements), ``.bsdf`` (RGL
-    measured material), ``.dat`` (CURET: ``abrdf.dat#12`` picks sample 12, by number or
-    name), ``.csv`` (gonioreflectometer table: ``PTFE.data.csv#532`` picks 532 nm),
+    measured material; ``file.bsdf#light`` takes the light as the file's incident direction
+    instead of the default camera, data_specs/rgl_bsdf.md), ``.dat`` (CURET:
+    ``abrdf.dat#12`` picks sample 12, by number or name), ``.csv`` (gonioreflectometer
+    table: ``PTFE.data.csv#532`` picks 532 nm),
     ``.json`` (a fitted model: an object with a string key ``model_spec``, strict UTF-8
     JSON of at most :data:`MAX_JSON_BYTES`). :func:`brdf_sources` expands a whole
     multi-BRDF file into its members.

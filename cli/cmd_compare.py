@@ -29,11 +29,13 @@ from .common import (
     add_env_orientation,
     add_lights_option,
     add_order_rule,
+    add_rgl_incident,
     add_window_option,
     load_env_arg,
     number_in,
     print_json,
     print_table,
+    rgl_brdf_arg,
     stderr,
     stdout,
     tolerance,
@@ -52,6 +54,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("brdf", metavar="BRDF", help="BRDF file (.binary, .npz, .json) or spec string")
     parser.add_argument("--env", required=True, help="environment map spec or file")
     add_env_orientation(parser)
+    add_rgl_incident(parser)
     parser.add_argument("--env-height", type=number_in(8, 512, integer=True), default=d.env_height,
                         help=f"resample the environment to this many rows (default {d.env_height}; the reference "
                         "is O(W S_L^2))")
@@ -122,7 +125,7 @@ def run(args: argparse.Namespace) -> int:
     if args.strip and Path(args.strip).suffix.lower() != ".png":
         raise BadInputError(args.strip, "--strip must name a .png file")
     mesh = load_mesh(args.mesh) if args.mesh else None
-    brdf = load_brdf(args.brdf)
+    brdf = load_brdf(rgl_brdf_arg(args.brdf, args))
     for path in (args.strip, args.markdown):
         if path:
             check_writable(path)

@@ -24,7 +24,7 @@ from ..analysis.fit.metrics import METRICS
 from ..analysis.fit.models_param import MODELS
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.specs import load_brdf
-from .common import number_in, print_json, print_table, stderr, stdout
+from .common import add_rgl_incident, number_in, print_json, print_table, rgl_brdf_arg, stderr, stdout
 
 HELP = "fit a Lafortune, Cook-Torrance or microfacet model to a BRDF (nlopt)"
 
@@ -58,12 +58,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="do not constrain the fit to conserve energy")
     parser.add_argument("--json", action="store_true", help="print the fit document as one JSON object")
     parser.add_argument("-o", "--output", help="write the fit document (JSON) to this file")
+    add_rgl_incident(parser)
 
 
 def run(args: argparse.Namespace) -> int:
     if args.output and not args.output.lower().endswith(".json"):
         raise BadInputError(args.output, "the output file must end in .json (load_brdf reads it back)")
-    brdf = load_brdf(args.brdf)
+    source = rgl_brdf_arg(args.brdf, args)
+    brdf = load_brdf(source)
     with Progress(
         TextColumn("[progress.description]{task.description}"), BarColumn(),
         TextColumn("{task.completed}/{task.total}"), TimeElapsedColumn(),
@@ -80,9 +82,9 @@ def run(args: argparse.Namespace) -> int:
             energy_conserving=not args.no_energy, progress=report,
         )
     if args.output:
-        write_fit_json(args.output, result, source=args.brdf)
+        write_fit_json(args.output, result, source=source)
     if args.json:
-        print_json(fit_document(result, source=args.brdf))
+        print_json(fit_document(result, source=source))
     else:
         _print_tables(result, brdf.name)
         if args.output:

@@ -20,10 +20,12 @@ from .common import (
     add_env_orientation,
     add_lights_option,
     add_order_rule,
+    add_rgl_incident,
     load_env_arg,
     order_rule,
     print_json,
     print_table,
+    rgl_brdf_arg,
     stderr,
     stdout,
     tolerance,
@@ -44,10 +46,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_order_rule(parser)
     add_lights_option(parser)
     add_env_orientation(parser)
+    add_rgl_incident(parser)
 
 
 def run(args: argparse.Namespace) -> int:
-    brdf = load_brdf(args.brdf)
+    brdf = load_brdf(rgl_brdf_arg(args.brdf, args))
     with stderr.status(f"choosing orders for {brdf.name} ...", spinner="dots") if not args.json else _null():
         orders = choose_orders(brdf, eps=args.eps, max_F=args.max_F, max_P=args.max_P, **order_rule(args))
     doc = {

@@ -24,11 +24,13 @@ from .common import (
     add_lights_option,
     add_order_rule,
     add_pixel_rule_option,
+    add_rgl_incident,
     add_window_option,
     load_env_arg,
     order_rule,
     print_json,
     print_table,
+    rgl_brdf_arg,
     stderr,
     stdout,
     tolerance,
@@ -56,6 +58,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="print one JSON object (orders, errors, view bands, meta) instead of tables")
     parser.add_argument("-o", "--output", required=True, help="output path, e.g. sky.shrm.npz")
     add_env_orientation(parser)
+    add_rgl_incident(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -66,7 +69,7 @@ def run(args: argparse.Namespace) -> int:
         raise BadInputError(None, "--cube-size needs --cube")
     check_writable(out)
     env = load_env_arg(args.env, args)
-    brdf = load_brdf(args.brdf)
+    brdf = load_brdf(rgl_brdf_arg(args.brdf, args))
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=stderr,
                   disable=args.json) as bar:
         task = bar.add_task("prefiltering", total=None)

@@ -35,10 +35,12 @@ from .common import (
     add_lights_option,
     add_order_rule,
     add_pixel_rule_option,
+    add_rgl_incident,
     add_window_option,
     env_rotation_arg,
     load_env_arg,
     order_rule,
+    rgl_brdf_arg,
 )
 
 HELP = "render a mesh shaded by the SHRM of ENV and BRDF to PNG (and linear EXR), offscreen"
@@ -115,6 +117,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--fps-frames", type=int, default=10, help="repeated frames for the fps figure (default 10)")
     p.add_argument("-o", "--output", required=True, help="output PNG")
     add_env_orientation(p)
+    add_rgl_incident(p)
     p.add_argument("--exr", help="also write linear radiance (before tone mapping) to this EXR")
     p.add_argument("--error-image", metavar="PATH", help=ERROR_IMAGE_HELP)
 
@@ -231,7 +234,7 @@ def run(args: argparse.Namespace) -> int:
     mesh = load_mesh(args.mesh)
     env = load_env_arg(args.env, args)
     result = render_scene(
-        mesh, env, args.brdf, mode=args.mode, eps=args.eps, camera=cameras, size=args.size,
+        mesh, env, rgl_brdf_arg(args.brdf, args), mode=args.mode, eps=args.eps, camera=cameras, size=args.size,
         background=args.background, fps_frames=args.fps_frames, options=options,
     )
     _report(args, result)

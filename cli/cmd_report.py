@@ -28,7 +28,9 @@ from .common import (
     add_env_orientation,
     add_lights_option,
     add_order_rule,
+    add_rgl_incident,
     add_window_option,
+    rgl_brdf_arg,
     stderr,
     stdout,
     tolerance,
@@ -117,6 +119,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_lights_option(p)
     add_order_rule(p)
     add_env_orientation(p)
+    add_rgl_incident(p)
     p.epilog = ("exit status: 0 all reports made, 1 some BRDFs failed (see summary), 2 bad usage, 130/143 stopped by "
                 "SIGINT/SIGTERM (the reports written so far are kept and listed; rerun to make the rest). A worker "
                 "process that dies is replaced and its BRDF retried once.")
@@ -172,7 +175,7 @@ def run(args: argparse.Namespace) -> int:
     _check_shared_inputs(options)
     _check_brdf_files(args.brdfs)
     # a whole multi-BRDF file (the 61 CURET samples, a CSV's wavelengths) is one report per member
-    sources = [member for source in args.brdfs for member in brdf_sources(source)]
+    sources = [rgl_brdf_arg(member, args) for source in args.brdfs for member in brdf_sources(source)]
     t0 = time.perf_counter()
     try:
         with _signals_stop_the_batch():

@@ -31,10 +31,12 @@ from .common import (
     add_lights_option,
     add_order_rule,
     add_pixel_rule_option,
+    add_rgl_incident,
     add_window_option,
     load_env_arg,
     number_in,
     order_rule,
+    rgl_brdf_arg,
     tolerance,
 )
 
@@ -73,6 +75,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    "offscreen, the mesh), auto (cpu for the sphere, gl for a mesh when available), none")
     p.add_argument("-o", "--output", required=True, help="output .html page")
     add_env_orientation(p)
+    add_rgl_incident(p)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -82,7 +85,7 @@ def run(args: argparse.Namespace) -> int:
     budget = ViewBudget(page_bytes=int(args.budget_mb * 2**20))
     check_writable(out)
     env = load_env_arg(args.env, args)
-    brdf = load_brdf(args.brdf)
+    brdf = load_brdf(rgl_brdf_arg(args.brdf, args))
     shrm = prefilter(env, brdf, eps=args.eps, size=args.size, window=args.window, lights=args.lights,
                      pixel_rule=args.pixel_rule == "on", **order_rule(args))
     page = build_view(

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -20,6 +21,7 @@ from ..brdf_io.env_rotation import env_rotation_matrix
 from ..brdf_io.envmap import load_env
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.jsonutil import to_jsonable
+from ..brdf_io.rgl import RGL_INCIDENT
 
 __all__ = [
     "add_env_orientation",
@@ -27,6 +29,8 @@ __all__ = [
     "add_lights_option",
     "add_pixel_rule_option",
     "add_order_rule",
+    "add_rgl_incident",
+    "rgl_brdf_arg",
     "order_rule",
     "env_orientation",
     "env_rotation_arg",
@@ -166,6 +170,38 @@ def add_lights_option(parser: argparse.ArgumentParser) -> None:
         f"{LIGHT_CONTRAST:g}x brighter than the map's median within a {MAX_LIGHT_RADIUS_DEG:g} degree cap, at most "
         f"{MAX_LIGHTS}); N: at most N; none: keep them in the map (they ring)",
     )
+
+
+def add_rgl_incident(parser: argparse.ArgumentParser) -> None:
+    """``--rgl-incident camera|light``: which direction plays an RGL ``.bsdf`` file's incident
+    direction ω_i, for every verb that loads BRDFs (data_specs/rgl_bsdf.md; applied by
+    :func:`rgl_brdf_arg`)."""
+    parser.add_argument(
+        "--rgl-incident", choices=tuple(RGL_INCIDENT), default="camera",
+        help="RGL .bsdf files: the direction that plays the file's incident direction; camera (default) renders "
+        "as Mitsuba 3 does, light takes the direction the sample was lit from (the data are not reciprocal, "
+        "so the two differ). A file written FILE.bsdf#camera or FILE.bsdf#light keeps its own choice")
+
+
+def rgl_brdf_arg(source: str, args: argparse.Namespace) -> str:
+    """``source`` (a BRDF spec or file) with :func:`add_rgl_incident`'s choice attached to an RGL
+    ``.bsdf`` path that names none (``"x.bsdf"`` -> ``"x.bsdf#light"``); every other source as given.
+
+    Raises
+    ------
+    BadInputError
+        A ``FILE.bsdf#camera|light`` that contradicts an explicit ``--rgl-incident``.
+    """
+    choice = getattr(args, "rgl_incident", "camera")
+    text = str(source)
+    base, sep, selector = text.rpartition("#")
+    if sep and Path(base).suffix.lower() == ".bsdf":
+        if selector.strip().lower() in RGL_INCIDENT and selector.strip().lower() != choice and choice != "camera":
+            raise BadInputError(text, f"names the RGL incident direction {selector!r}, --rgl-incident says {choice!r}")
+        return text
+    if Path(text).suffix.lower() == ".bsdf" and choice != "camera":
+        return f"{text}#{choice}"
+    return text
 
 
 def add_order_rule(parser: argparse.ArgumentParser) -> None:

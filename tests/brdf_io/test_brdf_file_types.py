@@ -16,7 +16,7 @@ from shrmkit.brdf_io.specs import BRDF_FILE_TYPES, brdf_sources, load_brdf
 
 def test_registry_lists_every_reader():
     assert set(BRDF_FILE_TYPES) == {".binary", ".npz", ".brdf", ".bsdf", ".dat", ".csv", ".json"}
-    assert {s for s, t in BRDF_FILE_TYPES.items() if t.selector} == {".dat", ".csv"}
+    assert {s for s, t in BRDF_FILE_TYPES.items() if t.selector} == {".dat", ".csv", ".bsdf"}
 
 
 def test_curet_selector_and_expansion(shared_data):
@@ -56,3 +56,15 @@ def test_selector_on_a_missing_file_names_the_file(tmp_path):
         load_brdf(f"{tmp_path / 'none.dat'}#3")
     assert "none.dat" in str(err.value) and "#3" not in str(err.value)
     assert brdf_sources("phong:s=8") == ["phong:s=8"]
+
+
+def test_rgl_incident_selector(shared_data):
+    """``file.bsdf#light`` / ``#camera`` pick the RGL table direction (default camera, as Mitsuba
+    renders: data_specs/rgl_bsdf.md); anything else is refused naming the choices."""
+    path = shared_data / "brdf" / "rgl" / "paper_white_rgb.bsdf"
+    assert load_brdf(path).table_direction == "view" and load_brdf(f"{path}#camera").table_direction == "view"
+    light = load_brdf(f"{path}#light")
+    assert light.table_direction == "light" and light.name == "paper_white_rgb#light"
+    assert brdf_sources(f"{path}#light") == [f"{path}#light"]
+    with pytest.raises(BadInputError, match="unknown RGL incident direction 'sun'.*camera, light"):
+        load_brdf(f"{path}#sun")

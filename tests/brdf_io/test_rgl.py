@@ -285,9 +285,10 @@ def _uniform_vndf_brdf(tmp_path: Path, rgb: np.ndarray, theta_i: np.ndarray, **e
 
 def test_uniform_vndf_is_the_identity_warp_closed_form(tmp_path: Path) -> None:
     """A constant VNDF makes the warp the identity, so R is read at the half vector's unit
-    coordinates u = (sqrt(θ_h/(π/2)), frac((φ_h − φ_L + π)/2π)); with R bilinear in u and
-    linear in θ_i (reproduced exactly by the interpolation) ρ is known in closed form:
-    ρ = R · D / (4 σ cos θ_V), D = 1/π, σ = 1."""
+    coordinates u = (sqrt(θ_h/(π/2)), frac((φ_h − φ_i + π)/2π)); with R bilinear in u and
+    linear in θ_i (reproduced exactly by the interpolation) ρ is known in closed form. With the
+    default table direction ω_i = V (as Mitsuba renders): ρ(L, V) = R(θ_V, u) · D / (4 σ cos θ_L),
+    D = 1/π, σ = 1, φ_i = φ_V; with ``table_direction="light"`` the same with L and V swapped."""
     theta_i = np.array([0.0, 0.5, 1.0, 1.5])
     x, y = np.meshgrid(np.linspace(0, 1, 6), np.linspace(0, 1, 4))  # rgb grid, 4 rows (y) x 6 columns (x)
 
@@ -299,15 +300,24 @@ def test_uniform_vndf_is_the_identity_warp_closed_form(tmp_path: Path) -> None:
     rng = np.random.default_rng(3)
     L, V = _hemisphere(rng, 2000, 89.0), _hemisphere(rng, 2000, 89.0)
     H = (L + V) / np.linalg.norm(L + V, axis=1, keepdims=True)
-    theta_l = np.arccos(L[:, 2])
     ux = np.sqrt(np.arccos(H[:, 2]) / (np.pi / 2))
-    uy = np.mod((np.arctan2(H[:, 1], H[:, 0]) - np.arctan2(L[:, 1], L[:, 0]) + np.pi) / (2 * np.pi), 1.0)
-    t = np.clip(theta_l, 0, 1.5).astype(np.float32).astype(np.float64)  # theta_i is stored as float32
-    expected = R(t, ux, uy) / np.pi / (4.0 * V[:, 2:3])
+
+    def closed_form(Wi: np.ndarray, Wo: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """ρ with table direction Wi, and u (relative to Wi's azimuth)."""
+        uy = np.mod((np.arctan2(H[:, 1], H[:, 0]) - np.arctan2(Wi[:, 1], Wi[:, 0]) + np.pi) / (2 * np.pi), 1.0)
+        t = np.clip(np.arccos(Wi[:, 2]), 0, 1.5).astype(np.float32).astype(np.float64)  # theta_i: float32
+        return R(t, ux, uy) / np.pi / (4.0 * Wo[:, 2:3]), np.stack([ux, uy], -1)
+
+    assert brdf.table_direction == "view"
+    expected, u_expected = closed_form(V, L)
     np.testing.assert_allclose(brdf.eval(L, V), expected, rtol=1e-5, atol=1e-7)
-    u, s = brdf.warped_coordinates(L, V)
-    np.testing.assert_allclose(u, np.stack([ux, uy], -1), atol=1e-12)
+    u, s = brdf.warped_coordinates(V, L)
+    np.testing.assert_allclose(u, u_expected, atol=1e-12)
     np.testing.assert_allclose(s, u, atol=1e-6)
+    lit = RGLBRDF(brdf.theta_i, brdf.ndf, brdf.sigma, brdf.vndf, brdf.rgb, table_direction="light")
+    expected, u_expected = closed_form(L, V)
+    np.testing.assert_allclose(lit.eval(L, V), expected, rtol=1e-5, atol=1e-7)
+    np.testing.assert_allclose(lit.warped_coordinates(L, V)[0], u_expected, atol=1e-12)
 
 
 def _bilinear_density(vertices: np.ndarray):
@@ -348,26 +358,28 @@ def test_inverse_warp_is_the_marginal_and_conditional_cdf(tmp_path: Path) -> Non
 
 
 def test_theta_beyond_the_measured_range_uses_the_last_slice(tmp_path: Path) -> None:
-    """θ_L above the last measured θ_i: the tables are clamped to the last slice (as
-    Mitsuba does), so the result equals a file that holds only that slice."""
+    """θ of the table direction (V by default) above the last measured θ_i: the tables are
+    clamped to the last slice (as Mitsuba does), so the result equals a file that holds only
+    that slice."""
     fields = _fields()  # θ_i = 0, 0.6, 1.2
     full = read_rgl(_write(tmp_path, name="full.bsdf"))
     last_slice = {key: fields[key][:, -1:] for key in ("vndf", "rgb", "luminance")}
     last = read_rgl(_write(tmp_path, name="last.bsdf", theta_i=fields["theta_i"][-1:], **last_slice))
     rng = np.random.default_rng(5)
-    V = _hemisphere(rng, 500)
+    L = _hemisphere(rng, 500)
     thetas, phis = rng.uniform(69.0, 90.0, 500), rng.uniform(-180, 180, 500)
-    L = np.stack([_direction(th, ph) for th, ph in zip(thetas, phis, strict=True)])
-    L[:5] = [_direction(89.999, 0), _direction(90 - 1e-9, 10), [1.0, 0, 1e-300], [0, 1.0, 1e-12], _direction(70, 0)]
+    V = np.stack([_direction(th, ph) for th, ph in zip(thetas, phis, strict=True)])
+    V[:5] = [_direction(89.999, 0), _direction(90 - 1e-9, 10), [1.0, 0, 1e-300], [0, 1.0, 1e-12], _direction(70, 0)]
     np.testing.assert_array_equal(full.eval(L, V), last.eval(L, V))
     assert np.all(np.isfinite(full.eval(L, V)))
 
 
 def test_synthetic_albedo_closed_form(tmp_path: Path) -> None:
     """Energy, with nothing but the formula: D = 1/π (∫ D cos θ_h dω_h = 1), σ = (1 + cos θ)/2
-    (its projected area), R = 0.8, identity warp. At normal incidence V = reflect(L, h) is
-    above the surface iff θ_h < 45°, so the albedo ∫ ρ cos θ_V dω_V = ∫ R D/(4σ) dω_V =
-    R ∫_{θ_h<45°} D cos θ_h dω_h = 0.8 · sin²45° = 0.4; at every angle it is ≤ R."""
+    (its projected area), R = 0.8, identity warp. With the table direction ω_i = V (default) at
+    normal incidence, L = reflect(V, h) is above the surface iff θ_h < 45°, so the albedo
+    ∫ ρ(L, V) cos θ_L dω_L = ∫ R D/(4σ) dω_L = R ∫_{θ_h<45°} D cos θ_h dω_h = 0.8 · sin²45° = 0.4
+    (what Mitsuba's ``eval(si.wi = V, ·)`` integrates to); at every angle it is ≤ R."""
     W = 257
     theta = (np.linspace(0, 1, W) ** 2) * np.pi / 2  # σ's columns sit at θ = u² π/2
     sigma = np.tile((1 + np.cos(theta)) / 2, (2, 1)).astype(np.float32)
@@ -378,10 +390,10 @@ def test_synthetic_albedo_closed_form(tmp_path: Path) -> None:
     phi = (np.arange(2 * n) + 0.5) / (2 * n) * 2 * np.pi
     C, P = np.meshgrid(c, phi, indexing="ij")
     S = np.sqrt(1 - C * C)
-    V = np.stack([S * np.cos(P), S * np.sin(P), C], -1).reshape(-1, 3)
-    for theta_l, expected in ((0.0, 0.4), (30.0, None), (60.0, None), (89.0, None)):
-        rho = brdf.eval(_direction(theta_l, 0.0), V)
-        albedo = (rho * V[:, 2:3]).sum(0) * (1 / n) * (np.pi / n)
+    L = np.stack([S * np.cos(P), S * np.sin(P), C], -1).reshape(-1, 3)
+    for theta_v, expected in ((0.0, 0.4), (30.0, None), (60.0, None), (89.0, None)):
+        rho = brdf.eval(L, _direction(theta_v, 0.0))
+        albedo = (rho * L[:, 2:3]).sum(0) * (1 / n) * (np.pi / n)
         assert np.all(albedo <= 0.8 + 1e-3)
         if expected is not None:
             np.testing.assert_allclose(albedo, expected, rtol=2e-3)
@@ -419,13 +431,17 @@ def test_isotropic_rotation_about_the_normal(tmp_path: Path) -> None:
     np.testing.assert_allclose(brdf.eval(3 * L, 0.5 * V), brdf.eval(L, V), rtol=1e-12)
 
 
-def test_table_direction_view_swaps_the_roles(tmp_path: Path) -> None:
+def test_table_direction_light_swaps_the_roles(tmp_path: Path) -> None:
+    """The default is the view (camera) direction, as Mitsuba renders; "light" swaps L and V,
+    and says so in the name (the spec string that loads it)."""
     path = _write(tmp_path)
-    light, view = read_rgl(path), read_rgl(path, table_direction="view")
+    view, light = read_rgl(path), read_rgl(path, table_direction="light")
     rng = np.random.default_rng(8)
     L, V = _hemisphere(rng, 200), _hemisphere(rng, 200)
     np.testing.assert_array_equal(view.eval(L, V), light.eval(V, L))
+    assert not np.allclose(view.eval(L, V), light.eval(L, V))  # the synthetic file is not reciprocal
     assert light.table_direction == "light" and view.table_direction == "view"
+    assert (view.name, light.name) == ("synthetic_rgb", "synthetic_rgb#light")
     with pytest.raises(BadInputError, match="table_direction"):
         read_rgl(path, table_direction="camera")
 
@@ -486,8 +502,12 @@ def test_real_file_loads_and_evaluates(shared_data: Path, name: str) -> None:
             assert np.all(np.isfinite(rho)) and np.all(rho >= 0)
 
 
-# Mitsuba 3.9.1 (scalar_rgb) measured plugin, bsdf.eval(si.wi = L, wo = V) = ρ(L, V) cos θ_V,
-# clip_negative=False; (θ_L, φ_L), (θ_V, φ_V) in degrees
+# Mitsuba 3.9.1 (pip install mitsuba==3.9.1, variant scalar_rgb) measured plugin,
+# bsdf.eval(ctx, si, wo) with si.wi = the first direction (the camera side, as Mitsuba's integrators
+# call it) and wo = the second (the light), i.e. ρ(L, V) cos θ_L with V = first, L = second, ours with
+# the default table_direction="view" and clip_negative=False; (θ_wi, φ_wi), (θ_wo, φ_wo) in degrees.
+# Produced by a 20-line script that loads {"type": "measured", "filename": FILE} with mi.load_dict and
+# calls eval at these pairs (re-run for issue 29: ours within 3.9e-6 of each pair's largest channel).
 MITSUBA_PAIRS = (((60, 0), (55, 170)), ((10, 0), (75, 90)), ((85, 30), (40, -120)), ((20, 0), (88, 45)),
                  ((45, 0), (20, 160)))
 MITSUBA_VALUES = {
@@ -511,29 +531,36 @@ MITSUBA_VALUES = {
 
 @pytest.mark.parametrize("name", RGL_FILES)
 def test_real_values_match_recorded_mitsuba_output(shared_data: Path, name: str) -> None:
-    """Values recorded from Mitsuba 3's ``measured`` plugin (float32) at five pairs."""
+    """Values recorded from Mitsuba 3's ``measured`` plugin (float32) at five pairs: the default
+    (camera) convention reproduces ``eval(si.wi = V, wo = L)``; the light convention reproduces it
+    with the roles swapped, ``eval(si.wi = L, wo = V)`` = ρ(L, V) cos θ_V."""
     brdf = _load(shared_data, name, clip_negative=False)
-    for ((tl, pl), (tv, pv)), expected in zip(MITSUBA_PAIRS, MITSUBA_VALUES[name], strict=True):
-        V = _direction(tv, pv)
-        ours = brdf.eval(_direction(tl, pl), V) * V[2]
-        np.testing.assert_allclose(ours, expected, rtol=0, atol=2e-5 * np.abs(expected).max())
+    lit = _load(shared_data, name, clip_negative=False, table_direction="light")
+    for ((tv, pv), (tl, pl)), expected in zip(MITSUBA_PAIRS, MITSUBA_VALUES[name], strict=True):
+        L, V = _direction(tl, pl), _direction(tv, pv)
+        tol = 2e-5 * np.abs(expected).max()
+        np.testing.assert_allclose(brdf.eval(L, V) * L[2], expected, rtol=0, atol=tol)
+        np.testing.assert_allclose(lit.eval(V, L) * L[2], expected, rtol=0, atol=tol)
 
 
-def _albedo(brdf: RGLBRDF, theta_l_deg: float, n: int = 192) -> np.ndarray:
-    """∫ ρ cos θ_V dω_V over the half vector h (midpoint rule in (sqrt(θ_h/(π/2)), φ_h),
-    dense where glossy lobes are): dω_V = 4 (L·h) dω_h, V = 2 (L·h) h − L."""
+def _albedo(brdf: RGLBRDF, theta_i_deg: float, n: int = 192) -> np.ndarray:
+    """The albedo at a fixed table direction ω_i (V by default, L with ``table_direction="light"``),
+    ∫ ρ cos θ_o dω_o over the other direction ω_o, integrated over the half vector h (midpoint rule
+    in (sqrt(θ_h/(π/2)), φ_h), dense where glossy lobes are): dω_o = 4 (ω_i·h) dω_h,
+    ω_o = 2 (ω_i·h) h − ω_i. This is what Mitsuba's ``eval(si.wi = ω_i, ·)`` integrates to."""
     ux = (np.arange(n) + 0.5) / n
     ph = (np.arange(2 * n) + 0.5) / (2 * n) * 2 * np.pi - np.pi
     U, P = np.meshgrid(ux, ph, indexing="ij")
     th = U.ravel() ** 2 * np.pi / 2
     d_omega = (np.pi * U.ravel() / n) * (np.pi / n) * np.sin(th)
     H = np.stack([np.sin(th) * np.cos(P.ravel()), np.sin(th) * np.sin(P.ravel()), np.cos(th)], -1)
-    L = _direction(theta_l_deg, 0.0)
-    LH = H @ L
-    V = 2 * LH[:, None] * H - L
-    ok = (V[:, 2] > 0) & (LH > 0)
-    weight = 4 * LH[ok] * d_omega[ok] * V[ok, 2]
-    return (brdf.eval(L, V[ok]) * weight[:, None]).sum(0)
+    Wi = _direction(theta_i_deg, 0.0)
+    WH = H @ Wi
+    Wo = 2 * WH[:, None] * H - Wi
+    ok = (Wo[:, 2] > 0) & (WH > 0)
+    weight = 4 * WH[ok] * d_omega[ok] * Wo[ok, 2]
+    rho = brdf.eval(Wo[ok], Wi) if brdf.table_direction == "view" else brdf.eval(Wi, Wo[ok])
+    return (rho * weight[:, None]).sum(0)
 
 
 @pytest.mark.parametrize("name", RGL_FILES)
@@ -569,21 +596,29 @@ def test_real_reciprocity_roughly(shared_data: Path, name: str, median_limit: fl
     assert np.median(np.abs(a - b)[ok] / (0.5 * (a + b)[ok])) < median_limit
 
 
+def _mitsuba():
+    """Mitsuba 3's scalar_rgb variant, or a skip (an optional test oracle, never a dependency)."""
+    try:
+        import mitsuba as mi
+    except ImportError:
+        pytest.skip("mitsuba is not installed (pip install mitsuba==3.9.1) - the independent reference is unavailable")
+    mi.set_variant("scalar_rgb")
+    return mi
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("name", RGL_FILES)
 def test_matches_mitsuba_measured_plugin(shared_data: Path, name: str) -> None:
     """Against Mitsuba 3's ``measured`` plugin at 3000 random pairs (skipped without
-    ``mitsuba``): ρ cos θ_V = bsdf.eval(si.wi = L, wo = V). Mitsuba works in float32, so
-    the agreement is to ~1e-6 except where its float32 cancellation near the horizon
-    shows (values ~1e-7 of the peak)."""
-    try:
-        import mitsuba as mi
-    except ImportError:
-        pytest.skip("mitsuba is not installed (pip install mitsuba) - the independent reference is unavailable")
-    mi.set_variant("scalar_rgb")
+    ``mitsuba``): with the default camera convention ρ(L, V) cos θ_L = bsdf.eval(si.wi = V,
+    wo = L); with ``table_direction="light"`` ρ(L, V) cos θ_V = bsdf.eval(si.wi = L, wo = V).
+    Mitsuba works in float32, so the agreement is to ~1e-6 except where its float32
+    cancellation near the horizon shows (values ~1e-7 of the peak)."""
+    mi = _mitsuba()
     path = shared_data / "brdf" / "rgl" / f"{name}.bsdf"
     ref = mi.load_dict({"type": "measured", "filename": str(path)})
     ours = _load(shared_data, name, clip_negative=False)
+    lit = _load(shared_data, name, clip_negative=False, table_direction="light")
     rng = np.random.default_rng(21)
     L = _hemisphere(rng, 3000).astype(np.float32).astype(np.float64)
     V = _hemisphere(rng, 3000).astype(np.float32).astype(np.float64)
@@ -593,14 +628,70 @@ def test_matches_mitsuba_measured_plugin(shared_data: Path, name: str) -> None:
     si.sh_frame = mi.Frame3f(si.n)
     theirs = np.empty((len(L), 3))
     for k in range(len(L)):
-        si.wi = mi.Vector3f(*map(float, L[k]))
-        value = ref.eval(ctx, si, mi.Vector3f(*map(float, V[k])))
+        si.wi = mi.Vector3f(*map(float, V[k]))  # toward the camera, as Mitsuba's integrators set it
+        value = ref.eval(ctx, si, mi.Vector3f(*map(float, L[k])))
         theirs[k] = (value[0], value[1], value[2])
-    mine = ours.eval(L, V) * V[:, 2:3]
     scale = np.abs(theirs).max(axis=1)
     big = scale > 1e-3 * scale.max()
-    rel = np.abs(mine - theirs).max(axis=1)[big] / scale[big]
-    assert np.median(rel) < 1e-5 and rel.max() < 1e-3
+    for mine in (ours.eval(L, V) * L[:, 2:3], lit.eval(V, L) * L[:, 2:3]):
+        rel = np.abs(mine - theirs).max(axis=1)[big] / scale[big]
+        assert np.median(rel) < 1e-5 and rel.max() < 1e-3
+
+
+# A Mitsuba 3.9.1 render (scalar_rgb, integrator "direct") of an infinite plane (a 20 x 20 "rectangle",
+# normal +z) made of cc_ibiza_sunset_rgb (plugin "measured"), lit by a "directional" emitter of
+# irradiance 1 arriving from L, seen by a 4 x 4 orthographic camera from V (box filter, 4 spp; the
+# pixels are exactly equal: no noise). Radiance = ρ(L, V) cos θ_L: the camera convention; the light
+# convention gives 0.07512 0.02792 0.01051 / 0.00548 0.00229 0.00088 / 0.01461 0.00578 0.00150.
+# ((θ_V, φ_V), (θ_L, φ_L)) in degrees -> RGB radiance (issue 29).
+MITSUBA_RENDERS = {
+    ((60, 0), (30, 180)): (0.08163, 0.03068, 0.01293),
+    ((20, 0), (70, 150)): (0.00665, 0.00245, 0.00039),
+    ((70, 0), (15, 170)): (0.01435, 0.00602, 0.00246),
+}
+
+
+def _mitsuba_plane_render(mi, path: Path, V: np.ndarray, L: np.ndarray) -> np.ndarray:
+    """Mean RGB of the 4 x 4 render described above MITSUBA_RENDERS."""
+    T = mi.ScalarTransform4f
+    eye = [float(c) for c in 5 * V]
+    scene = mi.load_dict({
+        "type": "scene", "integrator": {"type": "direct"},
+        "sensor": {"type": "orthographic",
+                   "to_world": T().look_at(origin=eye, target=[0, 0, 0], up=[0, 0, 1]) @ T().scale([0.2, 0.2, 1]),
+                   "film": {"type": "hdrfilm", "width": 4, "height": 4, "rfilter": {"type": "box"}},
+                   "sampler": {"type": "independent", "sample_count": 4}},
+        "plane": {"type": "rectangle", "to_world": T().scale(10), "bsdf": {"type": "measured", "filename": str(path)}},
+        "sun": {"type": "directional", "direction": [float(-c) for c in L],
+                "irradiance": {"type": "rgb", "value": 1.0}},
+    })
+    return np.array(mi.render(scene)).reshape(-1, 3).mean(axis=0)
+
+
+def test_camera_convention_reproduces_recorded_mitsuba_renders(shared_data: Path) -> None:
+    """The default (camera) convention gives Mitsuba's rendered radiance ρ(L, V) cos θ_L of a plane
+    under a directional light (recorded values, within their 5 printed digits); the light
+    convention does not (up to 2.3x off in blue: the vinyl is not reciprocal)."""
+    camera = _load(shared_data, "cc_ibiza_sunset_rgb", clip_negative=False)
+    light = _load(shared_data, "cc_ibiza_sunset_rgb", clip_negative=False, table_direction="light")
+    for ((tv, pv), (tl, pl)), expected in MITSUBA_RENDERS.items():
+        L, V = _direction(tl, pl), _direction(tv, pv)
+        np.testing.assert_allclose(camera.eval(L, V) * L[2], expected, rtol=0, atol=6e-6)
+        assert np.abs(light.eval(L, V) * L[2] - expected).max() > 1e-4
+
+
+@pytest.mark.slow
+def test_camera_convention_matches_a_mitsuba_render(shared_data: Path) -> None:
+    """The same renders made now by Mitsuba (skipped without ``mitsuba``): agreement to 1e-4
+    relative in the camera convention."""
+    mi = _mitsuba()
+    path = shared_data / "brdf" / "rgl" / "cc_ibiza_sunset_rgb.bsdf"
+    camera = _load(shared_data, "cc_ibiza_sunset_rgb", clip_negative=False)
+    for ((tv, pv), (tl, pl)), expected in MITSUBA_RENDERS.items():
+        L, V = _direction(tl, pl), _direction(tv, pv)
+        theirs = _mitsuba_plane_render(mi, path, V, L)
+        np.testing.assert_allclose(theirs, expected, rtol=0, atol=6e-6)
+        np.testing.assert_allclose(camera.eval(L, V) * L[2], theirs, rtol=1e-4, atol=1e-4 * theirs.max())
 
 
 def test_huge_negative_rgb_is_corruption_not_gamut(tmp_path: Path) -> None:
