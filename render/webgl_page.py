@@ -805,7 +805,8 @@ def _fragment(title: str, data: dict[str, Any], png: bytes, sources: dict[str, s
         '<div class="shrm-view-still"><div class="shrm-view-fallback-note"></div>' + still + "</div>",
         f'<div class="shrm-view-info"><span class="shrm-view-title">{html.escape(title)}</span>'
         f'<span class="shrm-view-numbers"> — {html.escape(info)}</span>'
-        ' <span class="shrm-view-help">· drag: orbit · wheel: zoom · double-click: reset · click here: fold</span>'
+        ' <span class="shrm-view-help">· drag: orbit · Shift+drag: lighting · wheel: zoom · double-click: reset · '
+        'click here: fold</span>'
         + notes + "</div>",
         '<div class="shrm-view-ui"></div>',
         "</div>",

@@ -23,7 +23,10 @@
     elevation: [-89, 89],
     zoom: [0.25, 10],
     exposure: [-30, 30],
+    env_azimuth: [-1e6, 1e6],
+    env_elevation: [-90, 90],
   };
+  const ENV_NAMES = ["env_azimuth", "env_elevation"];
 
   // ---------------------------------------------------------------------------------------
   // decoding of the embedded arrays (little-endian, base64)
@@ -120,6 +123,17 @@
     return { eye, forward, right, up, dir, tanY, aspect: width / height };
   }
 
+  // the lighting rotated at view time (brdf_io/env_rotation.py, roll 0): Q = Rz(AZ) Ry(-EL);
+  // returned as the column-major mat3 Q^T (its columns are the rows of Q) for uToMap
+  function envRotation(view) {
+    const a = (view.env_azimuth || 0) * DEG, e = (view.env_elevation || 0) * DEG;
+    const ca = Math.cos(a), sa = Math.sin(a), ce = Math.cos(e), se = Math.sin(e);
+    const Q = [[ca * ce, -sa, -ca * se], [sa * ce, ca, -sa * se], [se, 0, ce]];
+    return { Q, toMap: new Float32Array([].concat(Q[0], Q[1], Q[2])) };
+  }
+  // Q^T d: a world direction in the unrotated map's frame
+  const toMapFrame = (Q, d) => [0, 1, 2].map((j) => Q[0][j] * d[0] + Q[1][j] * d[1] + Q[2][j] * d[2]);
+
   // column-major view-projection matrix of the camera (symmetric frustum, as vtkCamera)
   function viewProjection(c, near, far) {
     const t = c.tanY, a = c.aspect;
@@ -161,7 +175,7 @@
   function parseView(text, base) {
     const view = Object.assign({}, base);
     const params = new URLSearchParams(text.replace(/^#/, ""));
-    for (const name of ["azimuth", "elevation", "zoom", "exposure"]) {
+    for (const name of ["azimuth", "elevation", "zoom", "exposure", ...ENV_NAMES]) {
       if (params.has(name)) view[name] = clampNumber(name, params.get(name), view[name]);
     }
     if (params.has("mode") && MODES.includes(params.get("mode"))) view.mode = params.get("mode");
@@ -175,7 +189,10 @@
     const r = (x) => String(Math.round(x * 1000) / 1000);
     return (
       `azimuth=${r(view.azimuth)}&elevation=${r(view.elevation)}&zoom=${r(view.zoom)}` +
-      `&exposure=${r(view.exposure)}&mode=${view.mode}&background=${view.background ? 1 : 0}&tone=${view.tone}`
+      `&exposure=${r(view.exposure)}&mode=${view.mode}&background=${view.background ? 1 : 0}&tone=${view.tone}` +
+      // the lighting's rotation, when it turns
+      (view.env_azimuth || view.env_elevation
+        ? `&env_azimuth=${r(view.env_azimuth)}&env_elevation=${r(view.env_elevation)}` : "")
     );
   }
 
@@ -263,7 +280,7 @@
     options = options || {};
     const canvas = root.querySelector(".shrm-view-canvas");
     const ui = root.querySelector(".shrm-view-ui");
-    const base = Object.assign({ ui: true }, data.view);
+    const base = Object.assign({ ui: true, env_azimuth: 0, env_elevation: 0 }, data.view);
     let view = options.hash ? parseView(window.location.hash, base) : Object.assign({}, base);
     root.dataset.state = "loading";
 
@@ -426,6 +443,7 @@
       }
       gl.viewport(0, 0, w, h);
       const cam = pageCamera(view, data.camera, w, h);
+      const env = envRotation(view);
       const tone = TONES.indexOf(view.tone);
       gl.disable(gl.BLEND);
       gl.clearColor(0, 0, 0, 1);
@@ -440,6 +458,7 @@
         gl.bindTexture(gl.TEXTURE_2D, res.envTex);
         gl.uniform1i(b.u.uEnv, 0);
         gl.uniform1f(b.u.uEnvScale, data.env.scale);
+        gl.uniformMatrix3fv(b.u.uToMap, false, env.toMap);
         gl.uniform3fv(b.u.uForward, cam.forward);
         gl.uniform3fv(b.u.uRight, cam.right);
         gl.uniform3fv(b.u.uUp, cam.up);
@@ -467,14 +486,16 @@
         gl.uniform1i(o.u.uCoef, 0);
         gl.uniform1f(o.u.uScale, S.scale);
       } else {
-        // V~: from the mesh's bounding-box centre toward the eye (camera.view_direction)
-        uploadViewMap(unit(sub(cam.eye, data.mesh.center)));
+        // V~: from the mesh's bounding-box centre toward the eye (camera.view_direction), in the
+        // unrotated map's frame (Q^T V~), as render/vtk_renderer.py update_view_maps
+        uploadViewMap(toMapFrame(env.Q, unit(sub(cam.eye, data.mesh.center))));
         gl.bindTexture(gl.TEXTURE_2D, res.mapTex);
         gl.uniform1i(o.u.uMap, 0);
       }
       const near = Math.max(1e-3, data.camera.distance - 2), far = data.camera.distance + 2;
       gl.uniformMatrix4fv(o.u.uViewProj, false, viewProjection(cam, near, far));
       gl.uniform3fv(o.u.uEye, cam.eye);
+      gl.uniformMatrix3fv(o.u.uToMap, false, env.toMap);
       gl.uniform1f(o.u.uExposure, view.exposure);
       gl.uniform1i(o.u.uTone, tone);
       gl.bindVertexArray(res.vao);
@@ -514,6 +535,7 @@
       controls.exposureText.textContent = `${view.exposure >= 0 ? "+" : ""}${view.exposure.toFixed(1)} EV`;
       controls.background.checked = !!view.background;
       controls.mode.value = view.mode;
+      controls.lighting.value = String(((view.env_azimuth % 360) + 540) % 360 - 180);
       root.classList.toggle("shrm-view-noui", !view.ui);
     }
 
@@ -538,14 +560,24 @@
       controls.mode = el("select", { "aria-label": "render mode" });
       for (const m of MODES) controls.mode.append(el("option", { value: m }, m));
       modeLabel.append(controls.mode);
+      const lightLabel = el("label", { title: "turn the environment about the up axis (Shift+drag: also tilt it)" },
+        "lighting ");
+      controls.lighting = el("input", { type: "range", min: "-180", max: "180", step: "1",
+        "aria-label": "lighting azimuth" });
+      lightLabel.append(controls.lighting);
       const reset = el("button", { type: "button" }, "reset view");
-      bar.append(expLabel, bgLabel, modeLabel, reset);
+      bar.append(expLabel, bgLabel, modeLabel, lightLabel, reset);
       ui.append(bar);
       controls.exposure.addEventListener("input", () => {
         view.exposure = clampNumber("exposure", controls.exposure.value, view.exposure);
         redraw();
       });
       controls.exposure.addEventListener("change", storeHash);
+      controls.lighting.addEventListener("input", () => {
+        view.env_azimuth = clampNumber("env_azimuth", controls.lighting.value, view.env_azimuth);
+        redraw();
+      });
+      controls.lighting.addEventListener("change", storeHash);
       controls.background.addEventListener("change", () => {
         view.background = controls.background.checked;
         redraw();
@@ -563,17 +595,23 @@
       });
     }
 
-    // ---- orbit (drag) and zoom (wheel)
+    // ---- orbit (drag), the lighting (Shift+drag) and zoom (wheel)
     let drag = null;
     canvas.addEventListener("pointerdown", (e) => {
-      drag = { x: e.clientX, y: e.clientY };
+      drag = { x: e.clientX, y: e.clientY, env: e.shiftKey };
       try { canvas.setPointerCapture(e.pointerId); } catch (err) { /* not capturable */ }
     });
     canvas.addEventListener("pointermove", (e) => {
       if (!drag) return;
-      view.azimuth -= 0.4 * (e.clientX - drag.x);
-      view.elevation = clampNumber("elevation", view.elevation + 0.4 * (e.clientY - drag.y), view.elevation);
-      drag = { x: e.clientX, y: e.clientY };
+      if (drag.env) {  // Shift+drag turns the environment (and the lights in it), not the camera
+        view.env_azimuth += 0.4 * (e.clientX - drag.x);
+        view.env_elevation = clampNumber("env_elevation", view.env_elevation - 0.4 * (e.clientY - drag.y),
+          view.env_elevation);
+      } else {
+        view.azimuth -= 0.4 * (e.clientX - drag.x);
+        view.elevation = clampNumber("elevation", view.elevation + 0.4 * (e.clientY - drag.y), view.elevation);
+      }
+      drag = { x: e.clientX, y: e.clientY, env: drag.env };
       redraw();
     });
     const endDrag = () => {
