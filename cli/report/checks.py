@@ -6,7 +6,9 @@
   out-of-gamut components, clipped to 0 by ``brdf_io.cornell``).
 - *Reciprocity*: ρ(L, V) = ρ(V, L) (Helmholtz). Evaluable BRDFs are compared at seeded
   random pairs; scattered measurements at pairs whose swapped configuration (θ_i ↔ θ_o,
-  same |φ_o − φ_i|) was also measured, within 0.5°.
+  same |φ_o − φ_i|) was also measured, within 0.5°. Stated relative to max ρ and, per
+  pair, relative to the pair's mean (median, 90th percentile): for a non-reciprocal
+  measured file (RGL) the choice of incident direction changes renders by about that much.
 - *Energy*: the directional albedo a(V) = ∫_{H²} ρ(L, V) cos θ_i dω_i must not exceed 1;
   it is integrated by Gauss–Legendre quadrature in cos θ_i times the midpoint rule in φ_i
   (exact for the piecewise-smooth part, under-resolving lobes much narrower than the
@@ -24,7 +26,7 @@ from ...brdf_io.brdf import BRDF
 from ...brdf_io.halfdiff import halfdiff_to_directions
 from ...brdf_io.merl import merl_sample_angles
 
-__all__ = ["directional_albedo", "reciprocity_check", "scattered_reciprocity", "data_checks",
+__all__ = ["directional_albedo", "reciprocity_check", "pair_asymmetry", "scattered_reciprocity", "data_checks",
            "merl_missing_above_surface", "ALBEDO_VIEWS_DEG"]
 
 ALBEDO_VIEWS_DEG = (0.0, 15.0, 30.0, 45.0, 60.0, 70.0, 80.0, 85.0)
@@ -70,8 +72,27 @@ def _random_hemisphere(n: int, rng: np.random.Generator, max_theta_deg: float = 
     return np.stack([s * np.cos(phi), s * np.sin(phi), mu], axis=-1)
 
 
+def pair_asymmetry(a: np.ndarray, b: np.ndarray) -> tuple[float | None, float | None]:
+    """Median and 90th percentile over pairs of |ρ(L,V) − ρ(V,L)| / ((ρ(L,V) + ρ(V,L))/2), ρ summed
+    over the channels; ``a``, ``b`` (n, 3) are ρ(L,V) and ρ(V,L). Pairs whose mean is 0 (or below
+    10⁻⁹ of the largest) are left out; ``(None, None)`` if none is left. A per-pair relative figure:
+    the few pairs in a glossy peak do not dominate it (an RMS over 2000 random pairs varied 2–5x
+    between seeds for the RGL vinyls; this median by at most 6 %)."""
+    a, b = np.asarray(a, float).sum(axis=-1), np.asarray(b, float).sum(axis=-1)
+    mean = 0.5 * (a + b)
+    ok = mean > 1e-9 * max(float(mean.max(initial=0.0)), 1e-300)
+    if not np.any(ok):
+        return None, None
+    rel = np.abs(a - b)[ok] / mean[ok]
+    return float(np.median(rel)), float(np.quantile(rel, 0.9))
+
+
 def reciprocity_check(brdf: BRDF, n: int = 2000, seed: int = 0) -> dict[str, Any]:
-    """Max and RMS of |ρ(L,V) − ρ(V,L)| relative to max ρ, at ``n`` seeded random pairs."""
+    """Reciprocity ρ(L,V) = ρ(V,L) at ``n`` seeded random pairs (L, V each uniform in solid angle on
+    the cap θ ≤ 85°): max and RMS of |ρ(L,V) − ρ(V,L)| relative to max ρ (``max_rel``, ``rms_rel``)
+    and the median and 90th percentile of the per-pair relative difference (``median_pair_rel``,
+    ``p90_pair_rel``: :func:`pair_asymmetry`), the figures to quote for a measured file (the RGL
+    files: median 0.022 paper, 0.040 paint, 0.18–0.32 vinyls; data_specs/rgl_bsdf.md)."""
     rng = np.random.default_rng(seed)
     L = _random_hemisphere(n, rng)
     V = _random_hemisphere(n, rng)
@@ -84,6 +105,7 @@ def reciprocity_check(brdf: BRDF, n: int = 2000, seed: int = 0) -> dict[str, Any
         "n_pairs": int(n),
         "max_rel": float(diff.max()),
         "rms_rel": float(np.sqrt(np.mean(diff**2))),
+        **dict(zip(("median_pair_rel", "p90_pair_rel"), pair_asymmetry(a, b), strict=True)),
     }
 
 
@@ -103,7 +125,8 @@ def scattered_reciprocity(L: np.ndarray, V: np.ndarray, rgb: np.ndarray, tol_deg
     dist, idx = tree.query(swapped, distance_upper_bound=np.radians(tol_deg))
     ok = np.isfinite(dist) & (a[:, 0] != a[:, 1])
     if not np.any(ok):
-        return {"method": "swapped measurements", "n_pairs": 0, "max_rel": None, "rms_rel": None}
+        return {"method": "swapped measurements", "n_pairs": 0, "max_rel": None, "rms_rel": None,
+                "median_pair_rel": None, "p90_pair_rel": None}
     rgb = np.asarray(rgb, float)
     scale = np.maximum(np.maximum(np.abs(rgb[ok]), np.abs(rgb[idx[ok]])).max(axis=1, keepdims=True), 1e-300)
     diff = np.abs(rgb[ok] - rgb[idx[ok]]) / scale
@@ -112,6 +135,7 @@ def scattered_reciprocity(L: np.ndarray, V: np.ndarray, rgb: np.ndarray, tol_deg
         "n_pairs": int(ok.sum() // 2),
         "max_rel": float(diff.max()),
         "rms_rel": float(np.sqrt(np.mean(diff**2))),
+        **dict(zip(("median_pair_rel", "p90_pair_rel"), pair_asymmetry(rgb[ok], rgb[idx[ok]]), strict=True)),
     }
 
 

@@ -186,6 +186,8 @@ def report_sections(doc: dict[str, Any], image_link: Any = None) -> Iterator[tup
     rows = [["missing table samples", missing], ["clamped components", c["n_clamped"]],
             ["reciprocity: max relative difference",
              f"{fmt(rec['max_rel'])} ({rec['method']}, {rec['n_pairs']} pairs)"],
+            ["reciprocity: per-pair |ρ(L,V) − ρ(V,L)| / mean, median / 90th percentile",
+             f"{fmt(rec.get('median_pair_rel'))} / {fmt(rec.get('p90_pair_rel'))}"],
             ["max directional albedo", f"{fmt(a['max'])} at θ_o = {a['max_view_deg']:g}° (of the {a['of']})"]]
     body = md_table(["check", "result"], rows)
     body += "\n\nDirectional albedo per view (RGB): " + "; ".join(
