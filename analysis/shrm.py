@@ -37,6 +37,7 @@ from .sh import real_sph_harm
 from .shrm_file import read_shrm_fields, save_shrm
 from .synthesis import (
     LOCAL_VIEWS_DEG,
+    fast_rows,
     global_from_local,
     global_shrm_latlong,
     local_shrm_at,
@@ -280,6 +281,13 @@ def default_size(F: int, P: int = 0, budget_bytes: int = DEFAULT_MAP_BUDGET_BYTE
     per_row_squared = (P + 1) ** 2 * 2 * 3 * 4  # bytes per S² texels of all maps
     fits = int(np.sqrt(budget_bytes / per_row_squared))
     return max(8, min(rule, fits))
+
+
+def _fast_rows(rows: int, F: int, P: int) -> int:
+    """``rows`` raised to the next size with fast FFTs (:func:`~shrmkit.analysis.synthesis.fast_rows`)
+    while that stays within the memory budget's :func:`default_size`, else ``rows``."""
+    fast = fast_rows(rows)
+    return fast if fast <= max(default_size(F, P), rows) else rows
 
 
 #: Under the ``"bands"`` rule the map is the smallest whose bilinear lookup adds at most this
@@ -544,9 +552,9 @@ def prefilter(
         if size is not None:
             return int(size)
         if orders.criterion == "rh02":
-            return default_size(F_, P_B)
-        return map_rows(orders.profile, base, band_energy, F_, P_B, eps, q_max=q_max, lighting_rows=lighting_rows,
-                        max_view_deg=orders.max_view_deg)[0]
+            return _fast_rows(default_size(F_, P_B), F_, P_B)
+        return _fast_rows(map_rows(orders.profile, base, band_energy, F_, P_B, eps, q_max=q_max,
+                                   lighting_rows=lighting_rows, max_view_deg=orders.max_view_deg)[0], F_, P_B)
 
     def window_at(F_: int, top_: int | None) -> WindowChoice:
         return choose_window(
@@ -580,11 +588,13 @@ def prefilter(
     elif orders.criterion == "rh02":
         S = default_size(F_B, P_B)  # RH02 §5.2: S ≈ 10 F
         budget_bound = S < default_size(F_B, 0)
+        S = _fast_rows(S, F_B, P_B)
     else:
         S, budget_bound = map_rows(
             orders.profile, base, band_energy, F_B, P_B, eps, sigma=sigma, q_max=q_max,
             lighting_rows=(lighting.rows, lighting.source_rows), max_view_deg=orders.max_view_deg,
         )
+        S = _fast_rows(S, F_B, P_B)
     if S < 2 or S > 8192:
         raise BadInputError(None, f"SHRM size must be in [2, 8192] rows, got {S}")
     timings["map size"] = time.perf_counter() - t0
