@@ -32,6 +32,7 @@ SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
 from __future__ import annotations
 
 import time
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -68,12 +69,19 @@ __all__ = [
     "choose_orders",
     "choose_orders_many",
     "orders_on_grid_for",
+    "forced_orders_note",
+    "OrdersClampedWarning",
     "DEFAULT_MAX_F",
     "DEFAULT_MAX_P",
 ]
 
 DEFAULT_MAX_F = 512
 DEFAULT_MAX_P = 20
+
+
+class OrdersClampedWarning(UserWarning):
+    """Orders given to ``prefilter(F=, P=)`` were beyond what the map or the BRDF's grid holds and
+    were lowered (:func:`forced_orders_note`)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -619,7 +627,27 @@ def orders_on_grid_for(
     if on.zero:
         on.raise_zero()
     F_rule, P_rule, capped = _choose(on, eps, P)
-    notes = [f"orders given (F={F}, P={P}): the grid was sized for them and not refined"]
+    notes = [f"orders asked (F={F}, P={P}): the grid was sized for them and not refined"]
     if on.missing:
         notes.append(f"{on.missing} reparameterized samples had no measurement to interpolate (set to 0)")
     return _choice(on, F_rule, P_rule, eps, capped, False, notes, time.perf_counter() - t0, criterion, max_view_deg)
+
+
+def forced_orders_note(
+    F_asked: int | None, P_asked: int | None, F_used: int, P_used: int, *, F_limit: int, P_limit: int
+) -> str:
+    """The note, and one :class:`OrdersClampedWarning` (a single line), when orders given to
+    ``prefilter(F=, P=)`` were lowered to what is there to use: ``F_limit`` the highest lighting
+    order computed (the map's rows − 1, or the BRDF grid's F0), ``P_limit`` the BRDF grid's P0.
+    ``""`` when nothing was asked or nothing was lowered."""
+    parts = []
+    if F_asked is not None and F_used < int(F_asked):
+        parts.append(f"F={F_used} used, F={int(F_asked)} asked (the lighting is computed to l <= {F_limit}: "
+                     "the map's rows - 1 or the BRDF grid's order)")
+    if P_asked is not None and P_used < int(P_asked):
+        parts.append(f"P={P_used} used, P={int(P_asked)} asked (the BRDF grid holds p <= {P_limit})")
+    if not parts:
+        return ""
+    note = "orders clamped: " + "; ".join(parts)
+    warnings.warn(note, OrdersClampedWarning, stacklevel=3)
+    return note

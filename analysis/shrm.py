@@ -30,7 +30,14 @@ from ..brdf_io.errors import BadInputError
 from ..brdf_io.latlong import bilinear_lookup
 from ..brdf_io.specs import load_brdf
 from .lights import DEFAULT_LIGHTS, LightSet, check_lights, extract_lights, merge_error_by_band
-from .orders import DEFAULT_MAX_F, DEFAULT_MAX_P, OrderChoice, choose_orders, orders_on_grid_for
+from .orders import (
+    DEFAULT_MAX_F,
+    DEFAULT_MAX_P,
+    OrderChoice,
+    choose_orders,
+    forced_orders_note,
+    orders_on_grid_for,
+)
 from .pixels import pixel_orders, pixel_sampler, pixel_statement
 from .scene import lighting_for, reflected_error_parts, residual_bound, scene_for
 from .sh import real_sph_harm
@@ -534,6 +541,7 @@ def prefilter(
     timings["lighting"] = time.perf_counter() - t0
     F_B = scene.F_B if F is None else int(min(F, lighting.lmax))
     P_B = scene.P_B if P is None else int(min(P, orders.P0))
+    clamp_note = forced_orders_note(F, P, F_B, P_B, F_limit=lighting.lmax, P_limit=orders.P0)  # warns if lowered
     base = orders.coefficients_for(P_B)  # projected (rh02) or fitted to the views that matter (bands)
     band_energy = lighting.band_energy_all()
     q_max = 0 if azimuth_free else None
@@ -697,7 +705,9 @@ def prefilter(
         "P_rho": orders.P,
         "F_L": scene.F_L,
         "lighting_capped": bool(scene.lighting_capped),
-        "orders_message": "; ".join(m for m in (orders.message, size_note) if m),
+        "orders_message": "; ".join(m for m in (orders.message, clamp_note, size_note) if m),
+        "orders_asked": None if F is None and P is None else {"F": F if F is None else int(F),
+                                                              "P": P if P is None else int(P)},
         "timings": timings,
         "shrmkit_version": __version__,
         "frame": "z-up; lat-long pixel centres theta=(i+1/2)pi/H, phi=2pi(j+1/2)/W",

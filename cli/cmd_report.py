@@ -20,6 +20,7 @@ from pathlib import Path
 
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
+from ..analysis.orders import DEFAULT_MAX_F
 from ..analysis.tolerance import DEFAULT_EPS
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.specs import brdf_sources
@@ -111,7 +112,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--dask-scheduler", default=None, metavar="ADDRESS",
                    help="run the per-BRDF tasks on this Dask distributed scheduler (tcp://host:8786); "
                         "start workers with --nthreads 1 --nworkers N (see README)")
-    p.add_argument("--max-F", type=_positive_int, default=None, help="cap on F (default 256, quick 96)")
+    p.add_argument("--max-F", type=_positive_int, default=None,
+                   help=f"cap on F (default {DEFAULT_MAX_F}, as shrm orders: the same orders for the same file and "
+                   "eps; quick 96)")
     p.add_argument("--fit-samples", type=_int_in(1, MAX_FIT_SAMPLES, "about 0.4 GiB of samples"), default=None,
                    help="fit samples (default 16384, quick 4096; at most 4,194,304)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")

@@ -12,7 +12,7 @@ from typing import Any
 
 from ...analysis.fit.models_param import MODELS
 from ...analysis.lights import DEFAULT_LIGHTS, check_lights
-from ...analysis.orders import DEFAULT_MAX_P
+from ...analysis.orders import DEFAULT_MAX_F, DEFAULT_MAX_P
 from ...analysis.shrm import DEFAULT_WINDOW, check_window
 from ...analysis.tolerance import DEFAULT_EPS, check_eps
 from ...analysis.view_bands import DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG, check_criterion, check_max_view
@@ -59,7 +59,8 @@ class ReportOptions:
     seed
         Seed of every random choice (pairs, fit samples, fit starts).
     max_F, max_P
-        Caps of ``choose_orders``.
+        Caps of ``choose_orders``: those of ``shrm orders`` (512, 20), so the two choose the same
+        orders (the quick profile caps F at 96 and says so).
     preview, preview_size, mesh
         Preview renderer (:data:`PREVIEW_MODES`), image size in pixels, and an optional mesh
         (file or ``builtin:``) rendered besides the sphere.
@@ -91,7 +92,10 @@ class ReportOptions:
     fit_starts: int = 4
     n_pairs: int = 300
     seed: int = 0
-    max_F: int = 256
+    # the caps of `shrm orders` (analysis.orders), so that both choose the same (F, P): the search
+    # starts from ε(min(F0, max_F), p), so a lower cap moves P, and F with it, even when F stays
+    # below it (microfacet σ = 0.03 at ε = 0.01: (241, 18) under 256, (274, 17) under 512; issue 29)
+    max_F: int = DEFAULT_MAX_F
     max_P: int = DEFAULT_MAX_P
     preview: str = "auto"
     preview_size: int = 192
