@@ -40,8 +40,8 @@ def fast_rows(rows: int, multiple: int = 1) -> int:
     transforms fast: 2S 11-smooth (``ducc0.fft.good_size``). A lat-long synthesis costs its FFTs
     along the rings: at S = 89 (2S = 2·89, a prime factor: Bluestein's algorithm) one
     ``synthesis_2d`` at degree 32 took 1.38 ms against 0.21 ms at S = 90 (ducc0, one thread, this
-    project's 2-core machine), and the maps of a high-P SHRM are hundreds of them. A larger S only samples the same band-limited
-    field more densely (the lookup error falls as S⁻⁴)."""
+    project's 2-core machine), and the maps of a high-P SHRM are hundreds of them. A larger S only
+    samples the same band-limited field more densely (the lookup error falls as S⁻⁴)."""
     S = max(int(rows), 1)
     S += -S % multiple
     while ducc0.fft.good_size(2 * S) != 2 * S:

@@ -117,9 +117,13 @@ def _print_tables(result: FitResult, name: str) -> None:
     stdout.print(params)
 
     summary = Table(title="errors")
-    for col in ("rel_rms", "log_rms", "status", "evaluations", "seconds", "samples", "dropped"):
+    for col in ("verdict", "worst band rel_rms", "worst band", "rel_rms (all)", "log_rms", "nlopt stop",
+                "evaluations", "seconds", "samples", "dropped"):
         summary.add_column(col, justify="right")
+    worst = result.worst
     summary.add_row(
+        "ok" if result.success else "FAILED", "–" if worst is None else f"{worst.rel_rms:.4g}",
+        "–" if worst is None else f"{worst.lo_deg:g}–{worst.hi_deg:g}°",
         f"{result.errors['rel_rms']:.4g}", f"{result.errors['log_rms']:.4g}", result.status,
         str(result.evaluations), f"{result.seconds:.2f}", str(result.n_samples), str(result.n_dropped),
     )
@@ -131,4 +135,6 @@ def _print_tables(result: FitResult, name: str) -> None:
     for b in result.bands:
         bands.add_row(f"{b.lo_deg:g}–{b.hi_deg:g}", str(b.n), f"{b.rel_rms:.4g}", f"{b.log_rms:.4g}")
     stdout.print(bands)
+    for note in result.at_bounds:
+        stdout.print(f"at a bound of the search: {note}", soft_wrap=True)
     stdout.print(f"spec: {result.brdf.to_spec()}", soft_wrap=True)

@@ -59,7 +59,10 @@ def fit_document(result: FitResult, source: str | os.PathLike[str] | None = None
         "fit": {
             "status": result.status,
             "success": result.success,
+            "converged": result.converged,
             "message": result.message,
+            "worst_band": None if result.worst is None else result.worst.as_dict(),
+            "at_bounds": list(result.at_bounds),
             "evaluations": result.evaluations,
             "seconds": result.seconds,
             "n_samples": result.n_samples,

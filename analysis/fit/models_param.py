@@ -117,6 +117,33 @@ class ModelParam:
         """The fitted model object and its parameters from x and true weights c (m, 3)."""
         raise NotImplementedError
 
+    def shape_names(self) -> list[tuple[str, str, str]]:
+        """Per shape parameter: (name, its value at the lower bound, at the upper bound) for people."""
+        raise NotImplementedError
+
+    def bounds_reached(self, x: np.ndarray, c: np.ndarray) -> list[str]:
+        """Sentences naming the parameters that ended at a bound of the search: shape parameters
+        within 10⁻⁴ of the box's span of an end, and, per channel, the energy constraint
+        Σ a_j c_j = 1 met with equality (to 10⁻⁶) — an optimum pressed against a bound is the best
+        the model allows there, not a fit of the data."""
+        out = []
+        span = self.upper - self.lower
+        for k, (name, at_lo, at_hi) in enumerate(self.shape_names()):
+            if x[k] - self.lower[k] <= 1e-4 * span[k]:
+                out.append(f"{name} at its lower bound {at_lo}")
+            elif self.upper[k] - x[k] <= 1e-4 * span[k]:
+                out.append(f"{name} at its upper bound {at_hi}")
+        used = self.energy(x) @ c  # (3,): Σ a_j c_j per channel
+        full = [ch for ch, u in zip("RGB", used, strict=True) if u >= 1.0 - 1e-6]
+        if full:
+            out.append(f"energy conservation bound reached in {', '.join(full)} ({self.energy_text})")
+        return out + self._weight_bounds(c)
+
+    energy_text = "Σ a_j c_j = 1"
+
+    def _weight_bounds(self, c: np.ndarray) -> list[str]:
+        return []
+
 
 @dataclass(frozen=True)
 class LafortuneParam(ModelParam):
@@ -185,6 +212,20 @@ class LafortuneParam(ModelParam):
                 combos.append(np.concatenate([a, b, *rest]))
         return np.asarray(combos)
 
+    energy_text = "kd + Σ ks 2π/(n + 2) = 1"
+
+    def shape_names(self) -> list[tuple[str, str, str]]:
+        names = []
+        for k in range(1, self.lobes + 1):
+            names += [(f"lobe {k} direction ψ", "0 (Cz = 0, retro-reflective)", "π (Cz = 0, forward)"),
+                      (f"lobe {k} exponent n", f"{self.n_min:g}", f"{self.n_max:g}")]
+        return names
+
+    def _weight_bounds(self, c: np.ndarray) -> list[str]:
+        scale = max(float(np.max(c)), 1e-300)
+        return [f"lobe {k} unused (ks = 0 in every channel)" for k in range(1, self.lobes + 1)
+                if not np.any(c[k] > 1e-9 * scale)]
+
     def canonical(self, x: np.ndarray) -> np.ndarray:
         pairs = x.reshape(self.lobes, 2)
         return pairs[np.argsort(-pairs[:, 1], kind="stable")].ravel()
@@ -228,6 +269,24 @@ class CookTorranceParam(ModelParam):
     def energy(self, x: np.ndarray) -> np.ndarray:
         return np.ones(3)
 
+    energy_text = "kd + ks = 1"
+
+    def shape_names(self) -> list[tuple[str, str, str]]:
+        return [("roughness α", f"{np.exp(self.lower[0]):g}", f"{np.exp(self.upper[0]):g}")]
+
+    def _weight_bounds(self, c: np.ndarray) -> list[str]:
+        # ks f0 = c[1], ks (1 − f0) = c[2]: f0 = 1 where only the first is used, 0 where only the second
+        # (to 10⁻⁶ of ks: the bounded least squares leave round-off above 0)
+        out = []
+        ks = c[1] + c[2]
+        one = [ch for ch, a, b, k in zip("RGB", c[1], c[2], ks, strict=True) if k > 0 and b <= 1e-6 * k]
+        zero = [ch for ch, a, b, k in zip("RGB", c[1], c[2], ks, strict=True) if k > 0 and a <= 1e-6 * k]
+        if one:
+            out.append(f"Fresnel f0 at its upper bound 1 in {', '.join(one)}")
+        if zero:
+            out.append(f"Fresnel f0 at its lower bound 0 in {', '.join(zero)}")
+        return out
+
     def starts(self) -> np.ndarray:
         return np.log([[0.005], [0.02], [0.05], [0.1], [0.2], [0.35], [0.6]])
 
@@ -263,6 +322,11 @@ class MicrofacetParam(ModelParam):
 
     def energy(self, x: np.ndarray) -> np.ndarray:
         return np.ones(1)
+
+    energy_text = "ks = 1"
+
+    def shape_names(self) -> list[tuple[str, str, str]]:
+        return [("width σ", f"{np.exp(self.lower[0]):g}", f"{np.exp(self.upper[0]):g}")]
 
     def starts(self) -> np.ndarray:
         return np.log([[0.01], [0.03], [0.08], [0.2], [0.5], [1.0]])

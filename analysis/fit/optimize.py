@@ -40,7 +40,7 @@ from .metrics import METRICS, error_metrics
 from .models_param import MODELS, ModelParam, make_param
 from .objective import ProjectedObjective
 from .sampling import FitSamples, collect_samples
-from .summary import BandError, band_errors
+from .summary import FIT_FAIL_BAND_REL_RMS, BandError, band_errors, worst_band
 
 __all__ = ["FitResult", "fit_brdf", "STATUS_NAMES"]
 
@@ -64,7 +64,7 @@ ProgressCallback = Callable[[int, int], None]
 
 @dataclass(frozen=True, eq=False)
 class FitResult:
-    """Outcome of :func:`fit_brdf`; falsy when the fit did not converge.
+    """Outcome of :func:`fit_brdf`; falsy when the fit failed.
 
     Attributes
     ----------
@@ -77,16 +77,29 @@ class FitResult:
     errors
         ``{"rel_rms": ..., "log_rms": ...}`` on the fit samples (``metrics.py``).
     bands
-        Errors per view-elevation band (``report.py``).
+        Errors per view-elevation band (``summary.py``).
     status, success, message
-        nlopt's termination reason of the final local run, whether it converged, and a
-        sentence for people.
+        nlopt's termination reason of the final local run (a reason, not a verdict), whether
+        the fit represents the data — finite errors, not the zero BRDF, and a relative RMS of at
+        most :data:`~shrmkit.analysis.fit.summary.FIT_FAIL_BAND_REL_RMS` in every view band
+        (``summary.worst_band``) — and a sentence for people that leads with the worst band.
     evaluations, seconds
         Objective evaluations over all stages, and wall time (sampling included).
     n_samples, n_dropped
         Samples used, and sampled points dropped for lack of data.
     options
         The options the fit ran with (model, lobes, metric, seed, ...).
+    worst
+        The view band with the largest relative RMS (None without bands of enough samples).
+    converged
+        Whether nlopt's last local run ended on a tolerance (``status`` in FTOL/XTOL/…), not on
+        its evaluation budget: reported, not part of ``success``.
+    usable
+        False for the zero BRDF or non-finite errors (nothing to analyse through); a failed fit
+        can be usable (the best this model gives, with its worst band stated).
+    at_bounds
+        Sentences naming the parameters that ended at a bound of the search (an exponent at its
+        cap, Fresnel f0 at 1, the energy-conservation constraint met with equality, an unused lobe).
     """
 
     model: str
@@ -102,6 +115,10 @@ class FitResult:
     n_samples: int
     n_dropped: int
     options: dict[str, Any] = field(default_factory=dict)
+    worst: BandError | None = None
+    converged: bool = True
+    at_bounds: tuple[str, ...] = ()
+    usable: bool = True
 
     def __bool__(self) -> bool:
         return self.success
@@ -281,13 +298,10 @@ def fit_brdf(
     errors = error_metrics(samples, model_rho)
     bands = band_errors(samples, model_rho)
     status = STATUS_NAMES.get(code, f"UNKNOWN({code})")
-    success = code in _CONVERGED and bool(np.all(np.isfinite(list(errors.values()))))
-    if not np.any(c > 0):
-        success, message = False, "the best fit is the zero BRDF: the model cannot represent this data"
-    elif success:
-        message = f"converged ({status}) after {objective.evaluations} evaluations"
-    else:
-        message = f"did not converge: nlopt stopped with {status} after {objective.evaluations} evaluations"
+    converged = code in _CONVERGED
+    worst = worst_band(bands)
+    at_bounds = tuple(param.bounds_reached(x, c))
+    message, success = _verdict(errors, worst, bool(np.any(c > 0)), status, converged, objective.evaluations, at_bounds)
     options = {
         "model": model,
         "lobes": int(lobes) if model == "lafortune" else None,
@@ -313,4 +327,27 @@ def fit_brdf(
         n_samples=len(samples),
         n_dropped=samples.n_dropped,
         options=options,
+        worst=worst,
+        converged=converged,
+        at_bounds=at_bounds,
+        usable=bool(np.any(c > 0)) and all(np.isfinite(v) for v in errors.values()),
     )
+
+
+def _verdict(errors: dict[str, float], worst: BandError | None, nonzero: bool, status: str, converged: bool,
+             evaluations: int, at_bounds: tuple[str, ...]) -> tuple[str, bool]:
+    """(message, success): the worst band first, then how nlopt stopped and the bounds reached."""
+    stop = (f"nlopt stopped with {status} after {evaluations} evaluations"
+            + ("" if converged else " (its evaluation budget, not a tolerance)"))
+    tail = f"; {stop}" + (f"; {'; '.join(at_bounds)}" if at_bounds else "")
+    if not nonzero:
+        return "failed: the best fit is the zero BRDF: the model cannot represent this data" + tail, False
+    if not all(np.isfinite(v) for v in errors.values()):
+        return "failed: non-finite errors" + tail, False
+    if worst is None:
+        return f"rel. RMS {errors['rel_rms']:.3g} (no view band with enough samples to judge)" + tail, True
+    where = f"rel. RMS {worst.rel_rms:.3g} in the {worst.lo_deg:g}–{worst.hi_deg:g}° view band"
+    if worst.rel_rms > FIT_FAIL_BAND_REL_RMS:
+        return (f"failed: {where} (above {FIT_FAIL_BAND_REL_RMS:g}; {errors['rel_rms']:.3g} over all samples)"
+                + tail), False
+    return f"worst band {where}; {errors['rel_rms']:.3g} over all samples" + tail, True

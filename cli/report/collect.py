@@ -103,6 +103,10 @@ def _fit_entry(result: Any) -> dict[str, Any]:
         "bands": [b.as_dict() for b in result.bands],
         "status": result.status,
         "success": bool(result.success),
+        "converged": bool(result.converged),
+        "usable": bool(result.usable),
+        "worst_band": None if result.worst is None else result.worst.as_dict(),
+        "at_bounds": list(result.at_bounds),
         "message": result.message,
         "evaluations": int(result.evaluations),
         "n_samples": int(result.n_samples),
@@ -399,15 +403,27 @@ def _warnings(checks: dict[str, Any], orders: list[dict[str, Any]], fits: list[d
 def _analysis_brdf(brdf: BRDF, fit_entries: list[dict[str, Any]], fit_results: list[Any]) -> tuple[BRDF, str, str]:
     if brdf.kind != "scattered":
         return brdf, "brdf", ""
-    ok = [(e["errors"]["rel_rms"], i) for i, e in enumerate(fit_entries) if e.get("success")]
+    # the successful fit with the smallest error, else the usable one with the smallest worst band
+    # (analysed, with its failure stated): a failed fit is still the best this toolkit has for the data
+    ok = [(not e.get("success"), _worst(e), e["errors"]["rel_rms"], i) for i, e in enumerate(fit_entries)
+          if e.get("usable", e.get("success"))]
     if not ok:
-        raise BadInputError(brdf.name, "scattered measurements and no successful fit: nothing to analyse "
+        raise BadInputError(brdf.name, "scattered measurements and no usable fit: nothing to analyse "
                             "(orders need a BRDF that can be evaluated everywhere)")
-    best = min(ok)[1]
+    failed, worst, rel, best = min(ok)
     model = fit_entries[best]["model"]
+    band = fit_entries[best].get("worst_band") or {}
+    where = f", worst view band {band['lo_deg']:g}–{band['hi_deg']:g}° {worst:.3g}" if band else ""
     return fit_results[best].brdf, f"fit:{model}", (
         f"scattered measurements: orders, SHRMs and previews use the {model} fit "
-        f"(rel_rms {fit_entries[best]['errors']['rel_rms']:.3g})")
+        f"(rel_rms {rel:.3g}{where}" + ("; the fit FAILED: its orders describe the fit, not the material)"
+                                         if failed else ")"))
+
+
+def _worst(entry: dict[str, Any]) -> float:
+    """The relative RMS of a fit entry's worst view band (its headline when it has none)."""
+    band = entry.get("worst_band")
+    return float(band["rel_rms"]) if band else float(entry["errors"]["rel_rms"])
 
 
 def collect_report(

@@ -13,6 +13,7 @@ import re
 from collections.abc import Iterator, Sequence
 from typing import Any
 
+from ...analysis.fit.summary import FIT_FAIL_BAND_REL_RMS
 from .plots import PLOT_TITLES
 
 __all__ = ["fmt", "md_table", "report_sections", "report_markdown", "LIVE_VIEW_MARK", "live_view_mark"]
@@ -89,6 +90,9 @@ def report_sections(doc: dict[str, Any], image_link: Any = None) -> Iterator[tup
             f"**F = {doc['main']['F']}, P = {doc['main']['P']}** (ε(F, P) = {fmt(doc['main']['eps'])})."]
     if b["analysis_of"] != "brdf":
         head.append(f"Orders, SHRMs and previews use `{b['analysis_of']}` (scattered measurements).")
+    fit_lines = [_fit_headline(f) for f in doc["fits"]]
+    if fit_lines:
+        head.append("Fits (worst view band first): " + "; ".join(fit_lines) + ".")
     head.append(f"Profile `{doc['options']['profile']}`, seed {doc['options']['seed']}, "
                 f"shrmkit {doc['provenance']['shrmkit_version']}; total {fmt(doc.get('total_seconds'))} s.")
     yield "Summary", "\n\n".join(head)
@@ -161,14 +165,26 @@ def report_sections(doc: dict[str, Any], image_link: Any = None) -> Iterator[tup
     rows = []
     for f in doc["fits"]:
         if f.get("error"):
-            rows.append([f["model"], "failed: " + f["error"], None, None, None, f["fit_seconds"]])
+            rows.append([f["model"], "failed: " + f["error"], None, None, None, None, "FAILED", None,
+                         f["fit_seconds"]])
         else:
-            rows.append([f["model"], f["spec"], f["errors"].get("rel_rms"), f["errors"].get("log_rms"),
-                         f["status"], f["fit_seconds"]])
-    body = md_table(["model", "fitted spec", "rel. RMS", "log RMS", "status", "time (s)"], rows)
+            band = f.get("worst_band")
+            rows.append([f["model"], f["spec"], band["rel_rms"] if band else None,
+                         f"{band['lo_deg']:g}–{band['hi_deg']:g}°" if band else None, f["errors"].get("rel_rms"),
+                         f["errors"].get("log_rms"), "ok" if f["success"] else "FAILED", f["status"],
+                         f["fit_seconds"]])
+    body = md_table(["model", "fitted spec", "worst band rel. RMS", "worst band", "rel. RMS (all)", "log RMS",
+                     "verdict", "nlopt stop", "time (s)"], rows)
+    body += (f"\n\nA fit FAILS when its relative RMS error passes {fmt(FIT_FAIL_BAND_REL_RMS)} in any view band "
+             "(of 10 samples or more): the model does not represent the material there, whatever its average. "
+             "nlopt's stop reason says how the search ended, not whether the fit is good.")
     params = [f"- {f['model']}: {_params_text(f['params'])}" for f in doc["fits"] if not f.get("error")]
     if params:
         body += "\n\nParameters:\n\n" + "\n".join(params)
+    bounds = [f"- {f['model']}: " + "; ".join(f["at_bounds"]) for f in doc["fits"] if f.get("at_bounds")]
+    if bounds:
+        body += "\n\nParameters at a bound of the search (the best the model allows, not a fit of the data):\n\n"
+        body += "\n".join(bounds)
     band_rows = [[f["model"], f"{b['lo_deg']:g}–{b['hi_deg']:g}°", b["n"], b["rel_rms"], b["log_rms"]]
                  for f in doc["fits"] for b in f.get("bands") or []]
     if band_rows:
@@ -274,6 +290,16 @@ def _explorer_body(doc: dict[str, Any], e: dict[str, Any], link: Any) -> str:
                      + ", ".join(f"{i['label']} (peak luminance {fmt(i['max_lum'])})" for i in sp["images"]) + ".")
         parts.append(link("explorer_sphere", sp["file"], "Lit sphere under one distant light"))
     return "\n\n".join(parts)
+
+
+def _fit_headline(f: dict[str, Any]) -> str:
+    """One fit in the summary's first lines: its worst view band, its error over all samples, its verdict."""
+    if f.get("error"):
+        return f"{f['model']} FAILED ({f['error']})"
+    band = f.get("worst_band")
+    worst = (f"{fmt(band['rel_rms'])} in {band['lo_deg']:g}–{band['hi_deg']:g}°, " if band else "")
+    return (f"{f['model']} {'ok' if f['success'] else '**FAILED**'} (rel. RMS {worst}"
+            f"{fmt(f['errors'].get('rel_rms'))} over all samples)")
 
 
 def report_markdown(doc: dict[str, Any]) -> str:

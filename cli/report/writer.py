@@ -91,6 +91,10 @@ def summary_row(doc: dict[str, Any]) -> dict[str, Any]:
         row[f"P@{o['tolerance']:g}"] = o["P"]
     for f in doc["fits"]:
         row[f"fit_rel_rms_{f['model']}"] = None if f.get("error") else f["errors"].get("rel_rms")
+        band = None if f.get("error") else f.get("worst_band")
+        row[f"fit_worst_band_rel_rms_{f['model']}"] = band["rel_rms"] if band else None
+        row[f"fit_worst_band_{f['model']}"] = f"{band['lo_deg']:g}-{band['hi_deg']:g}" if band else None
+        row[f"fit_ok_{f['model']}"] = bool(f.get("success")) and not f.get("error")
     for e in doc["environments"]:
         row[f"shrm_rel_rms_{e['name']}"] = e["measured_rel_rms"]
     row["warnings"] = len(doc["warnings"])

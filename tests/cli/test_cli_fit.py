@@ -61,3 +61,19 @@ def test_fit_bad_option_is_usage_error(capsys):
     with pytest.raises(SystemExit) as exc:
         main(["fit", SPEC, "--lobes", "9"])
     assert exc.value.code == 2
+
+
+def test_failed_fit_exits_1_and_its_json_says_why(capsys):
+    """A forward and a retro-reflective lobe: one Lafortune lobe cannot hold both (issue 24). The
+    verdict is the worst view band, stated in the table, the JSON and the warning; exit status 1."""
+    two_lobes = "lafortune:kd=0.05,cxy=-1,cz=1,n=60,ks=1,cxy2=1,cz2=1,n2=40,ks2=1"
+    assert main(["fit", two_lobes, "--samples", "4096", "--starts", "2", "--json"]) == 1
+    captured = capsys.readouterr()
+    doc = json.loads(captured.out)
+    fit = doc["fit"]
+    assert fit["success"] is False and fit["converged"] is True
+    assert fit["worst_band"]["rel_rms"] == max(b["rel_rms"] for b in doc["bands"]) > 0.5
+    assert fit["message"].startswith("failed: rel. RMS") and fit["status"] in fit["message"]
+    assert "warning: failed" in captured.err
+    assert main(["fit", two_lobes, "--samples", "4096", "--starts", "2"]) == 1
+    assert "FAILED" in capsys.readouterr().out
