@@ -16,7 +16,7 @@ import numpy as np
 from ..analysis.tolerance import DEFAULT_EPS, check_eps
 from ..brdf_io.atomic import atomic_paths, check_writable
 from ..brdf_io.errors import BadInputError
-from ..render.api import SIZE_RANGE, SceneRender, render_scene
+from ..render.api import SIZE_RANGE, SceneRender, SequenceRender, render_scene, render_sequence
 from ..render.camera import Camera
 from ..render.error_image import ERROR_IMAGE_HELP, check_error_image_request, error_image, write_error_image_line
 from ..render.mesh import load_mesh
@@ -38,7 +38,9 @@ from .common import (
     add_rgl_incident,
     add_window_option,
     env_rotation_arg,
+    env_sources_arg,
     load_env_arg,
+    load_env_sequence,
     order_rule,
     rgl_brdf_arg,
 )
@@ -78,7 +80,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "mesh", metavar="MESH", help="mesh file (obj, ply, stl, off, glb, gltf) or builtin:sphere|torus|torus-knot"
     )
-    p.add_argument("--env", default="builtin:sky", help="environment map spec or file (default builtin:sky)")
+    p.add_argument("--env", nargs="+", default=["builtin:sky"], metavar="ENV",
+                   help="environment map spec or file (default builtin:sky); several maps, a folder of maps or a "
+                   "glob pattern render one frame per map to OUT_0000.png ... and OUT.gif (the BRDF's orders chosen "
+                   "once, each map prefiltered, its cost and stated error printed)")
     p.add_argument("--brdf", default="microfacet:sigma=0.2", help="BRDF spec or file (default microfacet:sigma=0.2)")
     p.add_argument("--eps", type=float, default=DEFAULT_EPS, help=f"SHRM tolerance epsilon (default {DEFAULT_EPS:g})")
     p.add_argument("--mode", choices=mode_names(), default=DEFAULT_MODE, help=_mode_help())
@@ -114,7 +119,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="render N frames with the environment turning about the up axis (360/N degrees a frame, "
                    "after --env-rotation) and the camera still, to OUT_0000.png ... and OUT.gif; built once, "
                    "per-frame cost printed")
-    p.add_argument("--fps-frames", type=int, default=10, help="repeated frames for the fps figure (default 10)")
+    p.add_argument("--fps-frames", type=int, default=10,
+                   help="repeated frames for the fps figure (default 10; not measured for a sequence of maps)")
     p.add_argument("-o", "--output", required=True, help="output PNG")
     add_env_orientation(p)
     add_rgl_incident(p)
@@ -122,8 +128,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--error-image", metavar="PATH", help=ERROR_IMAGE_HELP)
 
 
-def _validate(args: argparse.Namespace) -> tuple[list[Camera], RenderOptions]:
-    """Check every option before any long computation; returns the cameras and the builders' options."""
+def _validate(args: argparse.Namespace, sequence: bool = False) -> tuple[list[Camera], RenderOptions]:
+    """Check every option before any long computation; returns the cameras and the builders' options.
+    ``sequence``: ``--env`` named several maps (one frame each)."""
     lo, hi = SIZE_RANGE
     if not lo <= args.size <= hi:
         raise BadInputError(None, f"--size must be in [{lo}, {hi}], got {args.size}")
@@ -135,6 +142,9 @@ def _validate(args: argparse.Namespace) -> tuple[list[Camera], RenderOptions]:
     if args.turntable and args.light_turntable:
         raise BadInputError(None, "--turntable (the camera turns) and --light-turntable (the lighting turns): "
                             "choose one")
+    if sequence and (args.turntable or args.light_turntable or args.error_image):
+        raise BadInputError(None, "several --env maps render one frame per map: --turntable, --light-turntable "
+                            "and --error-image apply to one map")
     rotation = env_rotation_arg(args.env_rotation) if args.env_rotation is not None else None
     if Path(args.output).suffix.lower() != ".png":
         raise BadInputError(args.output, "output must be a .png file")
@@ -195,14 +205,55 @@ def _build_seconds(info: dict) -> float | None:
     return None
 
 
-def _write(args: argparse.Namespace, frames: list[Frame]) -> None:
+def _stated_error(info: dict) -> str:
+    """The error an SHRM states for itself (``BuiltModel.info``): the worst view band's predicted and
+    bounded relative RMS inside the view limit, and the per-pixel 90th percentile."""
+    bands = [b for b in info.get("view_bands", []) if b["inside"]]
+    if not bands:
+        return "no stated error"
+    worst = max(bands, key=lambda b: b["predicted_rel_rms"])
+    text = (f"stated relative RMS {worst['predicted_rel_rms']:.3g} (bound {worst['bound_rel_rms']:.3g}) in the worst "
+            f"view band to {info['max_view_deg']:g} degrees")
+    p90 = (info.get("pixel_errors") or {}).get("p90")
+    return text + ("" if p90 is None else f", per pixel p90 {p90:.3g}")
+
+
+def _report_sequence(args: argparse.Namespace, seq: SequenceRender) -> None:
+    """Per map: its prefilter cost beside the error stated for it; then the sequence's totals."""
+    first = seq.renders[0]
+    print(f"mesh {first.mesh.name}: {first.mesh.n_triangles} triangles")
+    print(f"renderer: {first.timings.backend}, mode {first.mode}, {args.size}x{args.size}, {args.camera}")
+    n = len(seq.renders)
+    if seq.orders is not None:
+        print(f"orders: F={seq.orders.F} P={seq.orders.P} of the BRDF chosen once in {seq.orders_seconds:.3f} s "
+              f"for {n} maps")
+    builds = []
+    for k, (result, name, seconds) in enumerate(zip(seq.renders, seq.environments, seq.frame_seconds, strict=True)):
+        info = result.built.info
+        built = _build_seconds(info)
+        builds.append(built)
+        model = (f"SHRM F_B={info['F']} P={info['P']} on {info['height']}x{info['width']}" if "F" in info
+                 else result.built.description[0])
+        cost = "" if built is None else f"prefilter {built:.3f} s, "
+        lights = (info.get("lights") or {}).get("count", 0)
+        print(f"frame {k:04d} {name}: {model}, {cost}"
+              f"{_stated_error(info)}{f', {lights} light(s)' if lights else ''}; frame total {seconds:.3f} s")
+    known = [b for b in builds if b is not None]
+    if known:
+        mean = sum(known) / len(known)
+        print(f"environment sequence: {n} maps, prefilter {mean:.3f} s per map (min {min(known):.3f}, max "
+              f"{max(known):.3f}), {sum(seq.frame_seconds) / n:.3f} s per frame with the render"
+              + ("" if seq.orders is None else f"; the order choice ({seq.orders_seconds:.3f} s) paid once"))
+
+
+def _write(args: argparse.Namespace, frames: list[Frame], n_frames: int | None = None) -> None:
     def png(frame: Frame) -> np.ndarray:
         alpha = frame.alpha if frame.transparent else None
         return to_8bit(frame.linear, alpha, exposure=args.exposure, curve=args.tone)
 
     # every output of one command is written together (atomic_paths): a full disk or a failing writer
     # leaves none of them, and the error names the file
-    n_frames = args.turntable or args.light_turntable
+    n_frames = n_frames or args.turntable or args.light_turntable
     if n_frames:
         pngs, gif = turntable_paths(args.output, n_frames)
         exrs = turntable_paths(args.exr, n_frames)[0] if args.exr else []
@@ -227,12 +278,21 @@ def _write(args: argparse.Namespace, frames: list[Frame]) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    cameras, options = _validate(args)
+    sources, sequence = env_sources_arg(args.env)
+    cameras, options = _validate(args, sequence)
     for path in (args.output, args.exr, args.error_image):
         if path:
             check_writable(path)
     mesh = load_mesh(args.mesh)
-    env = load_env_arg(args.env, args)
+    if sequence:
+        maps = load_env_sequence(sources, args)  # every member read first: a bad one stops before any output
+        seq = render_sequence(mesh, maps, rgl_brdf_arg(args.brdf, args), mode=args.mode, eps=args.eps,
+                              camera=cameras[0], size=args.size, background=args.background,
+                              fps_frames=0, options=options)
+        _report_sequence(args, seq)
+        _write(args, seq.frames, len(seq.frames))
+        return 0
+    env = load_env_arg(sources[0], args)
     result = render_scene(
         mesh, env, rgl_brdf_arg(args.brdf, args), mode=args.mode, eps=args.eps, camera=cameras, size=args.size,
         background=args.background, fps_frames=args.fps_frames, options=options,

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import glob
 import json
 import sys
 from pathlib import Path
@@ -17,9 +18,11 @@ from ..analysis.lights import DEFAULT_LIGHTS, LIGHT_CONTRAST, MAX_LIGHT_RADIUS_D
 from ..analysis.shrm import DEFAULT_WINDOW, WINDOW_BUDGET_EPS, WINDOW_THRESHOLD, WINDOWS
 from ..analysis.tolerance import check_eps
 from ..analysis.view_bands import CRITERIA, DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG
+from ..brdf_io.cubemap import CUBE_FACES
 from ..brdf_io.env_rotation import env_rotation_matrix
 from ..brdf_io.envmap import load_env
 from ..brdf_io.errors import BadInputError
+from ..brdf_io.hdr_codecs import IMAGE_SUFFIXES
 from ..brdf_io.jsonutil import to_jsonable
 from ..brdf_io.rgl import RGL_INCIDENT
 
@@ -34,6 +37,8 @@ __all__ = [
     "order_rule",
     "env_orientation",
     "env_rotation_arg",
+    "env_sources_arg",
+    "load_env_sequence",
     "load_env_arg",
     "load_oriented_env",
     "stdout",
@@ -262,3 +267,54 @@ def load_oriented_env(spec: str, *, up: str | None, flip: bool, azimuth: float, 
 def load_env_arg(spec: str, args: argparse.Namespace, **kwargs: Any):
     """:func:`load_oriented_env` with the options of :func:`add_env_orientation`."""
     return load_oriented_env(spec, **env_orientation(args), **kwargs)
+
+
+_GLOB_CHARS = frozenset("*?[")
+
+
+def _is_cube_folder(folder: Path) -> bool:
+    """Whether ``folder`` holds cube-map faces (``px.hdr`` …), which ``load_env`` reads as one map."""
+    return any((folder / f"{face}{s}").is_file() for face in CUBE_FACES for s in IMAGE_SUFFIXES)
+
+
+def env_sources_arg(tokens: str | list[str]) -> tuple[list[str], bool]:
+    """The environment maps named by ``--env``'s values, and whether they make a sequence.
+
+    Each token is a spec (``builtin:…``), a map file, a cube-map folder (one map), a folder of
+    map files (its ``.exr``/``.hdr``/``.pfm`` files, sorted by name: a time-lapse), or a glob
+    pattern (``captures/*.exr``, sorted). The maps make a sequence (one frame each) when there
+    are several tokens or a token named a folder of maps or a pattern.
+
+    Raises
+    ------
+    BadInputError
+        A folder with no map file, a pattern that matches none (one line naming it).
+    """
+    tokens = [tokens] if isinstance(tokens, str) else list(tokens)
+    sources: list[str] = []
+    sequence = len(tokens) > 1
+    for token in tokens:
+        path = Path(token)
+        if token.strip().startswith("builtin:") or path.is_file():
+            sources.append(token)
+        elif path.is_dir() and not _is_cube_folder(path):
+            found = sorted(p for p in path.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_SUFFIXES)
+            if not found:
+                raise BadInputError(path, f"a folder of environment maps holds no {'/'.join(IMAGE_SUFFIXES)} file")
+            sources += [str(p) for p in found]
+            sequence = True
+        elif _GLOB_CHARS & set(token) and not path.exists():
+            found = sorted(p for p in glob.glob(token) if Path(p).is_file())
+            if not found:
+                raise BadInputError(token, "the pattern matches no file")
+            sources += found
+            sequence = True
+        else:
+            sources.append(token)  # a cube-map folder, or a missing file that load_env names
+    return sources, sequence
+
+
+def load_env_sequence(sources: list[str], args: argparse.Namespace, **kwargs: Any) -> list:
+    """:func:`load_env_arg` of every source, all before any is used: the first unreadable one raises
+    its :class:`BadInputError` (one line naming the file) and nothing has been computed or written."""
+    return [load_env_arg(source, args, **kwargs) for source in sources]

@@ -5,16 +5,24 @@ render mode through its record in the mode table (``render.modes``: an SHRM, RSI
 Gaussian lobes …), renders it offscreen from each camera (``render.pipeline.render_frames``)
 and returns a :class:`SceneRender` with the frames, the timings and what was built.
 ``shrm render`` is this call plus argument parsing and file writing.
+
+:func:`render_sequence` renders one frame per environment of a sequence (a time-lapse of HDR
+captures, ``shrm render --env A.exr B.exr ...``): the BRDF's orders are chosen once
+(``analysis.orders.choose_orders``; they depend on the BRDF only) and each map is prefiltered
+with them (``prefilter(orders=)``), so a frame is exactly what :func:`render_scene` makes of its map.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from numbers import Integral
 from pathlib import Path
 from typing import Any
 
+from ..analysis.orders import OrderChoice, choose_orders
 from ..analysis.tolerance import DEFAULT_EPS, check_eps
 from ..brdf_io.brdf import BRDF
 from ..brdf_io.envmap import EnvironmentMap, load_env
@@ -25,7 +33,7 @@ from .mesh import Mesh, load_mesh
 from .modes import DEFAULT_MODE, BuiltModel, RenderOptions, get_mode, self_shadow_modes
 from .pipeline import BACKGROUNDS, Frame, FrameTimings, render_frames
 
-__all__ = ["render_scene", "SceneRender", "SIZE_RANGE"]
+__all__ = ["render_scene", "SceneRender", "render_sequence", "SequenceRender", "SIZE_RANGE"]
 
 #: Image sizes (width = height, pixels) :func:`render_scene` accepts.
 SIZE_RANGE = (16, 8192)
@@ -175,3 +183,120 @@ def render_scene(
         background=background, fps_frames=fps_frames, visibility_sh=built.visibility_sh, env_rotation=rotations,
     )
     return SceneRender(mesh, record.name, built, cameras, frames, timings, size)
+
+
+@dataclass(frozen=True, eq=False)
+class SequenceRender:
+    """What :func:`render_sequence` made: one :class:`SceneRender` per environment.
+
+    Attributes
+    ----------
+    renders
+        One per environment, in the order given (each with its one frame, its model and timings).
+    environments
+        The environments' names (``EnvironmentMap.name``), in the same order.
+    orders
+        The BRDF's order choice shared by every frame, or None for a mode without SHRM orders
+        (``RenderMode.uses_orders``) or when ``options.orders`` was given.
+    orders_seconds
+        Seconds the order choice took (once for the whole sequence; 0 when none was made).
+    frame_seconds
+        Per environment: seconds to build its model (the prefilter) and render its frame.
+    """
+
+    renders: tuple[SceneRender, ...]
+    environments: tuple[str, ...]
+    orders: OrderChoice | None
+    orders_seconds: float
+    frame_seconds: tuple[float, ...]
+
+    @property
+    def frames(self) -> list[Frame]:
+        """The frames, one per environment."""
+        return [r.frames[0] for r in self.renders]
+
+
+def render_sequence(
+    mesh: Mesh | str | Path,
+    envs: Sequence[EnvironmentMap | str | Path],
+    brdf: BRDF | str | Path,
+    *,
+    mode: str = DEFAULT_MODE,
+    eps: float = DEFAULT_EPS,
+    camera: Camera | None = None,
+    size: int = 512,
+    background: str = "env",
+    fps_frames: int = 0,
+    options: RenderOptions | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> SequenceRender:
+    """Render ``mesh`` made of ``brdf`` under each environment of ``envs``: one frame per map.
+
+    The BRDF's orders (F, P) depend on the BRDF and the order rule only, so the SHRM modes choose
+    them once (:func:`~shrmkit.analysis.orders.choose_orders` at ``eps``, ``options.criterion`` and
+    ``options.max_view_deg``) and prefilter every map with them (``RenderOptions(orders=)``); each
+    map's lights, F_B, window and stated errors are its own. Frame k equals
+    ``render_scene(mesh, envs[k], brdf, ...)`` with the same arguments.
+
+    Parameters
+    ----------
+    mesh, brdf
+        As :func:`render_scene`; loaded once.
+    envs
+        A non-empty sequence of loaded maps or specs/paths for ``load_env``. Specs are all loaded
+        before anything is prefiltered, so an unreadable member fails first, naming its file.
+    mode, eps, size, background, options
+        As :func:`render_scene`; ``options.env_rotation`` (one rotation) applies to every frame.
+    camera
+        One camera for every frame (None: ``Camera.looking_at()``).
+    fps_frames
+        Repeated frames for each frame's frames-per-second figure (default 0: none).
+    progress
+        Optional callable told ``"orders"`` and then ``"frame K/N"`` as each frame starts.
+
+    Returns
+    -------
+    SequenceRender
+
+    Raises
+    ------
+    BadInputError
+        An empty sequence, a member that cannot be loaded (one line naming it), a camera that is
+        not one :class:`Camera`, several environment rotations, and what :func:`render_scene` refuses.
+    OffscreenError
+        No offscreen OpenGL context.
+    """
+    record = get_mode(mode)
+    eps = check_eps(eps)
+    options = RenderOptions() if options is None else options
+    if not isinstance(options, RenderOptions):
+        raise BadInputError(None, f"options must be a RenderOptions, got {type(options).__name__}")
+    if isinstance(envs, str | Path | EnvironmentMap) or not len(envs):
+        raise BadInputError(None, "envs must be a non-empty sequence of environment maps or specs")
+    if camera is not None and not isinstance(camera, Camera):
+        raise BadInputError(None, "render_sequence takes one camera for every frame")
+    if isinstance(options.rotations(), list):
+        raise BadInputError(None, "render_sequence takes one environment rotation for every frame, not one per frame")
+
+    def stage(name: str) -> None:
+        if progress is not None:
+            progress(name)
+
+    maps = [env if isinstance(env, EnvironmentMap) else load_env(env) for env in envs]  # every member first
+    mesh = mesh if isinstance(mesh, Mesh) else load_mesh(mesh)
+    brdf = brdf if isinstance(brdf, BRDF) else load_brdf(brdf)
+    choice, orders_seconds = None, 0.0
+    if record.uses_orders and options.orders is None:
+        stage("orders")
+        t0 = time.perf_counter()
+        choice = choose_orders(brdf, eps=eps, criterion=options.criterion, max_view_deg=options.max_view_deg)
+        orders_seconds = time.perf_counter() - t0
+        options = dataclasses.replace(options, orders=choice)
+    renders, seconds = [], []
+    for k, env in enumerate(maps):
+        stage(f"frame {k + 1}/{len(maps)}")
+        t0 = time.perf_counter()
+        renders.append(render_scene(mesh, env, brdf, mode=record.name, eps=eps, camera=camera, size=size,
+                                    background=background, fps_frames=fps_frames, options=options))
+        seconds.append(time.perf_counter() - t0)
+    return SequenceRender(tuple(renders), tuple(m.name for m in maps), choice, orders_seconds, tuple(seconds))

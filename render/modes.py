@@ -12,7 +12,9 @@ A record says everything the renderer, :func:`shrmkit.render.api.render_scene` a
   replacements and vertex attributes (``render.glsl``);
 - ``update(state, view, out)`` or None: the per-frame texture update from the view direction
   toward the object (distant: Σ B̃_pq Y^r_pq(Ṽ); rsibr: the blended view map);
-- ``self_shadow``: whether per-vertex SH visibility (``visibility_sh``) is supported.
+- ``self_shadow``: whether per-vertex SH visibility (``visibility_sh``) is supported;
+- ``uses_orders``: whether ``build`` prefilters an SHRM at the BRDF's orders (then
+  ``RenderOptions(orders=)`` lets a caller choose them once for several environments).
 
 The modes (RH02 = Ramamoorthi & Hanrahan 2002, doi:10.1145/566654.566611):
 
@@ -43,6 +45,7 @@ from ..analysis.baselines.gaussian_lobes import GaussianLobeModel, fit_gaussian_
 from ..analysis.baselines.rsibr import RSIBRMaps, rsibr_from_shrm
 from ..analysis.baselines.selfshadow import vertex_visibility_sh
 from ..analysis.lights import DEFAULT_LIGHTS, check_lights
+from ..analysis.orders import OrderChoice
 from ..analysis.pixels import pixel_line
 from ..analysis.shrm import DEFAULT_WINDOW, SHRM, check_window, prefilter
 from ..analysis.view_bands import DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG, check_criterion, check_max_view
@@ -113,6 +116,12 @@ class RenderOptions:
         sequence of (3, 3) matrices, one per camera (a lighting turntable,
         ``pipeline.light_turntable_rotations``). Stored as row-major 9-tuples; :meth:`rotations`
         gives the matrices. The lights and the ``"env"`` background turn with the map.
+    orders
+        The SHRM modes' (records with ``uses_orders``): the BRDF's
+        :class:`~shrmkit.analysis.orders.OrderChoice`, chosen beforehand at the same ε, criterion and
+        view limit (``prefilter(orders=)``; a mismatch is refused there), so that a sequence of
+        environments chooses them once (:func:`shrmkit.render.api.render_sequence`); None (default):
+        each build chooses them. The other modes ignore it.
     """
 
     lobes: int = 3
@@ -124,9 +133,13 @@ class RenderOptions:
     lights: str | int = DEFAULT_LIGHTS
     pixel_rule: bool = True
     env_rotation: Any = None
+    orders: OrderChoice | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "env_rotation", _rotation_tuples(self.env_rotation))
+        if self.orders is not None and not isinstance(self.orders, OrderChoice):
+            raise BadInputError(None, f"orders must be an OrderChoice (analysis.orders.choose_orders) or None, "
+                                f"got {type(self.orders).__name__}")
         check_window(self.window)
         if not isinstance(self.pixel_rule, bool):
             raise BadInputError(None, f"pixel_rule must be True or False, got {self.pixel_rule!r}")
@@ -195,6 +208,7 @@ class RenderMode:
     shading: Callable[..., Shading]
     update: Callable[[Any, np.ndarray, np.ndarray], None] | None = None
     self_shadow: bool = False
+    uses_orders: bool = False
 
     def prepare(
         self, model: Any, mesh: Mesh, visibility_sh: np.ndarray | None = None, normalized_visibility: bool = True
@@ -265,7 +279,7 @@ def _prefiltered(
     t0 = time.perf_counter()
     shrm = prefilter(env, brdf, eps=eps, azimuth_free=azimuth_free, window=options.window,
                      criterion=options.criterion, max_view_deg=options.max_view_deg, lights=options.lights,
-                     pixel_rule=options.pixel_rule)
+                     pixel_rule=options.pixel_rule, orders=options.orders)
     seconds = time.perf_counter() - t0
     light_info, light_line = lights_info(shrm, per_pixel=per_pixel_lights)
     info = {"F": shrm.F, "P": shrm.P, "height": shrm.height, "width": shrm.width, "eps": eps,
@@ -337,13 +351,13 @@ def build_gaussian_lobes(
 
 _MODES = (
     RenderMode("distant", "distant viewer (RH02 eq. 12): one SHRM map per frame, looked up by R",
-               build_shrm, (SHRM,), distant_shading, distant_update),
+               build_shrm, (SHRM,), distant_shading, distant_update, uses_orders=True),
     RenderMode("perpixel", "per-pixel view direction (RH02 eq. 8): the SHRM summed in the fragment shader",
-               build_shrm, (SHRM,), perpixel_shading),
+               build_shrm, (SHRM,), perpixel_shading, uses_orders=True),
     RenderMode("rsibr", "Cabral et al. 1999: 12 maps at the icosahedron's vertices, blended per frame",
-               build_rsibr, (RSIBRMaps, SHRM), rsibr_shading, rsibr_update),
+               build_rsibr, (RSIBRMaps, SHRM), rsibr_shading, rsibr_update, uses_orders=True),
     RenderMode("kautz-mccool", "Kautz & McCool 2000: the azimuth-free (q = 0) SHRM, per pixel",
-               build_kautz_mccool, (SHRM,), perpixel_shading),
+               build_kautz_mccool, (SHRM,), perpixel_shading, uses_orders=True),
     RenderMode("gaussian-lobes", "Green et al. 2007: K Gaussian lobes per view elevation over an SG mip stack",
                build_gaussian_lobes, (GaussianLobeModel,), gaussian_shading, self_shadow=True),
 )
