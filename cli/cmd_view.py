@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ..analysis.orders import choose_orders
 from ..analysis.shrm import prefilter
 from ..analysis.tolerance import DEFAULT_EPS
 from ..brdf_io.atomic import check_writable
@@ -33,7 +34,9 @@ from .common import (
     add_pixel_rule_option,
     add_rgl_incident,
     add_window_option,
-    load_env_arg,
+    env_rotation_angles,
+    env_sources_arg,
+    load_env_sequence,
     number_in,
     order_rule,
     rgl_brdf_arg,
@@ -45,7 +48,13 @@ HELP = "write a self-contained HTML page that renders the SHRM of ENV and BRDF l
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("brdf", metavar="BRDF", help="BRDF spec or file")
-    p.add_argument("--env", default="builtin:sky", help="environment map spec or file (default builtin:sky)")
+    p.add_argument("--env", nargs="+", default=["builtin:sky"], metavar="ENV",
+                   help="environment map spec or file (default builtin:sky); several maps, a folder of maps or a "
+                   "glob pattern: the page switches between them without reloading (an environment menu, "
+                   "#env_index=K), the BRDF's orders chosen once")
+    p.add_argument("--env-rotation", default=None, metavar="AZ,EL[,ROLL]",
+                   help="the lighting's starting rotation, degrees, as shrm render --env-rotation (the page's "
+                   "#env_azimuth=&env_elevation=&env_roll=; the still image shows it too)")
     p.add_argument("--mesh", default=None,
                    help=f"mesh file or builtin: spec (default {DEFAULT_MESH}); decimated to the page's mesh budget")
     p.add_argument("--eps", type=tolerance, default=DEFAULT_EPS,
@@ -83,28 +92,43 @@ def run(args: argparse.Namespace) -> int:
     if out.suffix.lower() not in (".html", ".htm"):
         raise BadInputError(out, "output must be an .html file")
     budget = ViewBudget(page_bytes=int(args.budget_mb * 2**20))
+    rotation = env_rotation_angles(args.env_rotation) if args.env_rotation is not None else (0.0, 0.0, 0.0)
+    if not -90.0 <= rotation[1] <= 90.0:
+        raise BadInputError(None, f"--env-rotation: the page's elevation EL must be in [-90, 90] degrees, "
+                            f"got {args.env_rotation!r}")
+    sources, _ = env_sources_arg(args.env)
     check_writable(out)
-    env = load_env_arg(args.env, args)
+    envs = load_env_sequence(sources, args)  # every map read first: a bad one stops before any prefilter
     brdf = load_brdf(rgl_brdf_arg(args.brdf, args))
-    shrm = prefilter(env, brdf, eps=args.eps, size=args.size, window=args.window, lights=args.lights,
-                     pixel_rule=args.pixel_rule == "on", **order_rule(args))
+    rule = order_rule(args)
+    # the orders depend on the BRDF only: chosen once for every map
+    orders = choose_orders(brdf, eps=args.eps, **rule) if len(envs) > 1 else None
+    shrms = [prefilter(env, brdf, eps=args.eps, size=args.size, window=args.window, lights=args.lights,
+                       pixel_rule=args.pixel_rule == "on", orders=orders, **rule) for env in envs]
+    shrm, env = shrms[0], envs[0]
     page = build_view(
         shrm, env, mesh=args.mesh, mode=args.mode, exposure=args.exposure, tone=args.tone, azimuth=args.azimuth,
         elevation=args.elevation, zoom=args.zoom, background=not args.no_background, budget=budget, still=args.still,
+        env_rotation=rotation, more=list(zip(shrms[1:], envs[1:], strict=True)),
     )
     text = page_html(page)
     write_view(out, text)
     s = page.data["shrm"]
     mesh = page.data["mesh"]
-    worst = max((band["predicted_rel_rms"] for band in shrm.meta["view_bands"] if band["inside"]), default=0.0)
-    lights = len(shrm.meta["lights"])
-    print(f"SHRM F={shrm.F} P={shrm.P} on {shrm.height}x{shrm.width} (eps {args.eps:g}: predicted relative RMS "
-          f"{worst:.3g} in the worst view band to {shrm.meta['max_view_deg']:g} degrees)"
-          + (f", {lights} light(s) shaded exactly" if lights else ""))
+    for one, env in zip(shrms, envs, strict=True):
+        worst = max((band["predicted_rel_rms"] for band in one.meta["view_bands"] if band["inside"]), default=0.0)
+        lights = len(one.meta["lights"])
+        print(("" if len(shrms) == 1 else f"{env.name}: ")
+              + f"SHRM F={one.F} P={one.P} on {one.height}x{one.width} (eps {args.eps:g}: predicted relative RMS "
+              f"{worst:.3g} in the worst view band to {one.meta['max_view_deg']:g} degrees)"
+              + (f", {lights} light(s) shaded exactly" if lights else ""))
     print(f"page: P={s['P']}, maps {s['height']}x{s['width']}, mesh {mesh['name']} {mesh['triangles']} triangles, "
-          f"still image: {page.still_renderer}")
+          f"still image: {page.still_renderer}"
+          + ("" if len(shrms) == 1 else f", {len(shrms)} environments (switched in the page, #env_index=K)"))
     for note in page.notes:
         print(f"note: {note}")
     print(f"wrote {out} ({len(text.encode('utf-8')) / 2**20:.2f} MiB of {budget.page_bytes / 2**20:g} MiB); open it "
-          f"in a browser, e.g. {out.resolve().as_uri()}#azimuth={args.azimuth:g}&elevation={args.elevation:g}")
+          f"in a browser, e.g. {out.resolve().as_uri()}#azimuth={args.azimuth:g}&elevation={args.elevation:g}"
+          + ("" if args.env_rotation is None else f"&env_azimuth={rotation[0]:g}&env_elevation={rotation[1]:g}"
+             + (f"&env_roll={rotation[2]:g}" if rotation[2] else "")))
     return 0

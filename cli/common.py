@@ -37,6 +37,7 @@ __all__ = [
     "order_rule",
     "env_orientation",
     "env_rotation_arg",
+    "env_rotation_angles",
     "env_sources_arg",
     "load_env_sequence",
     "load_env_arg",
@@ -234,9 +235,10 @@ def env_orientation(args: argparse.Namespace) -> dict[str, Any]:
             "layer": getattr(args, "env_layer", None), "part": getattr(args, "env_part", None)}
 
 
-def env_rotation_arg(text: str, option: str = "--env-rotation") -> np.ndarray:
-    """``AZ,EL[,ROLL]`` (degrees) as the rotation matrix of ``brdf_io.env_rotation.env_rotation_matrix``;
-    :class:`BadInputError` (one line, exit 2) echoing the text otherwise."""
+def env_rotation_angles(text: str, option: str = "--env-rotation") -> tuple[float, float, float]:
+    """``AZ,EL[,ROLL]`` (degrees) as three angles (ROLL 0 when not given): the one parser of
+    ``shrm render --env-rotation`` and ``shrm view --env-rotation``; :class:`BadInputError` (one
+    line, exit 2) echoing the text otherwise."""
     parts = str(text).split(",")
     try:
         angles = [float(p) for p in parts]
@@ -245,7 +247,13 @@ def env_rotation_arg(text: str, option: str = "--env-rotation") -> np.ndarray:
     if len(angles) not in (2, 3) or not all(np.isfinite(angles)):
         raise BadInputError(None, f"{option} must be two or three finite numbers AZ,EL[,ROLL] in degrees, "
                             f"got {text!r}")
-    return env_rotation_matrix(*angles)
+    return angles[0], angles[1], angles[2] if len(angles) == 3 else 0.0
+
+
+def env_rotation_arg(text: str, option: str = "--env-rotation") -> np.ndarray:
+    """``AZ,EL[,ROLL]`` (degrees, :func:`env_rotation_angles`) as the rotation matrix of
+    ``brdf_io.env_rotation.env_rotation_matrix``."""
+    return env_rotation_matrix(*env_rotation_angles(text, option))
 
 
 def load_oriented_env(spec: str, *, up: str | None, flip: bool, azimuth: float, layer: str | None = None,

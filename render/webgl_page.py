@@ -39,6 +39,7 @@ import html
 import json
 import math
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -51,6 +52,7 @@ from .._version import __version__
 from ..analysis.lights import LightSet
 from ..analysis.shrm import SHRM
 from ..brdf_io.atomic import atomic_path
+from ..brdf_io.env_rotation import env_rotation_matrix
 from ..brdf_io.envmap import EnvironmentMap
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.latlong import bilinear_corners, bilinear_lookup, row_edges_cos
@@ -74,6 +76,7 @@ __all__ = [
     "ViewBudget",
     "CoefficientFit",
     "ViewPage",
+    "PageEnvironment",
     "page_camera",
     "fit_coefficients",
     "build_view",
@@ -181,6 +184,28 @@ class CoefficientFit:
 
 
 @dataclass(frozen=True, eq=False)
+class PageEnvironment:
+    """One environment of a page as the page holds it (for CPU references of its image).
+
+    Attributes
+    ----------
+    name
+        The environment's name.
+    coeffs
+        float32 ((P+1)², h, w, 3): its coefficient maps as stored (half rounding and scale undone).
+    env_radiance
+        float32 (h, w, 3): its background as stored, or None.
+    fit
+        The :class:`CoefficientFit` of the budget rule for it.
+    """
+
+    name: str
+    coeffs: np.ndarray
+    env_radiance: np.ndarray | None
+    fit: CoefficientFit
+
+
+@dataclass(frozen=True, eq=False)
 class ViewPage:
     """A page's content: the JSON document the viewer reads and the still image.
 
@@ -205,6 +230,9 @@ class ViewPage:
         The :class:`CoefficientFit` of the budget rule.
     title
         Page title.
+    environments
+        Every environment the page switches between (the first is ``coeffs``, ``env_radiance`` and
+        ``fit`` above), as :class:`PageEnvironment`; one entry for a page of one environment.
     """
 
     data: dict[str, Any]
@@ -217,16 +245,20 @@ class ViewPage:
     fit: CoefficientFit
     title: str
     sources: dict[str, str] = field(default_factory=dict, repr=False)
+    environments: tuple[PageEnvironment, ...] = ()
 
     @property
     def P(self) -> int:
         return self.fit.P
 
-    def stored_shrm(self, source: SHRM) -> SHRM:
+    def stored_shrm(self, source: SHRM, index: int = 0) -> SHRM:
         """An SHRM of the coefficients as stored (for the CPU reference of the page's image), with
-        ``source``'s lights (the page holds their samples exactly, float32)."""
-        return SHRM(F=source.F, P=self.fit.P, coeffs=self.coeffs, tolerance=source.tolerance, eps=dict(source.eps),
-                    meta=dict(source.meta), lights=source.lights if source.has_lights else None,
+        ``source``'s lights (the page holds their samples exactly, float32); ``index``: which of the
+        page's :attr:`environments` (``source`` is the SHRM it was made from)."""
+        stored = self.environments[index] if self.environments else PageEnvironment(
+            "", self.coeffs, self.env_radiance, self.fit)
+        return SHRM(F=source.F, P=stored.fit.P, coeffs=stored.coeffs, tolerance=source.tolerance,
+                    eps=dict(source.eps), meta=dict(source.meta), lights=source.lights if source.has_lights else None,
                     brdf=source.lights_brdf() if source.has_lights else None)
 
 
@@ -555,10 +587,12 @@ def _chunked(radiance, chunk: int = 8192):
     return evaluate
 
 
-def _cpu_radiance(shrm: SHRM, mode: str, camera: Camera):
+def _cpu_radiance(shrm: SHRM, mode: str, camera: Camera, env_rotation: np.ndarray | None = None):
+    """B(R, V) of the page's ``mode`` for ``shade`` (which turns R and V by Qᵀ itself): per pixel, or
+    the distant view map made for Qᵀ Ṽ, as the shaders."""
     if mode == "perpixel":
         return _chunked(shrm.radiance)
-    view_map = shrm.view_map(camera.view_direction(np.zeros(3)))
+    view_map = shrm.view_map(camera.view_direction(np.zeros(3)), env_rotation=env_rotation)
     if shrm.has_lights:  # the map holds the SHRM part; the lights at each pixel's own V, as the shaders
         return _chunked(lambda R, V: bilinear_lookup(view_map, R) + shrm.light_radiance(R, V))
     return lambda R, V: bilinear_lookup(view_map, R)
@@ -567,8 +601,11 @@ def _cpu_radiance(shrm: SHRM, mode: str, camera: Camera):
 def _still(
     shrm: SHRM, env: EnvironmentMap | None, mesh: Mesh, is_sphere: bool, view: dict[str, Any], size: int, how: str
 ) -> tuple[bytes, str, str | None, str]:
-    """PNG of the initial view, its renderer, a note when it shows less than the page, its mode."""
+    """PNG of the initial view (the lighting turned by the view's ``env_*`` angles), its renderer, a
+    note when it shows less than the page, its mode."""
     mode = view["mode"]
+    q = env_rotation_matrix(view["env_azimuth"], view["env_elevation"], view["env_roll"])
+    q = None if np.array_equal(q, np.eye(3)) else q
     if how == "none":
         return b"", "none", None, mode
     camera = page_camera(view["azimuth"], view["elevation"], view["zoom"], size, size)
@@ -589,6 +626,7 @@ def _still(
             frames, timings = render_frames(
                 mesh, shrm, [camera], size=size, mode=mode,
                 env_radiance=None if env is None else env.radiance, background=background, fps_frames=0,
+                env_rotation=q,
             )
         except ValueError as err:  # a perpixel atlas over the GPU's texture limit (render.shader)
             mode = "distant"
@@ -596,13 +634,14 @@ def _still(
             frames, timings = render_frames(
                 mesh, shrm, [camera], size=size, mode=mode,
                 env_radiance=None if env is None else env.radiance, background=background, fps_frames=0,
+                env_rotation=q,
             )
         linear, renderer = frames[0].linear, f"opengl ({timings.backend})"
     else:
         geometry = sphere_geometry(camera, size, size)
-        radiance = shade(geometry, _cpu_radiance(shrm, mode, camera)).astype(np.float32)
+        radiance = shade(geometry, _cpu_radiance(shrm, mode, camera, q), env_rotation=q).astype(np.float32)
         if env is not None and view["background"]:
-            bg = environment_background(env.radiance, camera, size, size)
+            bg = environment_background(env.radiance, camera, size, size, env_rotation=q)
         else:
             bg = np.zeros((size, size, 3), np.float32)
         linear = composite(radiance, geometry.hit.astype(np.float32), bg)
@@ -656,6 +695,8 @@ def build_view(
     still: str = "auto",
     still_png: bytes | None = None,
     title: str | None = None,
+    env_rotation: tuple[float, ...] = (0.0, 0.0, 0.0),
+    more: Sequence[tuple[SHRM, EnvironmentMap | None]] = (),
 ) -> ViewPage:
     """Everything a view page holds, within the size budget.
 
@@ -673,6 +714,15 @@ def build_view(
         ``perpixel``), tone map (``filmic`` or ``srgb``), exposure in stops (None: the
         preview rule, ``render.preview.preview_exposure`` — 0 without ``env``), camera
         (:func:`page_camera`) and whether the environment is drawn behind the object.
+    env_rotation
+        The lighting's initial rotation, degrees (AZ, EL[, ROLL]) as
+        :func:`~shrmkit.brdf_io.env_rotation.env_rotation_matrix` (the page's ``env_azimuth``,
+        ``env_elevation``, ``env_roll``; EL in [−90, 90]); the still image shows it too.
+    more
+        Further (SHRM, environment) pairs the page switches between without reloading (an
+        ``environment`` menu and ``env_index`` in the URL); prefiltered from the same BRDF.
+        The coefficient budget is shared equally, the backgrounds get at most a quarter of the
+        page together (rows halved until they fit). The still image shows the first.
     budget
         Size limits (:class:`ViewBudget`).
     still, still_png
@@ -687,20 +737,25 @@ def build_view(
     Raises
     ------
     BadInputError
-        Bad view values, a mesh that cannot be loaded or decimated, a budget that cannot hold
-        even one small map.
+        Bad view values or rotation, a mesh that cannot be loaded or decimated, a budget that
+        cannot hold even one small map per environment, an entry of ``more`` that is not an SHRM.
     """
-    if not isinstance(shrm, SHRM):
-        raise BadInputError(None, f"build_view needs an SHRM, got {type(shrm).__name__}")
+    pairs = [(shrm, env), *[tuple(pair) for pair in more]]
+    for k, (s_k, _) in enumerate(pairs):
+        if not isinstance(s_k, SHRM):
+            raise BadInputError(None, f"build_view needs an SHRM (environment {k}), got {type(s_k).__name__}")
     budget = ViewBudget() if budget is None else budget
     if still not in STILL_RENDERERS:
         raise BadInputError(None, f"still must be one of {', '.join(STILL_RENDERERS)}, got {still!r}")
     _check_view(mode, tone, azimuth, elevation, zoom, exposure)
+    rotation = _check_env_angles(env_rotation)
     if exposure is None:
         exposure = preview_exposure(env) if env is not None else 0.0
     view = {"azimuth": float(azimuth), "elevation": float(elevation), "zoom": float(zoom),
             "exposure": round(float(exposure), 3), "mode": mode, "background": bool(background and env is not None),
-            "tone": tone}
+            "tone": tone, "env_azimuth": rotation[0], "env_elevation": rotation[1], "env_roll": rotation[2]}
+    if len(pairs) > 1:
+        view["env_index"] = 0
     is_sphere = mesh is None
     source_mesh = load_mesh(DEFAULT_MESH if mesh is None else mesh) if not isinstance(mesh, Mesh) else mesh
     notes: list[str] = []
@@ -716,12 +771,23 @@ def build_view(
         notes.append(still_note)
     meta = shrm.meta
     brdf_name = str(meta.get("brdf", "BRDF"))
-    env_name = str(meta.get("environment", env.name if env is not None else "environment"))
+    names = [str(s_k.meta.get("environment", e_k.name if e_k is not None else "environment")) for s_k, e_k in pairs]
+    env_name = names[0]
     title = title or f"{brdf_name} under {env_name}"
-    env_data, env_stored = (None, None) if env is None else _env_payload(env, budget.env_rows)
-    lights_data, lights_note = _lights_payload(shrm, budget)
-    if lights_note:
-        notes.append(lights_note)
+    # the backgrounds: together at most a quarter of the page when there are several
+    env_rows = budget.env_rows
+    if len(pairs) > 1:
+        while env_rows > 8 and len(pairs) * _b64_len(env_rows * 2 * env_rows * 6) > budget.page_bytes // 4:
+            env_rows //= 2
+    entries: list[dict[str, Any]] = []
+    stored_envs: list[np.ndarray | None] = []
+    for (s_k, e_k), name in zip(pairs, names, strict=True):
+        env_data, env_stored = (None, None) if e_k is None else _env_payload(e_k, env_rows)
+        lights_data, lights_note = _lights_payload(s_k, budget)
+        if lights_note:
+            notes.append(lights_note if len(pairs) == 1 else f"{name}: {lights_note}")
+        entries.append({"name": name, "shrm": None, "env": env_data, "lights": lights_data})
+        stored_envs.append(env_stored)
     data: dict[str, Any] = {
         "format": "shrmkit-view",
         "version": 1,
@@ -731,50 +797,87 @@ def build_view(
         "camera": {"distance": CAMERA_DISTANCE, "margin": CAMERA_MARGIN},
         "view": view,
         "shrm": None,
-        "env": env_data,
+        "env": entries[0]["env"],
         "mesh": _mesh_payload(page_mesh),
-        "lights": lights_data,
+        "lights": entries[0]["lights"],
         "still": {"renderer": renderer, "width": budget.still_size, "height": budget.still_size,
                   "view": {**view, "mode": still_mode}},
         "notes": notes,
-        "budget": {"page_bytes": budget.page_bytes, "mesh_bytes": budget.mesh_bytes, "env_rows": budget.env_rows},
+        "budget": {"page_bytes": budget.page_bytes, "mesh_bytes": budget.mesh_bytes, "env_rows": env_rows},
     }
+    if len(pairs) > 1:
+        data["environments"] = entries  # entries[0]'s payloads are data's own (the first environment)
     sources = webgl_sources()
-    # what the page costs without the coefficients: the budget rule gets the rest (the
-    # reduction note and the numbers of the shrm entry are covered by the margin)
-    placeholder = {"F": shrm.F, "P": shrm.P, "source": {"P": shrm.P, "height": shrm.height, "width": shrm.width},
-                   "height": shrm.height, "width": shrm.width, "cols": 0, "rows": 0, "scale": 1.0,
-                   "added_rel_rms": 0.0, "texels": ""}
-    fixed = len(_render_page(title, {**data, "shrm": placeholder}, png, sources).encode("utf-8"))
-    margin = 2048
-    room = budget.page_bytes - fixed - margin
+
+    def placeholder(s_k: SHRM) -> dict[str, Any]:
+        return {"F": s_k.F, "P": s_k.P, "source": {"P": s_k.P, "height": s_k.height, "width": s_k.width},
+                "height": s_k.height, "width": s_k.width, "cols": 0, "rows": 0, "scale": 1.0,
+                "added_rel_rms": 0.0, "texels": ""}
+
+    # what the page costs without the coefficients: the budget rule gets the rest, shared equally (the
+    # reduction notes and the numbers of the shrm entries are covered by the margin)
+    for entry, (s_k, _) in zip(entries, pairs, strict=True):
+        entry["shrm"] = placeholder(s_k)
+    data["shrm"] = entries[0]["shrm"]
+    fixed = len(_render_page(title, data, png, sources).encode("utf-8"))
+    margin = 2048 * len(pairs)
+    room = (budget.page_bytes - fixed - margin) // len(pairs)
     max_bytes = (room // 4) * 3
     if max_bytes <= 0:
         raise BadInputError(None, f"the page budget of {budget.page_bytes} bytes is used up before the SHRM "
                             f"({fixed} bytes for the viewer, mesh, background and still image)")
-    fit = fit_coefficients(shrm.coeffs, shrm.P, max_bytes, max_edge=budget.max_edge, min_rows=budget.min_rows)
-    if fit.reduced:
-        _, H, W = fit.source_shape[0], fit.source_shape[1], fit.source_shape[2]
+    stored_pages: list[PageEnvironment] = []
+    for entry, (s_k, _), name, env_stored in zip(entries, pairs, names, stored_envs, strict=True):
+        fit = fit_coefficients(s_k.coeffs, s_k.P, max_bytes, max_edge=budget.max_edge, min_rows=budget.min_rows)
+        if fit.reduced:
+            H, W = fit.source_shape[1], fit.source_shape[2]
+            h, w = fit.coeffs.shape[1:3]
+            parts = []
+            if (h, w) != (H, W):
+                parts.append(f"coefficient maps {H}x{W} -> {h}x{w} texels")
+            if fit.P != s_k.P:
+                parts.append(f"view order P {s_k.P} -> {fit.P} ({(fit.P + 1) ** 2} of {(s_k.P + 1) ** 2} maps)")
+            notes.append(("" if len(pairs) == 1 else f"{name}: ")
+                         + f"reduced to fit the {budget.page_bytes / 2**20:.3g} MiB page budget: " + ", ".join(parts)
+                         + f"; estimated added error {100 * fit.added_rel_rms:.2g} % relative RMS over all (R, V)")
+        atlas = coefficient_atlas(fit.coeffs)
+        half, scale = _half(atlas)
+        cols, rows = atlas_layout((fit.P + 1) ** 2)
         h, w = fit.coeffs.shape[1:3]
-        parts = []
-        if (h, w) != (H, W):
-            parts.append(f"coefficient maps {H}x{W} -> {h}x{w} texels")
-        if fit.P != shrm.P:
-            parts.append(f"view order P {shrm.P} -> {fit.P} ({(fit.P + 1) ** 2} of {(shrm.P + 1) ** 2} maps)")
-        notes.append(f"reduced to fit the {budget.page_bytes / 2**20:.3g} MiB page budget: " + ", ".join(parts)
-                     + f"; estimated added error {100 * fit.added_rel_rms:.2g} % relative RMS over all (R, V)")
-    atlas = coefficient_atlas(fit.coeffs)
-    half, scale = _half(atlas)
-    cols, rows = atlas_layout((fit.P + 1) ** 2)
-    h, w = fit.coeffs.shape[1:3]
-    stored = (half.astype(np.float32) / np.float32(scale)).astype(np.float32)
-    stored_maps = np.stack([stored[(c // cols) * h:(c // cols + 1) * h, (c % cols) * w:(c % cols + 1) * w]
-                            for c in range((fit.P + 1) ** 2)])
-    data["shrm"] = {"F": shrm.F, "P": fit.P, "source": {"P": shrm.P, "height": shrm.height, "width": shrm.width},
-                    "height": h, "width": w, "cols": cols, "rows": rows, "scale": scale,
-                    "added_rel_rms": fit.added_rel_rms, "texels": _b64(half)}
+        stored = (half.astype(np.float32) / np.float32(scale)).astype(np.float32)
+        stored_maps = np.stack([stored[(c // cols) * h:(c // cols + 1) * h, (c % cols) * w:(c % cols + 1) * w]
+                                for c in range((fit.P + 1) ** 2)])
+        entry["shrm"] = {"F": s_k.F, "P": fit.P, "source": {"P": s_k.P, "height": s_k.height, "width": s_k.width},
+                         "height": h, "width": w, "cols": cols, "rows": rows, "scale": scale,
+                         "added_rel_rms": fit.added_rel_rms, "texels": _b64(half)}
+        stored_pages.append(PageEnvironment(name, stored_maps, env_stored, fit))
+    data["shrm"] = entries[0]["shrm"]
     data["notes"] = notes
-    return ViewPage(data, png, renderer, tuple(notes), stored_maps, env_stored, page_mesh, fit, title, sources)
+    first = stored_pages[0]
+    return ViewPage(data, png, renderer, tuple(notes), first.coeffs, first.env_radiance, page_mesh, first.fit, title,
+                    sources, tuple(stored_pages))
+
+
+def _check_env_angles(angles: Any) -> tuple[float, float, float]:
+    """The page's lighting rotation (AZ, EL[, ROLL]) in degrees: finite, EL in [−90, 90]."""
+    try:
+        values = [float(a) for a in angles]
+    except (TypeError, ValueError):
+        values = []
+    if len(values) not in (2, 3) or not all(math.isfinite(v) for v in values):
+        raise BadInputError(None, f"env_rotation must be two or three finite angles AZ, EL[, ROLL] in degrees, "
+                            f"got {angles!r}")
+    if not -90.0 <= values[1] <= 90.0:
+        raise BadInputError(None, f"env_rotation: the elevation must be in [-90, 90] degrees, got {values[1]:g}")
+    return values[0], values[1], values[2] if len(values) == 3 else 0.0
+
+
+def _page_document(data: dict[str, Any]) -> dict[str, Any]:
+    """The JSON document as the page holds it: with several environments, the first one's payloads
+    are not repeated in ``environments[0]`` (the viewer reads them from the document's own keys)."""
+    if "environments" not in data:
+        return data
+    return {**data, "environments": [{"name": data["environments"][0]["name"]}, *data["environments"][1:]]}
 
 
 def _json_script(doc: Any) -> str:
@@ -812,7 +915,7 @@ def _fragment(title: str, data: dict[str, Any], png: bytes, sources: dict[str, s
         "</div>",
         f"<script>window.ShrmViewShaders = window.ShrmViewShaders || {_json_script(shaders)};</script>",
         f"<script>{sources['view.js']}</script>",
-        f'<script type="application/json" id="{element_id}-data">{_json_script(data)}</script>',
+        f'<script type="application/json" id="{element_id}-data">{_json_script(_page_document(data))}</script>',
         "<script>(function () { var root = document.getElementById(" + json.dumps(element_id) + ");"
         " var data = JSON.parse(document.getElementById(" + json.dumps(element_id + "-data") + ").textContent);"
         f" window.ShrmView.mount(root, data, {{hash: {'true' if use_hash else 'false'}}}); }})();</script>",

@@ -25,8 +25,9 @@
     exposure: [-30, 30],
     env_azimuth: [-1e6, 1e6],
     env_elevation: [-90, 90],
+    env_roll: [-1e6, 1e6],
   };
-  const ENV_NAMES = ["env_azimuth", "env_elevation"];
+  const ENV_NAMES = ["env_azimuth", "env_elevation", "env_roll"];
 
   // ---------------------------------------------------------------------------------------
   // decoding of the embedded arrays (little-endian, base64)
@@ -123,12 +124,14 @@
     return { eye, forward, right, up, dir, tanY, aspect: width / height };
   }
 
-  // the lighting rotated at view time (brdf_io/env_rotation.py, roll 0): Q = Rz(AZ) Ry(-EL);
+  // the lighting rotated at view time (brdf_io/env_rotation.py): Q = Rz(AZ) Ry(-EL) Rx(ROLL);
   // returned as the column-major mat3 Q^T (its columns are the rows of Q) for uToMap
   function envRotation(view) {
-    const a = (view.env_azimuth || 0) * DEG, e = (view.env_elevation || 0) * DEG;
-    const ca = Math.cos(a), sa = Math.sin(a), ce = Math.cos(e), se = Math.sin(e);
-    const Q = [[ca * ce, -sa, -ca * se], [sa * ce, ca, -sa * se], [se, 0, ce]];
+    const a = (view.env_azimuth || 0) * DEG, e = (view.env_elevation || 0) * DEG, r = (view.env_roll || 0) * DEG;
+    const ca = Math.cos(a), sa = Math.sin(a), ce = Math.cos(e), se = Math.sin(e), cr = Math.cos(r), sr = Math.sin(r);
+    const A = [[ca * ce, -sa, -ca * se], [sa * ce, ca, -sa * se], [se, 0, ce]];  // Rz(AZ) Ry(-EL)
+    // times Rx(ROLL) = [[1, 0, 0], [0, cr, -sr], [0, sr, cr]]
+    const Q = A.map((row) => [row[0], row[1] * cr + row[2] * sr, -row[1] * sr + row[2] * cr]);
     return { Q, toMap: new Float32Array([].concat(Q[0], Q[1], Q[2])) };
   }
   // Q^T d: a world direction in the unrotated map's frame
@@ -178,6 +181,11 @@
     for (const name of ["azimuth", "elevation", "zoom", "exposure", ...ENV_NAMES]) {
       if (params.has(name)) view[name] = clampNumber(name, params.get(name), view[name]);
     }
+    // the environment shown, on pages with several (data.environments): an index, clamped by mount
+    if (params.has("env_index") && base.env_index !== undefined) {
+      const k = Math.round(Number(params.get("env_index")));
+      if (Number.isFinite(k)) view.env_index = k;
+    }
     if (params.has("mode") && MODES.includes(params.get("mode"))) view.mode = params.get("mode");
     if (params.has("tone") && TONES.includes(params.get("tone"))) view.tone = params.get("tone");
     if (params.has("background")) view.background = !["0", "false", "off", "black"].includes(params.get("background"));
@@ -191,8 +199,10 @@
       `azimuth=${r(view.azimuth)}&elevation=${r(view.elevation)}&zoom=${r(view.zoom)}` +
       `&exposure=${r(view.exposure)}&mode=${view.mode}&background=${view.background ? 1 : 0}&tone=${view.tone}` +
       // the lighting's rotation, when it turns
-      (view.env_azimuth || view.env_elevation
-        ? `&env_azimuth=${r(view.env_azimuth)}&env_elevation=${r(view.env_elevation)}` : "")
+      (view.env_azimuth || view.env_elevation || view.env_roll
+        ? `&env_azimuth=${r(view.env_azimuth)}&env_elevation=${r(view.env_elevation)}` +
+          (view.env_roll ? `&env_roll=${r(view.env_roll)}` : "") : "") +
+      (view.env_index !== undefined ? `&env_index=${view.env_index}` : "")
     );
   }
 
@@ -299,6 +309,14 @@
       return null;
     }
 
+    // the environments the page switches between (data.environments, data_specs/view_html.md): the
+    // first one's payloads are the document's own shrm, env and lights
+    const ENVS = data.environments && data.environments.length > 1
+      ? data.environments.map((e, k) => (k === 0 ? { name: e.name, shrm: data.shrm, env: data.env, lights: data.lights } : e))
+      : [{ name: data.environment, shrm: data.shrm, env: data.env, lights: data.lights }];
+    const clampIndex = (k) => Math.min(Math.max(Number.isFinite(k) ? k : 0, 0), ENVS.length - 1);
+    if (view.env_index !== undefined) view.env_index = clampIndex(view.env_index);
+
     let gl = null;
     try {
       gl = canvas.getContext("webgl2", {
@@ -309,17 +327,21 @@
     }
     if (!gl) return fallback("WebGL2 is not available in this browser");
 
-    const S = data.shrm;
-    const nc = (S.P + 1) * (S.P + 1);
-    const atlasW = S.cols * S.width;
-    const atlasH = S.rows * S.height;
-    let res;
-    try {
-      const maxTex = gl.getParameter(gl.MAX_TEXTURE_SIZE);
-      if (Math.max(atlasW, atlasH) > maxTex) throw new Error(`the coefficient atlas ${atlasW}x${atlasH} exceeds MAX_TEXTURE_SIZE ${maxTex}`);
+    let maxTex = 0;
+    const shared = {};  // the mesh's buffers and the background program, for every environment
+    const perEnv = [];  // per environment: its programs, textures and view-map tiles, made on first use
+
+    function setupEnvironment(k) {
+      const E = ENVS[k];
+      const S = E.shrm;
+      const r = {
+        S, nc: (S.P + 1) * (S.P + 1), atlasW: S.cols * S.width, atlasH: S.rows * S.height, envData: E.env,
+        mapTex: null, mapView: null, tiles: null,
+      };
+      if (Math.max(r.atlasW, r.atlasH) > maxTex) throw new Error(`the coefficient atlas ${r.atlasW}x${r.atlasH} exceeds MAX_TEXTURE_SIZE ${maxTex}`);
       const defines = { SHRM_P: S.P, SHRM_H: S.height, SHRM_W: S.width, SHRM_COLS: S.cols };
       let objectFrag = ["latlong.glsl", "tonemap.glsl", "object_prelude.glsl"];
-      const lights = data.lights;
+      const lights = E.lights;
       if (lights) {
         // the lights beside the SHRM (lights.glsl after the BRDF's GLSL, render/brdf_glsl.py)
         Object.assign(defines, lights.defines, { SHRM_LIGHTS: 1 });
@@ -328,31 +350,37 @@
         const have = gl.getParameter(gl.MAX_FRAGMENT_UNIFORM_VECTORS);
         if (have < need) throw new Error(`${lights.count} light samples need ${need} fragment uniform vectors, this WebGL2 has ${have}`);
       }
-      res = {
-        distant: program(gl, ["object.vert"], objectFrag.concat(["object_distant.frag"]), defines, "distant"),
-        perpixel: program(gl, ["object.vert"], objectFrag.concat(["shrm_sum.glsl", "object_perpixel.frag"]), defines, "perpixel"),
-        background: data.env
-          ? program(gl, ["background.vert"], ["latlong.glsl", "tonemap.glsl", "background.frag"], {}, "background")
-          : null,
-      };
+      r.distant = program(gl, ["object.vert"], objectFrag.concat(["object_distant.frag"]), defines, "distant");
+      r.perpixel = program(gl, ["object.vert"], objectFrag.concat(["shrm_sum.glsl", "object_perpixel.frag"]), defines, "perpixel");
       if (lights) {
-        for (const o of [res.distant, res.perpixel]) setUniforms(gl, o, lights.uniforms);
+        for (const o of [r.distant, r.perpixel]) setUniforms(gl, o, lights.uniforms);
         const T = lights.table;
         if (T) {
           const tw = T.cols * T.shape[2], th = T.rows * T.shape[1];
           if (Math.max(tw, th) > maxTex) throw new Error(`the BRDF table ${tw}x${th} exceeds MAX_TEXTURE_SIZE ${maxTex}`);
-          res.brdfTex = texture(gl, tw, th, gl.RGB16F, gl.HALF_FLOAT, halfTexels(T.texels, tw * th * 3));
+          r.brdfTex = texture(gl, tw, th, gl.RGB16F, gl.HALF_FLOAT, halfTexels(T.texels, tw * th * 3));
         }
       }
-      const coef = halfTexels(S.texels, atlasW * atlasH * 3);
-      res.coefHalf = coef;
-      res.coefTex = texture(gl, atlasW, atlasH, gl.RGB16F, gl.HALF_FLOAT, coef);
-      if (data.env) {
-        const E = data.env;
-        res.envTex = texture(gl, E.width, E.height, gl.RGB16F, gl.HALF_FLOAT, halfTexels(E.texels, E.width * E.height * 3));
+      r.coefHalf = halfTexels(S.texels, r.atlasW * r.atlasH * 3);
+      r.coefTex = texture(gl, r.atlasW, r.atlasH, gl.RGB16F, gl.HALF_FLOAT, r.coefHalf);
+      if (E.env) {
+        r.envTex = texture(gl, E.env.width, E.env.height, gl.RGB16F, gl.HALF_FLOAT,
+          halfTexels(E.env.texels, E.env.width * E.env.height * 3));
       }
-      res.mapTex = null;
-      res.mapView = null;
+      const err = gl.getError();
+      if (err !== gl.NO_ERROR) throw new Error(`WebGL error 0x${err.toString(16)} during set-up of ${E.name}`);
+      return r;
+    }
+    function environment(k) {
+      if (!perEnv[k]) perEnv[k] = setupEnvironment(k);
+      return perEnv[k];
+    }
+
+    try {
+      maxTex = gl.getParameter(gl.MAX_TEXTURE_SIZE);
+      shared.background = ENVS.some((E) => E.env)
+        ? program(gl, ["background.vert"], ["latlong.glsl", "tonemap.glsl", "background.frag"], {}, "background")
+        : null;
       // mesh
       const M = data.mesh;
       const pos = new Float32Array(bytesOf(M.positions).buffer);
@@ -362,8 +390,8 @@
       if (pos.length !== M.vertices * 3 || nrm.length !== M.vertices * 3 || idx.length !== M.triangles * 3) {
         throw new Error("mesh arrays do not match their counts");
       }
-      res.vao = gl.createVertexArray();
-      gl.bindVertexArray(res.vao);
+      shared.vao = gl.createVertexArray();
+      gl.bindVertexArray(shared.vao);
       const vb = gl.createBuffer();
       gl.bindBuffer(gl.ARRAY_BUFFER, vb);
       gl.bufferData(gl.ARRAY_BUFFER, pos, gl.STATIC_DRAW);
@@ -378,39 +406,39 @@
       gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, ib);
       gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, idx, gl.STATIC_DRAW);
       gl.bindVertexArray(null);
-      res.indexType = M.index_type === "uint16" ? gl.UNSIGNED_SHORT : gl.UNSIGNED_INT;
-      res.count = idx.length;
-      res.emptyVao = gl.createVertexArray();
+      shared.indexType = M.index_type === "uint16" ? gl.UNSIGNED_SHORT : gl.UNSIGNED_INT;
+      shared.count = idx.length;
+      shared.emptyVao = gl.createVertexArray();
       const err = gl.getError();
       if (err !== gl.NO_ERROR) throw new Error(`WebGL error 0x${err.toString(16)} during set-up`);
+      environment(view.env_index || 0);
     } catch (e) {
       return fallback(`WebGL2 set-up failed: ${e.message}`);
     }
 
     // distant mode: the view map max(sum_c Y^r_c(V~) B~_c, 0) on the CPU (render/shader.py
-    // distant_update), float32, once per view direction
-    let tiles = null;
-    function viewMap(dir) {
-      const H = S.height, W = S.width, n = H * W * 3;
-      if (!tiles) {
+    // distant_update), float32, once per view direction and environment
+    function viewMap(r, dir) {
+      const S = r.S, H = S.height, W = S.width, n = H * W * 3;
+      if (!r.tiles) {
         const table = halfToFloat();
         const inv = 1 / S.scale;
-        tiles = [];
-        for (let c = 0; c < nc; ++c) {
+        r.tiles = [];
+        for (let c = 0; c < r.nc; ++c) {
           const tile = new Float32Array(n);
           const ox = (c % S.cols) * W, oy = Math.floor(c / S.cols) * H;
           for (let y = 0; y < H; ++y) {
-            let src = ((oy + y) * atlasW + ox) * 3;
+            let src = ((oy + y) * r.atlasW + ox) * 3;
             let dst = y * W * 3;
-            for (let x = 0; x < W * 3; ++x) tile[dst++] = table[res.coefHalf[src++]] * inv;
+            for (let x = 0; x < W * 3; ++x) tile[dst++] = table[r.coefHalf[src++]] * inv;
           }
-          tiles.push(tile);
+          r.tiles.push(tile);
         }
       }
       const Y = realSH(S.P, dir);
       const out = new Float32Array(n);
-      for (let c = 0; c < nc; ++c) {
-        const y = Y[c], tile = tiles[c];
+      for (let c = 0; c < r.nc; ++c) {
+        const y = Y[c], tile = r.tiles[c];
         if (y === 0) continue;
         for (let t = 0; t < n; ++t) out[t] += y * tile[t];
       }
@@ -418,20 +446,21 @@
       return out;
     }
 
-    function uploadViewMap(dir) {
+    function uploadViewMap(r, dir) {
       const key = dir.join(",");
-      if (res.mapView === key) return;
-      const map = viewMap(dir);
-      if (!res.mapTex) res.mapTex = texture(gl, S.width, S.height, gl.RGB32F, gl.FLOAT, map);
+      if (r.mapView === key) return;
+      const map = viewMap(r, dir);
+      if (!r.mapTex) r.mapTex = texture(gl, r.S.width, r.S.height, gl.RGB32F, gl.FLOAT, map);
       else {
-        gl.bindTexture(gl.TEXTURE_2D, res.mapTex);
-        gl.texSubImage2D(gl.TEXTURE_2D, 0, 0, 0, S.width, S.height, gl.RGB, gl.FLOAT, map);
+        gl.bindTexture(gl.TEXTURE_2D, r.mapTex);
+        gl.texSubImage2D(gl.TEXTURE_2D, 0, 0, 0, r.S.width, r.S.height, gl.RGB, gl.FLOAT, map);
       }
-      res.mapView = key;
+      r.mapView = key;
     }
 
     let frames = 0;
     let pending = false;
+    const title = root.querySelector(".shrm-view-title");
     function draw() {
       pending = false;
       const dpr = window.devicePixelRatio || 1;
@@ -445,19 +474,26 @@
       const cam = pageCamera(view, data.camera, w, h);
       const env = envRotation(view);
       const tone = TONES.indexOf(view.tone);
+      let R;
+      try {
+        R = environment(view.env_index || 0);
+      } catch (e) {
+        fallback(`WebGL2 set-up failed: ${e.message}`);
+        return;
+      }
       gl.disable(gl.BLEND);
       gl.clearColor(0, 0, 0, 1);
       gl.clearDepth(1);
       gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
-      if (view.background && res.background) {
-        const b = res.background;
+      if (view.background && shared.background && R.envTex) {
+        const b = shared.background;
         gl.useProgram(b.p);
         gl.disable(gl.DEPTH_TEST);
         gl.depthMask(false);
         gl.activeTexture(gl.TEXTURE0);
-        gl.bindTexture(gl.TEXTURE_2D, res.envTex);
+        gl.bindTexture(gl.TEXTURE_2D, R.envTex);
         gl.uniform1i(b.u.uEnv, 0);
-        gl.uniform1f(b.u.uEnvScale, data.env.scale);
+        gl.uniform1f(b.u.uEnvScale, R.envData.scale);
         gl.uniformMatrix3fv(b.u.uToMap, false, env.toMap);
         gl.uniform3fv(b.u.uForward, cam.forward);
         gl.uniform3fv(b.u.uRight, cam.right);
@@ -466,30 +502,30 @@
         gl.uniform2f(b.u.uSize, w, h);
         gl.uniform1f(b.u.uExposure, view.exposure);
         gl.uniform1i(b.u.uTone, tone);
-        gl.bindVertexArray(res.emptyVao);
+        gl.bindVertexArray(shared.emptyVao);
         gl.drawArrays(gl.TRIANGLES, 0, 3);
         gl.depthMask(true);
       }
-      const o = view.mode === "perpixel" ? res.perpixel : res.distant;
+      const o = view.mode === "perpixel" ? R.perpixel : R.distant;
       gl.useProgram(o.p);
       gl.enable(gl.DEPTH_TEST);
       gl.depthFunc(gl.LESS);
-      if (res.brdfTex) {
+      if (R.brdfTex) {
         // a measured BRDF's table (brdf_table.glsl) on texture unit 1
         gl.activeTexture(gl.TEXTURE1);
-        gl.bindTexture(gl.TEXTURE_2D, res.brdfTex);
+        gl.bindTexture(gl.TEXTURE_2D, R.brdfTex);
         gl.uniform1i(o.u.shrmBrdfTex, 1);
       }
       gl.activeTexture(gl.TEXTURE0);
       if (view.mode === "perpixel") {
-        gl.bindTexture(gl.TEXTURE_2D, res.coefTex);
+        gl.bindTexture(gl.TEXTURE_2D, R.coefTex);
         gl.uniform1i(o.u.uCoef, 0);
-        gl.uniform1f(o.u.uScale, S.scale);
+        gl.uniform1f(o.u.uScale, R.S.scale);
       } else {
         // V~: from the mesh's bounding-box centre toward the eye (camera.view_direction), in the
         // unrotated map's frame (Q^T V~), as render/vtk_renderer.py update_view_maps
-        uploadViewMap(toMapFrame(env.Q, unit(sub(cam.eye, data.mesh.center))));
-        gl.bindTexture(gl.TEXTURE_2D, res.mapTex);
+        uploadViewMap(R, toMapFrame(env.Q, unit(sub(cam.eye, data.mesh.center))));
+        gl.bindTexture(gl.TEXTURE_2D, R.mapTex);
         gl.uniform1i(o.u.uMap, 0);
       }
       const near = Math.max(1e-3, data.camera.distance - 2), far = data.camera.distance + 2;
@@ -498,12 +534,14 @@
       gl.uniformMatrix3fv(o.u.uToMap, false, env.toMap);
       gl.uniform1f(o.u.uExposure, view.exposure);
       gl.uniform1i(o.u.uTone, tone);
-      gl.bindVertexArray(res.vao);
-      gl.drawElements(gl.TRIANGLES, res.count, res.indexType, 0);
+      gl.bindVertexArray(shared.vao);
+      gl.drawElements(gl.TRIANGLES, shared.count, shared.indexType, 0);
       gl.bindVertexArray(null);
       frames += 1;
       root.dataset.frames = String(frames);
       root.dataset.view = formatView(view);
+      root.dataset.environment = ENVS[view.env_index || 0].name;
+      if (ENVS.length > 1 && title) title.textContent = `${data.brdf} under ${ENVS[view.env_index || 0].name}`;
       root.dataset.state = "ready";
       const glErr = gl.getError();
       if (glErr !== gl.NO_ERROR) root.dataset.glError = `0x${glErr.toString(16)}`;
@@ -536,6 +574,7 @@
       controls.background.checked = !!view.background;
       controls.mode.value = view.mode;
       controls.lighting.value = String(((view.env_azimuth % 360) + 540) % 360 - 180);
+      if (controls.environment) controls.environment.value = String(view.env_index || 0);
       root.classList.toggle("shrm-view-noui", !view.ui);
     }
 
@@ -555,7 +594,7 @@
       const bgLabel = el("label", {});
       controls.background = el("input", { type: "checkbox" });
       bgLabel.append(controls.background, document.createTextNode(" environment"));
-      if (!res.background) controls.background.disabled = true;
+      if (!shared.background) controls.background.disabled = true;
       const modeLabel = el("label", {}, "mode ");
       controls.mode = el("select", { "aria-label": "render mode" });
       for (const m of MODES) controls.mode.append(el("option", { value: m }, m));
@@ -566,7 +605,21 @@
         "aria-label": "lighting azimuth" });
       lightLabel.append(controls.lighting);
       const reset = el("button", { type: "button" }, "reset view");
-      bar.append(expLabel, bgLabel, modeLabel, lightLabel, reset);
+      bar.append(expLabel, bgLabel, modeLabel, lightLabel);
+      if (ENVS.length > 1) {
+        // several environments (shrm view --env A B ...): switched here, without reloading
+        const envLabel = el("label", {}, "environment ");
+        controls.environment = el("select", { "aria-label": "environment" });
+        ENVS.forEach((E, k) => controls.environment.append(el("option", { value: String(k) }, E.name)));
+        envLabel.append(controls.environment);
+        bar.append(envLabel);
+        controls.environment.addEventListener("change", () => {
+          view.env_index = clampIndex(Math.round(Number(controls.environment.value)));
+          redraw();
+          storeHash();
+        });
+      }
+      bar.append(reset);
       ui.append(bar);
       controls.exposure.addEventListener("input", () => {
         view.exposure = clampNumber("exposure", controls.exposure.value, view.exposure);
@@ -634,6 +687,7 @@
     if (options.hash) {
       window.addEventListener("hashchange", () => {
         view = parseView(window.location.hash, base);
+        if (view.env_index !== undefined) view.env_index = clampIndex(view.env_index);
         redraw();
       });
     }
