@@ -9,10 +9,13 @@ Nemec 1999 (RSIBR) and Green, Kautz, Durand 2007 (Gaussian lobes).
   :data:`REGISTRY` (:mod:`.registry`): kind key → builder.
 - :func:`sample_pairs` (:mod:`.pairs`) and :func:`relative_rms` (:mod:`.metrics`): the one
   (R, V) sampler and the one error metric of the project.
+- :func:`band_sample` and :func:`band_error` (:mod:`.band_error`): the per-view-band measurement
+  (importance-sampled, stratified pairs; a standard error that matches the seed-to-seed spread).
 
 This package never imports the render layer.
 """
 
+from .band_error import BandSample, band_error, band_sample, pixel_density
 from .metrics import band_relative_rms, beside_measured, relative_rms
 from .options import DEFAULT_ENV_HEIGHT, CompareOptions
 from .pairs import band_pairs, brightest_pixels, sample_pairs, sample_pairs_focused
@@ -27,4 +30,5 @@ __all__ = [
     "REGISTRY", "Builder", "build_representations",
     "sample_pairs", "sample_pairs_focused", "band_pairs", "brightest_pixels",
     "relative_rms", "band_relative_rms", "beside_measured",
+    "BandSample", "band_sample", "band_error", "pixel_density",
 ]
