@@ -15,7 +15,7 @@ Nemec 1999 (RSIBR) and Green, Kautz, Durand 2007 (Gaussian lobes).
 This package never imports the render layer.
 """
 
-from .band_error import BandSample, band_error, band_sample, pixel_density
+from .band_error import BandSample, band_error, band_sample, pairs_per_band, pixel_density
 from .metrics import band_relative_rms, beside_measured, relative_rms
 from .options import DEFAULT_ENV_HEIGHT, CompareOptions
 from .pairs import band_pairs, brightest_pixels, sample_pairs, sample_pairs_focused
@@ -30,5 +30,5 @@ __all__ = [
     "REGISTRY", "Builder", "build_representations",
     "sample_pairs", "sample_pairs_focused", "band_pairs", "brightest_pixels",
     "relative_rms", "band_relative_rms", "beside_measured",
-    "BandSample", "band_sample", "band_error", "pixel_density",
+    "BandSample", "band_sample", "band_error", "pixel_density", "pairs_per_band",
 ]

@@ -30,9 +30,10 @@ from ...brdf_io.errors import BadInputError
 from ...brdf_io.specs import load_brdf
 from ..reference import reference_radiance
 from ..view_bands import DEFAULT_BAND_EDGES_DEG
-from .metrics import band_relative_rms, beside_measured, relative_rms
+from .band_error import band_error, band_sample, pairs_per_band
+from .metrics import beside_measured, relative_rms
 from .options import CompareOptions
-from .pairs import band_pairs, sample_pairs
+from .pairs import sample_pairs
 from .registry import build_representations
 from .representation import Representation
 
@@ -108,11 +109,11 @@ def compare_representations(
     t0 = time.perf_counter()
     ref = reference_radiance(env, brdf, R, V)
     t_ref = time.perf_counter() - t0
-    # per view band: pairs drawn per band, R importance-sampled around the brightest pixels, so a
-    # sun is measured in every band (uniform pairs leave a 5° band a few noisy samples)
-    per_band = max(16, n // (len(DEFAULT_BAND_EDGES_DEG) - 1))
-    Rb, Vb, theta_b, weight_b = band_pairs(env.radiance, per_band, DEFAULT_BAND_EDGES_DEG, seed=options.seed)
-    ref_b = reference_radiance(env, brdf, Rb, Vb)
+    # per view band: pairs drawn per band, R importance-sampled from the map's bright pixels and
+    # stratified, with a standard error that matches the spread over seeds (.band_error, issue 29)
+    per_band = pairs_per_band(n, len(DEFAULT_BAND_EDGES_DEG) - 1)
+    sample = band_sample(env.radiance, per_band, DEFAULT_BAND_EDGES_DEG, seed=options.seed)
+    ref_b = reference_radiance(env, brdf, sample.R, sample.V)
     reps = tuple(build_representations(env, brdf, options, progress=progress))
     grazing = theta_v > np.radians(GRAZING_DEG)
     frontal = theta_v < np.radians(FRONTAL_DEG)
@@ -122,7 +123,7 @@ def compare_representations(
         t0 = time.perf_counter()
         pred = rep.radiance(R, V)
         t_eval = time.perf_counter() - t0
-        measured = band_relative_rms(rep.radiance(Rb, Vb), ref_b, theta_b, DEFAULT_BAND_EDGES_DEG, weight_b)
+        measured = band_error(rep.radiance(sample.R, sample.V), ref_b, sample)
         bands = beside_measured(measured, rep.params.get("view_bands"))  # an SHRM's statement too
         rows.append({
             "key": rep.key,

@@ -38,7 +38,7 @@ from typing import Any
 import numpy as np
 
 from ..._version import __version__
-from ...analysis.compare import band_pairs, band_relative_rms, beside_measured, relative_rms, sample_pairs
+from ...analysis.compare import band_error, band_sample, beside_measured, pairs_per_band, relative_rms, sample_pairs
 from ...analysis.fit import fit_brdf
 from ...analysis.lighting import lighting_coefficients
 from ...analysis.orders import OrderChoice, choose_orders_many
@@ -246,11 +246,11 @@ def _environments(brdf: BRDF, options: ReportOptions, choices: dict[float, Order
         t0 = time.perf_counter()
         reference = reference_radiance(env, brdf, R, V)
         ref_seconds = time.perf_counter() - t0
-        # per view band: pairs drawn per band, R importance-sampled around the brightest pixels
-        # (a band of uniform pairs under a sun has a few samples and a meaningless spread)
-        Rb, Vb, theta_b, weight_b = band_pairs(env.radiance, max(16, options.n_pairs // len(BAND_EDGES)),
-                                               BAND_EDGES, seed=options.seed)
-        reference_b = reference_radiance(env, brdf, Rb, Vb)
+        # per view band: pairs drawn per band, R importance-sampled from the map's bright pixels and
+        # stratified, so the standard error matches the spread over seeds (analysis.compare.band_error)
+        sample = band_sample(env.radiance, pairs_per_band(options.n_pairs, len(BAND_EDGES) - 1), BAND_EDGES,
+                             seed=options.seed)
+        reference_b = reference_radiance(env, brdf, sample.R, sample.V)
         lighting = lighting_coefficients(env.radiance, env.height - 1, name=env.name, nthreads=max(nthreads, 1))
         entry: dict[str, Any] = {
             "name": env.name,
@@ -269,8 +269,8 @@ def _environments(brdf: BRDF, options: ReportOptions, choices: dict[float, Order
                              criterion=options.criterion, max_view_deg=options.max_view_deg, nthreads=nthreads,
                              orders=choices[tol], lights=options.lights)
             err = relative_rms(shrm.radiance(R, V), reference)  # clamped at 0, as rendered
-            bands = beside_measured(band_relative_rms(shrm.radiance(Rb, Vb), reference_b, theta_b, BAND_EDGES,
-                                                      weight_b), shrm.meta["view_bands"])
+            bands = beside_measured(band_error(shrm.radiance(sample.R, sample.V), reference_b, sample),
+                                    shrm.meta["view_bands"])
             t = shrm.meta["timings"]
             n_out = shrm.height * shrm.width
             row = {
