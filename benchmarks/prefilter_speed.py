@@ -29,10 +29,10 @@ the machine. Nothing is read back from saved output, nothing is hard-coded.
     T_N = T_setup + N × T_map; ``× bands`` is T_N over the default's T_N (> 1: slower).
     Error: relative RMS against the brute-force sum over every pixel (``analysis.reference``,
     used only as the error reference: its time is printed as context, never as a ratio) on
-    ``--per-band`` (R, V) pairs per view band inside the 80° limit (``analysis.compare.band_pairs``:
-    R importance-sampled around the brightest pixels, θ_v stratified), per band with its
-    standard error (``band_relative_rms``); the worst band is shown beside the statement of
-    that band (``SHRM.meta["view_bands"]``: predicted / bound relative RMS; for ``truncated``
+    ``--per-band`` (R, V) pairs per view band inside the 80° limit (``analysis.compare.band_sample``:
+    R importance-sampled from the map's bright pixels, R and θ_v stratified), per band with its
+    standard error (``band_error``, which matches the spread over seeds); the worst band is shown
+    beside the statement of that band (``SHRM.meta["view_bands"]``: predicted / bound relative RMS; for ``truncated``
     its rigorous bound, threshold × peak × flux outside the cone). **FLAG**: some band's
     measured error exceeds its prediction by more than ``--flag-se`` standard errors
     (``pred``), or exceeds its bound (``BOUND``); each flag is listed under the table.
@@ -66,7 +66,7 @@ from threadpoolctl import threadpool_limits
 
 from shrmkit.analysis.baselines.lobe_truncated import lobe_truncated_sum
 from shrmkit.analysis.baselines.split_sum import env_brdf_lut, split_sum
-from shrmkit.analysis.compare import band_pairs, band_relative_rms
+from shrmkit.analysis.compare import BandSample, band_error, band_sample
 from shrmkit.analysis.orders import choose_orders
 from shrmkit.analysis.reference import reference_radiance
 from shrmkit.analysis.shrm import SHRM, prefilter
@@ -237,10 +237,10 @@ class Flag:
         return f"{self.kind}{'(exact)' if np.isinf(self.margin) else f'+{self.margin:.1f}'}"
 
 
-def measure_bands(value: np.ndarray, ref: np.ndarray, theta_v: np.ndarray, weights: np.ndarray,
-                  stated: list[dict] | None = None) -> list[dict]:
+def measure_bands(value: np.ndarray, ref: np.ndarray, pairs: BandSample, stated: list[dict] | None = None
+                  ) -> list[dict]:
     """Per band inside the limit: measured relative RMS ± s.e., beside the stated prediction/bound."""
-    measured = band_relative_rms(value, ref, theta_v, EDGES, weights)
+    measured = band_error(value, ref, pairs)
     out = []
     for m in measured:
         row = {"theta_v_deg": m["theta_v_deg"], "measured_rel_rms": m["measured_rel_rms"], "stderr": m["stderr"]}
@@ -268,7 +268,7 @@ def shrm_kwargs(method: str) -> dict:
     return kw
 
 
-def shrmkit_row(env: EnvironmentMap, brdf: Any, method: str, eps: float, views: np.ndarray, pairs: tuple,
+def shrmkit_row(env: EnvironmentMap, brdf: Any, method: str, eps: float, views: np.ndarray, pairs: BandSample,
                 ref: np.ndarray, n_time_views: int) -> tuple[Measured, SHRM]:
     """Prefilter (timed whole), view maps (timed on a few views), error per band."""
     setup, shrm = clocked(lambda: prefilter(env, brdf, eps=eps, nthreads=1, **shrm_kwargs(method)))
@@ -284,8 +284,7 @@ def shrmkit_row(env: EnvironmentMap, brdf: Any, method: str, eps: float, views: 
                 m = m + shrm.light_radiance(grid, np.broadcast_to(v, grid.shape)).reshape(m.shape)
 
     t_maps, _ = clocked(lambda: maps(has_lights))
-    R, V, theta_v, w = pairs
-    bands = measure_bands(shrm.radiance(R, V), ref, theta_v, w, shrm.meta.get("view_bands"))
+    bands = measure_bands(shrm.radiance(pairs.R, pairs.V), ref, pairs, shrm.meta.get("view_bands"))
     timings = shrm.meta["timings"]
     stages = ", ".join(f"{k} {fmt_time(v)}" for k, v in timings.items() if k != "total" and v >= 5e-4)
     notes = [f"T_setup stages (wall): {stages}", f"window: {shrm.meta.get('window_reason', '')}"]
@@ -302,32 +301,32 @@ def shrmkit_row(env: EnvironmentMap, brdf: Any, method: str, eps: float, views: 
     return row, shrm
 
 
-def split_sum_row(env: EnvironmentMap, brdf: Any, lut: Any, views: np.ndarray, pairs: tuple, ref: np.ndarray,
+def split_sum_row(env: EnvironmentMap, brdf: Any, lut: Any, views: np.ndarray, pairs: BandSample, ref: np.ndarray,
                   n_time_views: int) -> Measured:
     setup, ss = clocked(lambda: split_sum(env, brdf, lut=lut))
     sample = views[:: max(1, len(views) // n_time_views)][:n_time_views]
     t_maps, _ = clocked(lambda: [ss.view_map(v) for v in sample])
-    R, V, theta_v, w = pairs
     rows = ss.levels[0][1].shape[0]
     return Measured(
         method="split-sum", setup=setup, per_map=t_maps * (1.0 / len(sample)), nbytes=ss.nbytes,
-        bands=measure_bands(ss.radiance(R, V), ref, theta_v, w), orders=f"LUT {ss.lut.mu.size}×{ss.lut.roughness.size}",
+        bands=measure_bands(ss.radiance(pairs.R, pairs.V), ref, pairs),
+        orders=f"LUT {ss.lut.mu.size}×{ss.lut.roughness.size}",
         grid=f"{rows}",
         notes=[f"setup: GGX level {fmt_time(ss.seconds['levels'])}, irradiance {fmt_time(ss.seconds['irradiance'])} "
                "(wall)"],
     )
 
 
-def truncated_row(env: EnvironmentMap, brdf: Any, S: int, views: np.ndarray, pairs: tuple, ref: np.ndarray,
+def truncated_row(env: EnvironmentMap, brdf: Any, S: int, views: np.ndarray, pairs: BandSample, ref: np.ndarray,
                   n_samples: int, rng: np.random.Generator) -> Measured:
     setup, ts = clocked(lambda: lobe_truncated_sum(env, brdf))
     grid = pixel_directions(S, 2 * S).reshape(-1, 3)
     vi = rng.integers(len(views), size=n_samples)
     pi = rng.integers(grid.shape[0], size=n_samples)
     t_sample, (_, _, terms) = clocked(lambda: ts.radiance_and_bound(grid[pi], views[vi]))
-    R, V, theta_v, w = pairs
+    R, V, theta_v, w = pairs.R, pairs.V, pairs.theta_v, pairs.weights
     out, bound, _ = ts.radiance_and_bound(R, V)
-    bands = measure_bands(out, ref, theta_v, w)
+    bands = measure_bands(out, ref, pairs)
     # its stated bound per band: |error| <= bound per pair and channel, so the band's relative RMS
     # is at most sqrt(Σ w bound² / Σ w ref²) on the same pairs
     deg = np.degrees(theta_v)
@@ -381,8 +380,8 @@ def speed_table(tasks: list[tuple[str, str]], args: argparse.Namespace, lut: Any
             notes.append(f"{env_name}: map not found under {DATA}, skipped")
             continue
         brdf = load_brdf(spec)
-        pairs = band_pairs(env.radiance, args.per_band, EDGES, seed=args.seed)
-        t_ref, ref = clocked(lambda env=env, brdf=brdf, pairs=pairs: reference_radiance(env, brdf, *pairs[:2]))
+        pairs = band_sample(env.radiance, args.per_band, EDGES, seed=args.seed)
+        t_ref, ref = clocked(lambda env=env, brdf=brdf, pairs=pairs: reference_radiance(env, brdf, pairs.R, pairs.V))
         short = short_name(spec)
         for eps in eps_list:
             rows: list[Measured] = []
@@ -419,7 +418,7 @@ def speed_table(tasks: list[tuple[str, str]], args: argparse.Namespace, lut: Any
                 flags += [Flag(f.kind, f"{env_name} {short} ε={eps:g} {row.method}: {f.kind} {f.text}", f.margin)
                           for f in row_flags]
                 notes += [f"{env_name} {short} ε={eps:g} {row.method}: {n}" for n in row.notes]
-            n_pairs = pairs[0].shape[0]
+            n_pairs = len(pairs)
             notes.append(f"{env_name} {short}: brute force (error reference only) {fmt_clock(t_ref)} for {n_pairs} "
                          f"pairs = {fmt_time(t_ref.cpu / n_pairs * default.height * 2 * default.height)} CPU per "
                          f"{default.height}×{2 * default.height} map (extrapolated)")

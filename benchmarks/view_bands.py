@@ -9,7 +9,8 @@ Two tables:
    window), its time and SHRM size, and per θ_v band the predicted and bounded relative RMS
    (``SHRM.meta["view_bands"]``) beside the relative RMS measured against brute-force angular
    integration (``analysis.reference``) on pairs drawn per band with importance sampling of
-   the brightest pixels (``sample_pairs_focused``), ± its standard error.
+   the map's bright pixels and stratification (``analysis.compare.band_sample``), ± its standard
+   error (``band_error``, which matches the spread over seeds).
 2. **Storage** — orders (F, P) and the SHRM bytes of a 256 MiB-budget map under the bands
    rule and under RH02's rule (``--criterion rh02``) for Cook–Torrance/GGX materials and a
    MERL table written from a GGX model (the table that needed F = 63, P = 16, 266 MB under
@@ -30,7 +31,7 @@ from pathlib import Path
 from rich.console import Console
 from rich.table import Table
 
-from shrmkit.analysis.compare import band_pairs, band_relative_rms
+from shrmkit.analysis.compare import band_error, band_sample
 from shrmkit.analysis.orders import choose_orders
 from shrmkit.analysis.reference import reference_radiance
 from shrmkit.analysis.shrm import default_size, prefilter
@@ -71,14 +72,14 @@ def band_table(quick: bool, per_band: int) -> None:
     brdfs = BRDFS[::2] if quick else BRDFS
     for env_name, make in environments(quick).items():
         env = make()
-        R, V, theta_v, w = band_pairs(env.radiance, per_band, DEFAULT_BAND_EDGES_DEG, seed=11)
+        pairs = band_sample(env.radiance, per_band, DEFAULT_BAND_EDGES_DEG, seed=11)
         for spec in brdfs:
             brdf = load_brdf(spec)
             t0 = time.perf_counter()
             shrm = prefilter(env, brdf, eps=EPS)
             seconds = time.perf_counter() - t0
-            ref = reference_radiance(env, brdf, R, V)
-            measured = band_relative_rms(shrm.radiance(R, V), ref, theta_v, DEFAULT_BAND_EDGES_DEG, w)
+            ref = reference_radiance(env, brdf, pairs.R, pairs.V)
+            measured = band_error(shrm.radiance(pairs.R, pairs.V), ref, pairs)
             cells = []
             for band, m in zip(shrm.meta["view_bands"], measured, strict=True):
                 mark = "" if band["inside"] else "*"
