@@ -285,7 +285,7 @@ def test_lean_global_path_matches_full_local_rotation():
 
 def test_forced_orders_skip_the_search():
     m = shrmkit.prefilter("builtin:sky,height=32", "microfacet:sigma=0.3", eps=0.03, F=9, P=3)
-    assert (m.F, m.P) == (9, 3) and "orders given" in m.meta["orders_message"]
+    assert (m.F, m.P) == (9, 3) and "orders asked (F=9, P=3)" in m.meta["orders_message"]
 
 
 def test_default_size_follows_10F_within_the_memory_budget():
