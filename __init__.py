@@ -32,6 +32,7 @@ _LAZY = {
     "fit_brdf": "shrmkit.analysis.fit",
     "compare": "shrmkit.analysis.compare",
     "render_scene": "shrmkit.render.api",
+    "render_sequence": "shrmkit.render.api",
     "SHRMRenderer": "shrmkit.render.vtk_renderer",
 }
 

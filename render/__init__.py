@@ -5,7 +5,8 @@ Modules: ``mesh`` (loading, built-ins), ``camera`` (z-up frame = VTK world frame
 ``glsl`` (the shared shader prelude), ``shader`` (SHRM modes), ``gaussian_shader``
 (Gaussian lobes), ``offscreen`` (EGL/OSMesa context, float framebuffer), ``vtk_renderer``
 (:class:`SHRMRenderer`), ``pipeline`` (:func:`render_frames`), ``api`` (:func:`render_scene`,
-what ``shrm render`` calls), ``cpu_reference`` (numpy reference renderer), ``output``
+what ``shrm render`` calls; :func:`render_sequence`, one frame per environment),
+``cpu_reference`` (numpy reference renderer), ``output``
 (EXR/PNG/GIF, tone mapping), ``preview`` and ``strip`` (report images).
 Names are imported on first use so that importing the package does not load VTK.
 """
@@ -24,6 +25,8 @@ _LAZY = {
     "render_frames": "shrmkit.render.pipeline",
     "render_scene": "shrmkit.render.api",
     "SceneRender": "shrmkit.render.api",
+    "render_sequence": "shrmkit.render.api",
+    "SequenceRender": "shrmkit.render.api",
     "RenderOptions": "shrmkit.render.modes",
     "RenderMode": "shrmkit.render.modes",
     "RENDER_MODES": "shrmkit.render.modes",
