@@ -1,4 +1,5 @@
-"""Spectral reflectance-like quantities (a BRDF per wavelength) to linear sRGB.
+"""Spectral reflectance-like quantities (a BRDF per wavelength) to linear sRGB; the Rec. 709 luminance
+weights (:data:`REC709_LUMA`).
 
 Pipeline, for samples s(λ) at λ = 400, 410, ..., 700 nm:
 
@@ -33,6 +34,7 @@ __all__ = [
     "CIE1931_CMF",
     "D65_SPD",
     "XYZ_TO_LINEAR_SRGB",
+    "REC709_LUMA",
     "spectral_to_xyz",
     "xyz_to_linear_srgb",
     "spectral_to_linear_srgb",
@@ -98,6 +100,11 @@ XYZ_TO_LINEAR_SRGB = np.array(
         [0.0557, -0.2040, 1.0570],
     ]
 )
+
+# ITU-R BT.709-6 item 3.2: luminance Y = 0.2126 R + 0.7152 G + 0.0722 B of linear Rec. 709 / sRGB
+# (the standard's rounded weights; ``exr.luminance_weights()`` derives them from the primaries)
+REC709_LUMA = np.array([0.2126, 0.7152, 0.0722])
+REC709_LUMA.setflags(write=False)
 
 
 def _check_wavelengths(wavelengths: np.ndarray | None) -> None:

@@ -38,6 +38,7 @@ __all__ = [
     "MERL_SCALE",
     "MerlBRDF",
     "merl_index_coordinates",
+    "merl_missing_above_surface",
     "merl_sample_angles",
     "read_merl",
     "tabulate_merl",
@@ -293,3 +294,20 @@ def write_merl(path: str | os.PathLike[str], brdf_or_values: BRDF | np.ndarray) 
         # channel-major R, G, B planes, each C-ordered [θ_h][θ_d][φ_d], φ_d fastest
         f.write(np.ascontiguousarray(stored, dtype=_SAMPLE).tobytes())
     return path
+
+
+def merl_missing_above_surface(brdf: BRDF) -> int | None:
+    """Missing MERL table samples whose (L, V) are both above the surface (``None`` if not MERL).
+
+    Samples with tan θ_h tan θ_d |cos φ_d| >= 1 put L or V below the surface; they are
+    missing in every MERL file (and in tabulated models) and are not a data problem.
+    """
+    values = getattr(brdf, "values", None)
+    if values is None or getattr(values, "shape", None) != (3, 90, 90, 180):
+        return None
+
+    th, td, pd = merl_sample_angles()
+    L, V = halfdiff_to_directions(th[:, None, None], td[None, :, None], pd[None, None, :])
+    above = (L[..., 2] > 0) & (V[..., 2] > 0)
+    missing = np.any(np.isnan(values), axis=0)
+    return int(np.count_nonzero(missing & above))
