@@ -42,6 +42,7 @@ from ...analysis.compare import band_error, band_sample, beside_measured, pairs_
 from ...analysis.fit import fit_brdf
 from ...analysis.lighting import lighting_coefficients
 from ...analysis.orders import OrderChoice, choose_orders_many
+from ...analysis.reciprocity import RECIPROCITY_TOLERANCE
 from ...analysis.reference import reference_radiance
 from ...analysis.shrm import prefilter
 from ...analysis.view_bands import DEFAULT_BAND_EDGES_DEG, worst_inside
@@ -50,7 +51,7 @@ from ...brdf_io.errors import BadInputError
 from ...brdf_io.jsonutil import to_jsonable
 from ...brdf_io.specs import load_brdf
 from ...render.preview import PREVIEW_DISABLED, PreviewImage, render_previews, resolve_preview_mode
-from .checks import RECIPROCITY_TOLERANCE, data_checks
+from .checks import data_checks
 from .explorer import explore, live_views
 from .options import ReportOptions, load_report_env
 from .shared_state import OPENGL_LOCK
