@@ -1,29 +1,19 @@
 """BRDF Explorer's views of a BRDF for its report, and the live WebGL2 previews.
 
-The views of Disney's BRDF Explorer (Burley 2012), computed from the BRDF objects at report
-time; the numbers go into ``report.json`` (``explorer``, ``data_specs/report_json.md``) and
-``plots.py`` draws them from there. Luminance is Rec. 709, 0.2126 R + 0.7152 G + 0.0722 B.
+:func:`explore` builds the ``explorer`` block of ``report.json`` (``data_specs/report_json.md``;
+``plots.py`` draws it) from the views of Disney's BRDF Explorer (Burley 2012), computed by
+``analysis.brdf_views`` and ``analysis.albedo``, for the BRDF and each fitted model:
 
-- **Image slice** (tabulated and analytic BRDFs): ρ on a θ_h × θ_d grid (cell centres every
-  :data:`SLICE_STEP_DEG`) at φ_d = :data:`SLICE_PHI_D_DEG`, the directions from the
-  half/difference angles (Rusinkiewicz 1998, ``brdf_io.halfdiff.halfdiff_to_directions``,
-  φ_h = 0), for the BRDF and each fitted model. A cell is *missing* where the table has no
-  present sample in its interpolation cell (``eval_masked``; MERL stores missing samples as
-  negative numbers, read as NaN), *below the surface* where L or V is (ρ = 0 by definition;
-  none at φ_d = 90°).
-- **Measured samples near the plane of incidence** (scattered measurements, instead of the
-  slice): the samples within :data:`PLANE_TOLERANCE_DEG` of the plane, by θ_i and signed θ_o.
-- **Polar plots** of the plane of incidence at θ_i = :data:`POLAR_INCIDENCE_DEG`
-  (scattered: the nearest measured θ_i): L = (−sin θ_i, 0, cos θ_i), V = (sin θ_o, 0, cos θ_o)
-  with signed θ_o (the mirror direction at θ_o = +θ_i); the BRDF (or the measured samples)
-  and each fitted model.
-- **Directional albedo** a(θ_v) = ∫ ρ(L, V) cos θ_i dω_i against θ_v (``checks.directional_albedo``:
-  Gauss–Legendre in cos θ_i × midpoint in φ_i), of the BRDF (not of scattered measurements)
-  and of each fit; energy conservation is a ≤ 1.
-- **Lit sphere**: a unit sphere seen orthographically along −z (V = +z at every pixel) under
-  one distant light L = :data:`SPHERE_LIGHT` of irradiance π at normal incidence, radiance
-  ρ(L, V)·max(N·L, 0)·π in each pixel's tangent frame (so a white Lambertian surface facing
-  the light has radiance 1), tone mapped by ``render.output.to_8bit`` (filmic, exposure 0).
+- the half/difference **image slice** (tabulated and analytic BRDFs; missing cells and cells
+  below the surface marked), or the **measured samples near the plane of incidence**
+  (scattered measurements);
+- **polar plots** of the plane of incidence at θ_i = :data:`POLAR_INCIDENCE_DEG` (scattered:
+  the nearest measured θ_i);
+- the **directional albedo** at :data:`ALBEDO_CURVE_VIEWS_DEG` (not of scattered measurements);
+- the **lit sphere**, tone mapped by ``render.output.to_8bit`` (filmic, exposure 0) into
+  :data:`SPHERE_FILE`.
+
+Luminance is Rec. 709 (``brdf_io.colour.REC709_LUMA``).
 
 :func:`live_views` builds the live WebGL2 preview of each environment's SHRM at the main
 tolerance (``render.webgl_page``) for ``report.html``, within :data:`LIVE_VIEW_BUDGET_BYTES`
@@ -32,8 +22,6 @@ per view, with the report's sphere preview as the still image for browsers witho
 References
 ----------
 B. Burley, "Physically-Based Shading at Disney", SIGGRAPH 2012 course notes (BRDF Explorer).
-S. Rusinkiewicz, "A New Change of Variables for Efficient BRDF Representation", EGWR 1998,
-doi:10.1007/978-3-7091-6453-2_2.
 """
 
 from __future__ import annotations
@@ -47,44 +35,42 @@ from typing import Any
 
 import numpy as np
 
+from ...analysis.albedo import directional_albedo
+from ...analysis.brdf_views import (
+    PLANE_TOLERANCE_DEG,
+    SLICE_PHI_D_DEG,
+    SPHERE_LIGHT,
+    SPHERE_SIZE,
+    halfdiff_slice,
+    lit_sphere,
+    plane_directions,
+    plane_samples,
+)
 from ...brdf_io.brdf import BRDF
-from ...brdf_io.halfdiff import halfdiff_to_directions
+from ...brdf_io.colour import REC709_LUMA
 from ...brdf_io.masked_grid import eval_with_mask
 from ...render.output import to_8bit
 from ...render.preview import PREVIEW_VIEW, PreviewImage
 from ...render.webgl_page import ViewBudget, build_view, view_fragment
-from .checks import directional_albedo
 from .plots import image_row_plot
 
 __all__ = [
-    "SLICE_PHI_D_DEG", "SLICE_STEP_DEG", "POLAR_INCIDENCE_DEG", "POLAR_THETA_DEG", "ALBEDO_VIEWS_DEG",
-    "PLANE_TOLERANCE_DEG", "MAX_SAMPLES", "SPHERE_SIZE", "SPHERE_LIGHT", "SPHERE_FILE", "LUMA",
-    "LIVE_VIEW_BUDGET_BYTES", "ReportImage", "LiveView", "plane_directions", "halfdiff_slice",
-    "lit_sphere", "explore", "live_views", "preview_view_angles",
+    "POLAR_INCIDENCE_DEG", "POLAR_THETA_DEG", "ALBEDO_CURVE_VIEWS_DEG", "MAX_SAMPLES", "SPHERE_FILE",
+    "LIVE_VIEW_BUDGET_BYTES", "ReportImage", "LiveView", "explore", "live_views", "preview_view_angles",
 ]
 
-#: φ_d of the image slice (BRDF Explorer's default: no cell below the surface).
-SLICE_PHI_D_DEG = 90.0
-#: Cell size of the θ_h × θ_d slice: 45 × 45 cells, centres at 1°, 3°, …, 89°.
-SLICE_STEP_DEG = 2.0
 #: θ_i of the polar plots.
 POLAR_INCIDENCE_DEG = (0.0, 30.0, 60.0, 75.0)
 #: Signed θ_o of the polar curves.
 POLAR_THETA_DEG = np.arange(-87.5, 87.5 + 1e-9, 2.5)
-#: θ_v of the directional-albedo curves.
-ALBEDO_VIEWS_DEG = (*range(0, 90, 5), 88)
-#: Scattered samples this close to the plane of incidence (azimuth) count as in the plane.
-PLANE_TOLERANCE_DEG = 3.0
+#: θ_v of the directional-albedo curves (denser than the energy check's ``analysis.albedo.ALBEDO_CHECK_VIEWS_DEG``).
+ALBEDO_CURVE_VIEWS_DEG = (*range(0, 90, 5), 88)
 #: At most this many in-plane samples are stored (every k-th beyond it).
 MAX_SAMPLES = 4000
-#: Lit-sphere image size (pixels) and light direction (45° from the view, from the upper left).
-SPHERE_SIZE = 128
-SPHERE_LIGHT = (-0.5, 0.5, math.sqrt(0.5))
+#: File of the lit-sphere images (size and light: ``analysis.brdf_views.SPHERE_SIZE``, ``SPHERE_LIGHT``).
 SPHERE_FILE = "explorer_sphere.png"
 #: 8-bit grey behind the sphere (so that its unlit side is seen against it).
 SPHERE_BACKGROUND = 48
-#: Rec. 709 luminance weights.
-LUMA = np.array([0.2126, 0.7152, 0.0722])
 #: Size budget of one live view in report.html (the coefficient maps are reduced to fit;
 #: ``render.webgl_page.fit_coefficients``).
 LIVE_VIEW_BUDGET_BYTES = 3 << 20
@@ -107,38 +93,11 @@ class LiveView:
     html: str
 
 
-# ------------------------------------------------------------------------------ geometry
-
-
-def plane_directions(theta_i_deg: float, theta_o_deg: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(L, V) in the plane of incidence: L = (−sin θ_i, 0, cos θ_i), V = (sin θ_o, 0, cos θ_o)."""
-    ti = math.radians(theta_i_deg)
-    to = np.radians(np.asarray(theta_o_deg, dtype=np.float64))
-    V = np.stack([np.sin(to), np.zeros_like(to), np.cos(to)], axis=-1)
-    L = np.broadcast_to(np.array([-math.sin(ti), 0.0, math.cos(ti)]), V.shape)
-    return L, V
+# ------------------------------------------------------------------------------ json
 
 
 def _luma(rgb: np.ndarray) -> np.ndarray:
-    return np.asarray(rgb, dtype=np.float64) @ LUMA
-
-
-def _cell_centres(step: float) -> np.ndarray:
-    n = int(round(90.0 / step))
-    return (np.arange(n) + 0.5) * (90.0 / n)
-
-
-def halfdiff_slice(brdf: BRDF, phi_d_deg: float = SLICE_PHI_D_DEG, step_deg: float = SLICE_STEP_DEG
-                   ) -> dict[str, Any]:
-    """ρ on the θ_h × θ_d grid at φ_d: ``theta_h_deg``, ``theta_d_deg`` (cell centres),
-    ``rgb`` (n_h, n_d, 3), ``missing`` and ``below_surface`` (bool (n_h, n_d))."""
-    th = _cell_centres(step_deg)
-    td = _cell_centres(step_deg)
-    L, V = halfdiff_to_directions(np.radians(th)[:, None], np.radians(td)[None, :], math.radians(phi_d_deg))
-    rgb, has = eval_with_mask(brdf, L, V)
-    below = (L[..., 2] <= 0) | (V[..., 2] <= 0)
-    return {"theta_h_deg": th, "theta_d_deg": td, "rgb": np.asarray(rgb, dtype=np.float64),
-            "missing": ~has & ~below, "below_surface": below}
+    return np.asarray(rgb, dtype=np.float64) @ REC709_LUMA
 
 
 def _grid_json(lum: np.ndarray, blank: np.ndarray) -> list[list[float | None]]:
@@ -153,53 +112,7 @@ def _rgb_json(rgb: np.ndarray, has: np.ndarray | None = None) -> list[list[float
     return out
 
 
-def lit_sphere(brdf: BRDF, size: int = SPHERE_SIZE, light: Sequence[float] = SPHERE_LIGHT
-               ) -> tuple[np.ndarray, np.ndarray]:
-    """Linear radiance (size, size, 3) of the unit sphere under one distant light, and the
-    hit mask: orthographic view along −z (V = +z), pixel centres x = (2j+1)/size − 1,
-    y = 1 − (2i+1)/size, N = (x, y, √(1 − x² − y²)); radiance = ρ(L, V)·max(N·L, 0)·π with
-    L and V in the tangent frame (T = the part of V across N, B = N × T, N)."""
-    Lw = np.asarray(light, dtype=np.float64)
-    Lw = Lw / np.linalg.norm(Lw)
-    c = (2.0 * np.arange(size) + 1.0) / size - 1.0
-    x, y = np.meshgrid(c, -c)
-    r2 = x * x + y * y
-    hit = r2 < 1.0
-    N = np.stack([x[hit], y[hit], np.sqrt(1.0 - r2[hit])], axis=-1)
-    Vw = np.array([0.0, 0.0, 1.0])
-    nv = N @ Vw
-    T = Vw[None, :] - nv[:, None] * N
-    tn = np.linalg.norm(T, axis=-1)
-    # at the centre V = N: any tangent will do (isotropic BRDF)
-    T = np.where(tn[:, None] > 1e-12, T / np.maximum(tn, 1e-300)[:, None], np.array([1.0, 0.0, 0.0]))
-    B = np.cross(N, T)
-    L = np.stack([T @ Lw, B @ Lw, N @ Lw], axis=-1)
-    V = np.stack([T @ Vw, B @ Vw, nv], axis=-1)
-    cos_i = np.maximum(L[:, 2], 0.0)
-    radiance = np.zeros((size, size, 3))
-    lit = cos_i > 0
-    values = np.zeros((len(N), 3))
-    if np.any(lit):
-        values[lit] = np.asarray(brdf.eval(L[lit], V[lit]), dtype=np.float64) * (np.pi * cos_i[lit])[:, None]
-    radiance[hit] = values
-    return radiance, hit
-
-
 # ------------------------------------------------------------------------------ explorer
-
-
-def _scattered_plane(brdf: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(θ_i°, signed θ_o°, rgb) of the samples within PLANE_TOLERANCE_DEG of the plane of incidence
-    (signed θ_o > 0 on the side of the mirror direction)."""
-    L, V, rgb = np.asarray(brdf.L, float), np.asarray(brdf.V, float), np.asarray(brdf.rgb, float)
-    dphi = np.arctan2(V[:, 1], V[:, 0]) - np.arctan2(L[:, 1], L[:, 0])
-    theta_i = np.degrees(np.arccos(np.clip(L[:, 2], -1.0, 1.0)))
-    theta_o = np.degrees(np.arccos(np.clip(V[:, 2], -1.0, 1.0)))
-    # in the plane: Δφ near 0 (back towards the light) or near π (forward); at θ_o ≈ 0 the
-    # azimuth does not matter
-    in_plane = (np.abs(np.sin(dphi)) < math.sin(math.radians(PLANE_TOLERANCE_DEG))) | (theta_o < 0.5)
-    signed = np.where(np.cos(dphi) < 0, theta_o, -theta_o)
-    return theta_i[in_plane], signed[in_plane], rgb[in_plane]
 
 
 def explore(brdf: BRDF, fit_results: Sequence[Any], models: Sequence[str], *, albedo_nodes: int = 48
@@ -230,7 +143,7 @@ def _explore(brdf: BRDF, fit_results: Sequence[Any], models: Sequence[str], albe
 
     # the slice, or the measured samples near the plane of incidence
     if scattered:
-        ti_all, so_all, rgb_all = _scattered_plane(brdf)
+        ti_all, so_all, rgb_all = plane_samples(brdf)
         ti, so, rgb = ti_all, so_all, rgb_all
         order = np.lexsort((so, ti))
         ti, so, rgb = ti[order], so[order], rgb[order]
@@ -285,7 +198,7 @@ def _explore(brdf: BRDF, fit_results: Sequence[Any], models: Sequence[str], albe
     block["polar"] = {"theta_o_deg": POLAR_THETA_DEG.tolist(), "curves": curves}
 
     # directional albedo against θ_v
-    views = tuple(float(v) for v in ALBEDO_VIEWS_DEG)
+    views = tuple(float(v) for v in ALBEDO_CURVE_VIEWS_DEG)
     block["albedo"] = {
         "views_deg": list(views), "nodes": int(albedo_nodes),
         "measured_rgb": None if scattered else directional_albedo(brdf, views, nodes=albedo_nodes).tolist(),

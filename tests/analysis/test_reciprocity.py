@@ -1,6 +1,6 @@
-"""The report's reciprocity figures (cli/report/checks.py: median and 90th percentile of the per-pair
-relative difference |ρ(L,V) − ρ(V,L)| / mean), against a closed form, a hand count and a brute-force
-grid over the real RGL files (issue 29)."""
+"""Reciprocity figures (analysis/reciprocity.py: max and RMS relative to max ρ, median and 90th percentile
+of the per-pair relative difference |ρ(L,V) − ρ(V,L)| / mean), against a closed form, a hand count, a
+reciprocal model and a brute-force grid over the real RGL files (issue 29)."""
 
 from __future__ import annotations
 
@@ -9,9 +9,10 @@ import warnings
 import numpy as np
 import pytest
 
+import shrmkit
+from shrmkit.analysis.reciprocity import reciprocity_check, scattered_reciprocity
 from shrmkit.brdf_io.brdf import BRDF
 from shrmkit.brdf_io.rgl import RGLGamutWarning, read_rgl
-from shrmkit.cli.report.checks import reciprocity_check, scattered_reciprocity
 
 COS_85 = np.cos(np.radians(85.0))
 
@@ -49,6 +50,27 @@ def test_scattered_pairs_by_hand() -> None:
     V = d[[1, 0, 3, 2]] * [-1, 1, 1]
     out = scattered_reciprocity(d, V, np.array([[1.0, 1, 1], [1.0, 1, 1], [2.0, 2, 2], [1.0, 1, 1]]))
     assert out["median_pair_rel"] == pytest.approx(1 / 3) and out["p90_pair_rel"] == pytest.approx(2 / 3)
+
+
+def test_reciprocal_and_non_reciprocal_models() -> None:
+    """Cook–Torrance is reciprocal (to rounding); the simplified microfacet of RH02 eq. 11 is not."""
+    assert reciprocity_check(shrmkit.load_brdf("cook-torrance:kd=0.2,alpha=0.3"))["max_rel"] < 1e-12
+    assert reciprocity_check(shrmkit.load_brdf("microfacet:sigma=0.3"))["max_rel"] > 1e-2
+
+
+def test_scattered_max_rel_by_hand() -> None:
+    """Two swapped configurations, one pair agreeing, one off by 50 % of the larger value."""
+    t = np.radians([20.0, 50.0, 30.0, 70.0])
+
+    def d(theta, phi):
+        return np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], -1)
+
+    L = d(t, np.zeros(4))
+    V = d(t[[1, 0, 3, 2]], np.full(4, np.pi))
+    rgb = np.array([[1.0, 1, 1], [1.0, 1, 1], [2.0, 2, 2], [1.0, 1, 1]])
+    out = scattered_reciprocity(L, V, rgb)
+    assert out["n_pairs"] == 2
+    assert out["max_rel"] == pytest.approx(0.5)
 
 
 def _grid_figures(brdf: BRDF, n: int = 60, m: int = 96) -> tuple[float, float]:

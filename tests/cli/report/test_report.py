@@ -15,7 +15,6 @@ import numpy as np
 import pytest
 
 import shrmkit
-from shrmkit.cli.report.checks import directional_albedo, reciprocity_check, scattered_reciprocity
 from shrmkit.cli.report.collect import collect_report, strip_timings
 from shrmkit.cli.report.options import profile
 from shrmkit.render.preview import PreviewImage
@@ -210,34 +209,13 @@ def test_report_is_reproducible_except_timings():
 
 
 def test_energy_gain_is_flagged_with_closed_form_albedo():
-    """Lafortune kd + ks cos^n at normal view: a(0) = kd + ks·2π/(n + 2) (closed form)."""
-    brdf = shrmkit.load_brdf("lafortune:kd=0.3,n=20,ks=4")
-    a = directional_albedo(brdf, views_deg=(0.0,), nodes=48)[0]
-    np.testing.assert_allclose(a, 0.3 + 4.0 * 2.0 * np.pi / 22.0, rtol=1e-9)
-    lam = directional_albedo(shrmkit.load_brdf("lambert:albedo=0.2/0.4/0.8"), nodes=16)
-    np.testing.assert_allclose(lam, np.tile([0.2, 0.4, 0.8], (lam.shape[0], 1)), rtol=1e-12)
+    """Lafortune kd + ks cos^n at normal view: a(0) = kd + ks·2π/(n + 2) = 1.4424 (closed form;
+    ``directional_albedo`` itself: tests/analysis/test_albedo.py)."""
     options = profile("quick", preview="none", models=("lafortune",), tolerances=(0.1,), eps=0.1, n_pairs=20)
     doc, _ = collect_report("lafortune:kd=0.3,n=20,ks=4", options)
     assert any(w["code"] == "energy_gain" for w in doc["warnings"])
     assert doc["data_checks"]["albedo"]["max"] == pytest.approx(1.4424, rel=1e-3)
     assert doc["data_checks"]["reciprocity"]["max_rel"] < 1e-12  # Lafortune is reciprocal
-
-
-def test_reciprocity_checks():
-    assert reciprocity_check(shrmkit.load_brdf("cook-torrance:kd=0.2,alpha=0.3"))["max_rel"] < 1e-12
-    assert reciprocity_check(shrmkit.load_brdf("microfacet:sigma=0.3"))["max_rel"] > 1e-2
-    # scattered: two swapped configurations, one pair agreeing, one off by 50 %
-    t = np.radians([20.0, 50.0, 30.0, 70.0])
-
-    def d(theta, phi):
-        return np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], -1)
-
-    L = d(t, np.zeros(4))
-    V = d(t[[1, 0, 3, 2]], np.full(4, np.pi))
-    rgb = np.array([[1.0, 1, 1], [1.0, 1, 1], [2.0, 2, 2], [1.0, 1, 1]])
-    out = scattered_reciprocity(L, V, rgb)
-    assert out["n_pairs"] == 2
-    assert out["max_rel"] == pytest.approx(0.5)
 
 
 def test_failed_load_raises_bad_input(tmp_path):
