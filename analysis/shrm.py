@@ -30,6 +30,7 @@ from ..brdf_io.errors import BadInputError
 from ..brdf_io.latlong import bilinear_lookup
 from ..brdf_io.specs import load_brdf
 from .lights import DEFAULT_LIGHTS, LightSet, check_lights, extract_lights, merge_error_by_band
+from .map_budget import assess_map
 from .orders import (
     DEFAULT_MAX_F,
     DEFAULT_MAX_P,
@@ -290,11 +291,11 @@ def default_size(F: int, P: int = 0, budget_bytes: int = DEFAULT_MAP_BUDGET_BYTE
     return max(8, min(rule, fits))
 
 
-def _fast_rows(rows: int, F: int, P: int) -> int:
+def _fast_rows(rows: int, F: int, P: int, budget_bytes: int = DEFAULT_MAP_BUDGET_BYTES) -> int:
     """``rows`` raised to the next size with fast FFTs (:func:`~shrmkit.analysis.synthesis.fast_rows`)
     while that stays within the memory budget's :func:`default_size`, else ``rows``."""
     fast = fast_rows(rows)
-    return fast if fast <= max(default_size(F, P), rows) else rows
+    return fast if fast <= max(default_size(F, P, budget_bytes), rows) else rows
 
 
 #: Under the ``"bands"`` rule the map is the smallest whose bilinear lookup adds at most this
@@ -383,6 +384,7 @@ def prefilter(
     *,
     eps: float = DEFAULT_EPS,
     size: int | None = None,
+    budget_bytes: int = DEFAULT_MAP_BUDGET_BYTES,
     F: int | None = None,
     P: int | None = None,
     max_F: int = DEFAULT_MAX_F,
@@ -418,6 +420,10 @@ def prefilter(
     size
         Rows S_B of the S_B × 2S_B output (default :func:`default_size`: 10 F_B, within
         [32, 1024] rows and a 256 MiB map budget; the meta says when the budget applied).
+    budget_bytes
+        The memory budget of the default size (``size=`` overrides it). ``meta["map_budget"]``
+        (:mod:`~shrmkit.analysis.map_budget`) says when the map's size makes a band's bound
+        uninformative, what the lookup costs, and the rows and bytes that would meet ε.
     F, P
         Force the orders instead of choosing them.
     orders
@@ -560,9 +566,10 @@ def prefilter(
         if size is not None:
             return int(size)
         if orders.criterion == "rh02":
-            return _fast_rows(default_size(F_, P_B), F_, P_B)
+            return _fast_rows(default_size(F_, P_B, budget_bytes), F_, P_B, budget_bytes)
         return _fast_rows(map_rows(orders.profile, base, band_energy, F_, P_B, eps, q_max=q_max,
-                                   lighting_rows=lighting_rows, max_view_deg=orders.max_view_deg)[0], F_, P_B)
+                                   lighting_rows=lighting_rows, max_view_deg=orders.max_view_deg,
+                                   budget_bytes=budget_bytes)[0], F_, P_B, budget_bytes)
 
     def window_at(F_: int, top_: int | None) -> WindowChoice:
         return choose_window(
@@ -594,15 +601,16 @@ def prefilter(
     if size is not None:
         S = int(size)
     elif orders.criterion == "rh02":
-        S = default_size(F_B, P_B)  # RH02 §5.2: S ≈ 10 F
-        budget_bound = S < default_size(F_B, 0)
-        S = _fast_rows(S, F_B, P_B)
+        S = default_size(F_B, P_B, budget_bytes)  # RH02 §5.2: S ≈ 10 F
+        budget_bound = S < int(np.clip(10 * F_B, 32, 1024))
+        S = _fast_rows(S, F_B, P_B, budget_bytes)
     else:
         S, budget_bound = map_rows(
             orders.profile, base, band_energy, F_B, P_B, eps, sigma=sigma, q_max=q_max,
             lighting_rows=(lighting.rows, lighting.source_rows), max_view_deg=orders.max_view_deg,
+            budget_bytes=budget_bytes,
         )
-        S = _fast_rows(S, F_B, P_B)
+        S = _fast_rows(S, F_B, P_B, budget_bytes)
     if S < 2 or S > 8192:
         raise BadInputError(None, f"SHRM size must be in [2, 8192] rows, got {S}")
     timings["map size"] = time.perf_counter() - t0
@@ -633,20 +641,23 @@ def prefilter(
         ).astype(np.float32)
         timings["cube"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    def state(signal: np.ndarray | None = None):
+    def state(signal: np.ndarray | None = None, rows: int | None = S):
         return shrm_view_bands(
-            orders.profile, base, band_energy, F_B, P_B, sigma=sigma, q_max=q_max, map_rows=S,
+            orders.profile, base, band_energy, F_B, P_B, sigma=sigma, q_max=q_max, map_rows=rows,
             lighting_rows=(lighting.rows, lighting.source_rows), max_view_deg=orders.max_view_deg,
             signal_band_energy=signal,
         )
 
     statement = state()
+    signal_energy, raw_bands = None, [dict(b) for b in statement.bands]
     if len(light_set):
         # the maps hold the map without its lights: relative to that reflection (what holds away from
         # the lights, ``*_residual``) and, the main statement, to the whole map's reflection (the
         # lights add signal and, where merged from pixels, their merge error)
         whole = lighting_for(source_env, orders, F=F, nthreads=nthreads).band_energy_all()
+        signal_energy = whole
         residual_bands, statement = statement.bands, state(whole)
+        raw_bands = [dict(b) for b in statement.bands]
         part = SHRM(F=F_B, P=P_B, coeffs=coeffs)
         merge_res, merge_whole = (np.zeros(len(residual_bands)),) * 2
         if extraction.merged:
@@ -660,6 +671,14 @@ def prefilter(
             band["bound_rel_rms"] = float(band["bound_rel_rms"] + 1.5 * np.sqrt(extra))
             band["predicted_rel_rms_residual"] = float(np.sqrt(own["predicted_rel_rms"] ** 2 + extra_res))
             band["bound_rel_rms_residual"] = float(own["bound_rel_rms"] + 1.5 * np.sqrt(extra_res))
+    # what the map's size costs the statement, and whether a cap made a bound say nothing (issue 29)
+    map_budget = assess_map(
+        statement.bands, raw_bands, state(signal_energy, None).bands, rows=S, P=P_B, budget_bytes=budget_bytes,
+        inside=list(bands_inside(orders.profile, orders.max_view_deg)), capped=budget_bound,
+        rows_needed=lambda: _fast_rows(map_rows(
+            orders.profile, base, band_energy, F_B, P_B, eps, sigma=sigma, q_max=q_max,
+            lighting_rows=(lighting.rows, lighting.source_rows), max_view_deg=orders.max_view_deg,
+            budget_bytes=1 << 62)[0], F_B, P_B, 1 << 62))
     # on the coefficients the map was made of (the projection for rh02, the view fit for bands):
     # the window's cost, the energy of its change over all views, is exact for either
     truncation, cost = reflected_error_parts(lighting, base, F_B, P_B, sigma, q_max=q_max)
@@ -686,9 +705,9 @@ def prefilter(
     timings["errors"] = time.perf_counter() - t0
     timings["total"] = time.perf_counter() - t
     pixel_capped = pixel_choice is not None and pixel_choice.capped
-    size_note = "" if not budget_bound else (
-        f"map rows held at {S} by the 256 MiB default budget (use size=)"
-    )
+    size_note = map_budget.note or ("" if not budget_bound else (
+        f"map rows held at {S} by the {budget_bytes / 2**20:g} MiB budget ({map_budget.rows_needed} rows, "
+        f"{map_budget.bytes_needed / 2**20:.0f} MiB, would meet eps; use size= or budget_bytes=)"))
     meta = {
         "brdf": brdf.name,
         "environment": source_env.name,
@@ -734,12 +753,13 @@ def prefilter(
         "capped_by": [name for name, hit in (
             ("orders: --max-F/--max-P", orders.capped), ("lighting: the map's resolution (F_B at its lmax)",
                                                            scene.capped),
-            ("window budget", choice.capped), ("map budget: 256 MiB", budget_bound),
+            ("window budget", choice.capped), (f"map budget: {budget_bytes / 2**20:g} MiB", budget_bound),
             ("pixel rule: no order the lighting holds meets √ε per direction", pixel_capped)) if hit],
         # the rule's check: from F_B (the energy rule's, after the window) to F (raised when it failed)
         "pixel_rule": {**pixel_choice.to_dict(), "F_from": pixel_from} if pixel_choice is not None else None,
         "pixel_errors": pixels.to_dict(),
         "view_bands": statement.bands,
+        "map_budget": map_budget.to_dict(),
         "extrapolated_samples": int(orders.n_without_data),
     }
     return SHRM(F=F_B, P=P_B, coeffs=coeffs, tolerance=float(eps), eps=eps_info, meta=meta, cube=cube_coeffs,

@@ -308,6 +308,7 @@ def _environments(brdf: BRDF, options: ReportOptions, choices: dict[float, Order
                 "lights": len(shrm.meta["lights"]),
                 "capped": bool(shrm.meta["capped"]),
                 "capped_by": list(shrm.meta["capped_by"]),
+                "map_budget": shrm.meta["map_budget"],  # uninformative bounds said so (analysis/map_budget.py)
                 # per direction (analysis/pixels.py): the estimate, and where the pixel rule took F_B from
                 "pixel_median": shrm.meta["pixel_errors"]["median"],
                 "pixel_p90": shrm.meta["pixel_errors"]["p90"],
@@ -337,6 +338,7 @@ def _environments(brdf: BRDF, options: ReportOptions, choices: dict[float, Order
                     "lights_flux_share": shrm.meta["lights_flux_share"],
                     "capped": row["capped"],
                     "capped_by": row["capped_by"],
+                    "map_budget": row["map_budget"],
                     "pixel_errors": shrm.meta["pixel_errors"],
                     "pixel_rule": shrm.meta["pixel_rule"],
                     "n_pairs": options.n_pairs,
