@@ -24,7 +24,7 @@ from ..analysis.fit.metrics import METRICS
 from ..analysis.fit.models_param import MODELS
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.specs import load_brdf
-from .common import add_rgl_incident, number_in, print_json, print_table, rgl_brdf_arg, stderr, stdout
+from .common import add_rgl_incident, brdf_help, number_in, print_json, print_table, rgl_brdf_arg, stderr, stdout
 
 HELP = "fit a Lafortune, Cook-Torrance or microfacet model to a BRDF (nlopt)"
 
@@ -37,7 +37,7 @@ _angle = number_in(0.0, 90.0, lo_open=True, unit=" degrees")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("brdf", help="BRDF file (.binary, .npz, .brdf, .json) or spec string")
+    parser.add_argument("brdf", help=brdf_help())
     parser.add_argument("--model", choices=MODELS, default="lafortune", help="model to fit (default lafortune)")
     parser.add_argument("--lobes", type=_int_in(1, 4), default=1, help="Lafortune lobes (default 1)")
     parser.add_argument(

@@ -21,6 +21,7 @@ from .common import (
     add_lights_option,
     add_order_rule,
     add_rgl_incident,
+    brdf_help,
     load_env_arg,
     order_rule,
     print_json,
@@ -36,7 +37,7 @@ HELP = "choose the SH orders (F, P) a BRDF needs at a tolerance eps (RH02 §5.1)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("brdf", help="BRDF spec (e.g. microfacet:sigma=0.2) or file (.binary, .npz, .json)")
+    parser.add_argument("brdf", help=brdf_help())
     parser.add_argument("--eps", type=tolerance, default=DEFAULT_EPS,
                         help=f"tolerance on uncaptured energy (default {DEFAULT_EPS:g})")
     parser.add_argument("--max-F", type=int, default=DEFAULT_MAX_F, help=f"cap on F (default {DEFAULT_MAX_F})")

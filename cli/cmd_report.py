@@ -31,6 +31,7 @@ from .common import (
     add_order_rule,
     add_rgl_incident,
     add_window_option,
+    brdf_help,
     rgl_brdf_arg,
     stderr,
     stdout,
@@ -83,8 +84,7 @@ MAX_LOBES, MAX_FIT_SAMPLES, MAX_PAIRS, MAX_WORKERS = 4, 2**22, 10**6, 256
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("brdfs", nargs="+", metavar="BRDF",
-                   help="BRDF files (.binary, .npz, .bsdf, .brdf, .json; CURET abrdf.dat and gonioreflectometer "
-                        ".csv: every member, or FILE#N for one) or spec strings")
+                   help=brdf_help(many=True))
     p.add_argument("--eps", type=tolerance, default=DEFAULT_EPS,
                    help=f"main tolerance (scene orders, preview; default {DEFAULT_EPS:g})")
     p.add_argument("--tolerances", type=_tolerances, default=None,

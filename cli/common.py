@@ -25,8 +25,10 @@ from ..brdf_io.errors import BadInputError
 from ..brdf_io.hdr_codecs import IMAGE_SUFFIXES
 from ..brdf_io.jsonutil import to_jsonable
 from ..brdf_io.rgl import RGL_INCIDENT
+from ..brdf_io.specs import BRDF_FILE_TYPES
 
 __all__ = [
+    "brdf_help",
     "add_env_orientation",
     "add_window_option",
     "add_lights_option",
@@ -176,6 +178,19 @@ def add_lights_option(parser: argparse.ArgumentParser) -> None:
         f"{LIGHT_CONTRAST:g}x brighter than the map's median within a {MAX_LIGHT_RADIUS_DEG:g} degree cap, at most "
         f"{MAX_LIGHTS}); N: at most N; none: keep them in the map (they ring)",
     )
+
+
+def brdf_help(*, many: bool = False) -> str:
+    """Help text of a BRDF argument, its file suffixes from the file-type registry
+    (``brdf_io.specs.BRDF_FILE_TYPES``); ``many``: the argument takes several BRDFs and a whole
+    multi-BRDF file expands to every member."""
+    suffixes = ", ".join(BRDF_FILE_TYPES)
+    picks = "/".join(s for s, kind in BRDF_FILE_TYPES.items() if kind.selector)
+    if many:
+        whole = "/".join(s for s, kind in BRDF_FILE_TYPES.items() if kind.members)
+        return (f"BRDF files ({suffixes}; a whole {whole} file is every member; FILE#... picks one part of a "
+                f"{picks} file) or specs (e.g. microfacet:sigma=0.2)")
+    return f"BRDF spec (e.g. microfacet:sigma=0.2) or file ({suffixes}; FILE#... picks one part of a {picks} file)"
 
 
 def add_rgl_incident(parser: argparse.ArgumentParser) -> None:
