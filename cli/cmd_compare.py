@@ -31,6 +31,7 @@ from .common import (
     add_order_rule,
     add_rgl_incident,
     add_window_option,
+    brdf_help,
     load_env_arg,
     number_in,
     print_json,
@@ -51,7 +52,7 @@ CLI_CABRAL_REFERENCE_HEIGHT = 16
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     d = _DEFAULTS
-    parser.add_argument("brdf", metavar="BRDF", help="BRDF file (.binary, .npz, .json) or spec string")
+    parser.add_argument("brdf", metavar="BRDF", help=brdf_help())
     parser.add_argument("--env", required=True, help="environment map spec or file")
     add_env_orientation(parser)
     add_rgl_incident(parser)
