@@ -7,7 +7,7 @@ font caches) is still shared by the whole process, so :func:`make_plots` draws u
 
 - ``energy``: captured energy 1 − ε(F, P) against F for each P, with the environments'
   1 − ε_L(F) (RH02 Fig. 6 style) and the chosen (F, P) at each tolerance;
-- ``accuracy_by_p``: 1 − ε(F, P) against P at the largest tabulated F and at the chosen F
+- ``accuracy_by_p``: ε(F, P) against P (log scale) at the largest tabulated F and at the chosen F
   (RH02 Fig. 8 style: how much P buys);
 - ``speed_error``: measured SHRM error against prefilter time per tolerance (and √ε_B);
 - ``fit_slices``: measured vs fitted ρ in the plane of incidence at a few view angles;
@@ -44,7 +44,7 @@ __all__ = ["PLOT_TITLES", "make_plots", "energy_plot", "accuracy_by_p_plot", "sp
 
 PLOT_TITLES = {
     "energy": "Captured energy against F (RH02 Fig. 6 style)",
-    "accuracy_by_p": "Accuracy by P (RH02 Fig. 8 style)",
+    "accuracy_by_p": "Error against P (RH02 Fig. 8 style, as ε on a log scale)",
     "speed_error": "Speed against error",
     "fit_slices": "Measured vs fitted slices (plane of incidence)",
     "fit_bands": "Fit error by view-elevation band",
@@ -60,7 +60,7 @@ BELOW_COLOUR = (0.62, 0.62, 0.62, 1.0)
 _DECADES = 4
 _POLAR_DECADES = 3
 _LUMA = np.array([0.2126, 0.7152, 0.0722])
-_DPI = 80
+_DPI = 100
 
 
 def _figure(width: float = 6.0, height: float = 3.6):
@@ -115,49 +115,85 @@ def _png(fig, row: tuple[float, float, float, float, float] | None = None) -> by
     return buf.getvalue()
 
 
+def _rule_label(doc: dict[str, Any]) -> str:
+    """What ε means in this report: the worst view band's error (bands rule) or RH02's energy."""
+    bands = any(o.get("criterion") == "bands" for o in doc.get("orders", []))
+    return "worst view band" if bands else "RH02, all views"
+
+
+def _plotted_p(doc: dict[str, Any], n_p: int, most: int = 8) -> list[int]:
+    """View orders to draw: every chosen P, P = 0, the largest tabulated, and evenly spaced others
+    up to ``most`` curves (the chosen orders' dots then lie on drawn curves)."""
+    chosen = {min(int(o["P"]), n_p - 1) for o in doc.get("orders", [])}
+    picks = chosen | {0, n_p - 1}
+    for p in np.linspace(0, n_p - 1, most).round().astype(int):
+        if len(picks) >= max(most, len(chosen) + 2):
+            break
+        picks.add(int(p))
+    return sorted(picks)
+
+
 def energy_plot(doc: dict[str, Any]) -> bytes:
-    """1 − ε(F, P) against F for P = 0 … min(P0, 8), lighting curves dashed."""
+    """1 − ε(F, P) against F for the chosen P of every tolerance and a few others (at most ~8
+    curves), lighting curves dashed, each chosen (F, P) a dot on its own curve."""
     table = np.array(doc["eps_table"]["eps"], dtype=float)
     fig = _figure()
     ax = fig.add_subplot(1, 1, 1)
     F = np.arange(table.shape[0])
-
+    chosen = {min(int(o["P"]), table.shape[1] - 1) for o in doc["orders"]}
     cmap = colormaps["viridis"]
-    n_p = min(table.shape[1], 9)
-    for p in range(n_p):
-        colour = cmap(p / max(n_p - 1, 1))
-        ax.plot(F, 1.0 - table[:, p], color=colour, lw=1.2, label=f"P={p}")
+    top = max(table.shape[1] - 1, 1)
+    for p in _plotted_p(doc, table.shape[1]):
+        ax.plot(F, 1.0 - table[:, p], color=cmap(0.9 * p / top), lw=2.0 if p in chosen else 1.0,
+                label=f"P={p}" + (" (chosen)" if p in chosen else ""))
     for env in doc.get("environments", []):
         curve = np.array([np.nan if v is None else v for v in env["eps_L_curve"]], dtype=float)
         ax.plot(np.arange(curve.size), 1.0 - curve, "k--", lw=1.0, label=f"lighting {env['name']}")
     for row in doc["orders"]:
-        ax.plot([row["F"]], [1.0 - row["eps"]], "o", color="crimson", ms=5)
-        ax.annotate(f"ε={row['tolerance']:g}", (row["F"], 1.0 - row["eps"]), textcoords="offset points",
-                    xytext=(4, -10), fontsize=7, color="crimson")
+        f, p = min(int(row["F"]), table.shape[0] - 1), min(int(row["P"]), table.shape[1] - 1)
+        value = 1.0 - table[f, p]  # on the drawn curve (the tightest tolerance's grid)
+        ax.plot([f], [value], "o", color="crimson", ms=5)
+        ax.annotate(f"ε={row['tolerance']:g}: F={row['F']}, P={row['P']}", (f, value), textcoords="offset points",
+                    xytext=(-4, -12), ha="right", fontsize=8, color="crimson")
     ax.set_xlabel("order F")
-    ax.set_ylabel("captured energy 1 − ε")
+    ax.set_ylabel(f"captured energy 1 − ε ({_rule_label(doc)})", fontsize=9)
     ax.set_ylim(max(0.0, float(np.nanmin(1.0 - table[:, 0])) - 0.05), 1.005)
     ax.set_xlim(0, F[-1])
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, ncol=2, loc="lower right")
+    ax.legend(fontsize=8, ncol=2, loc="lower right")
     return _png(fig)
 
 
 def accuracy_by_p_plot(doc: dict[str, Any]) -> bytes:
-    """1 − ε against P at the largest tabulated F and at each tolerance's chosen F."""
+    """ε(F, P) against P (log scale: no negative "accuracy" where a low P's error passes 1) at the
+    largest tabulated F and at each tolerance's chosen F, with the tolerances as lines; P on
+    integer ticks."""
+    from matplotlib.ticker import MaxNLocator
+
     table = np.array(doc["eps_table"]["eps"], dtype=float)
     fig = _figure(5.0, 3.2)
     ax = fig.add_subplot(1, 1, 1)
     P = np.arange(table.shape[1])
-    ax.plot(P, 1.0 - table[-1], "s-", color="k", label=f"F={table.shape[0] - 1} (all)")
-    for row in doc["orders"]:
+    floor = 1e-6  # ε = 0 (a P that fits every view exactly) drawn at the floor of the log axis
+
+    def shown(values: np.ndarray) -> np.ndarray:
+        return np.maximum(values, floor)
+
+    ax.plot(P, shown(table[-1]), "s-", color="k", ms=4, label=f"F={table.shape[0] - 1} (all)")
+    for k, row in enumerate(doc["orders"]):
         f = min(row["F"], table.shape[0] - 1)
-        ax.plot(P, 1.0 - table[f], "o-", ms=3, lw=1, label=f"F={f} (ε={row['tolerance']:g})")
-        ax.axhline(1.0 - row["tolerance"], color="grey", lw=0.6, ls=":")
+        colour = colormaps["tab10"](k)
+        ax.plot(P, shown(table[f]), "o-", ms=3, lw=1, color=colour, label=f"F={f} (ε={row['tolerance']:g})")
+        ax.axhline(row["tolerance"], color=colour, lw=0.8, ls=":")
+        ax.plot([min(int(row["P"]), P[-1])], [max(table[f, min(int(row["P"]), P[-1])], floor)], "o", ms=7,
+                mfc="none", color="crimson")
     ax.set_xlabel("order P (view direction)")
-    ax.set_ylabel("accuracy 1 − ε(F, P)")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
+    ax.set_ylabel(f"error ε(F, P) ({_rule_label(doc)})", fontsize=9)
+    _log_y(ax)
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    ax.set_xlim(-0.3, P[-1] + 0.3)
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8, title="dotted: tolerances; circles: chosen P", title_fontsize=7)
     return _png(fig)
 
 
