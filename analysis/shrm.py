@@ -751,7 +751,7 @@ def prefilter(
         # resolution of the lighting, the window, the map's memory budget)
         "capped": bool(orders.capped or scene.capped or choice.capped or budget_bound or pixel_capped),
         "capped_by": [name for name, hit in (
-            ("orders: --max-F/--max-P", orders.capped), ("lighting: the map's resolution (F_B at its lmax)",
+            ("orders: max_F/max_P", orders.capped), ("lighting: the map's resolution (F_B at its lmax)",
                                                            scene.capped),
             ("window budget", choice.capped), (f"map budget: {budget_bytes / 2**20:g} MiB", budget_bound),
             ("pixel rule: no order the lighting holds meets √ε per direction", pixel_capped)) if hit],
