@@ -580,7 +580,7 @@ def _search(data_for: Callable[[ReparamGrid], _GridData], eps: float, max_F: int
     elif capped:
         notes.append(
             f"tolerance {eps:g} not met within the caps F<={max_F}, P<={max_P}: "
-            f"ε({F}, {P}) = {on.column(P)[F]:.3g}; raise --max-F/--max-P"
+            f"ε({F}, {P}) = {on.column(P)[F]:.3g}; raise max_F/max_P"
         )
     if not converged:
         notes.append("the order choice did not settle under quadrature refinement (table too coarse?)")

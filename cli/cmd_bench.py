@@ -23,7 +23,7 @@ from pathlib import Path
 
 from ..brdf_io.errors import BadInputError
 from ..render.offscreen import probe_offscreen
-from .common import stdout
+from .common import say
 
 HELP = ("run the speed-against-error benchmarks (prefilter vs the best angular methods, with targets; fits; "
         "render fps) and print tables")
@@ -46,10 +46,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--only", choices=tuple(BENCHMARKS), nargs="+", default=None, help="run only these benchmarks")
     p.add_argument("--benchmarks", default=None, metavar="DIR",
                    help="folder of the benchmark scripts (default: benchmarks/ of the source checkout)")
-
-
-def _say(text: str) -> None:
-    stdout.print(text, soft_wrap=True, markup=False, highlight=False)
 
 
 def _load(path: Path):
@@ -87,22 +83,22 @@ def run(args: argparse.Namespace) -> int:
     for name in names:
         file, what = BENCHMARKS[name]
         path = folder / file
-        _say(f"\n=== {name}: {what} ({path}){' --quick' if args.quick else ''}")
+        say(f"\n=== {name}: {what} ({path}){' --quick' if args.quick else ''}")
         if name == "render":
             ok, message = probe_offscreen(timeout=60.0)
             if not ok:
                 results.append((name, "skipped", 0.0, f"no offscreen OpenGL: {message}"))
-                _say(f"skipped: no offscreen OpenGL context ({message})")
+                say(f"skipped: no offscreen OpenGL context ({message})")
                 continue
         t0 = time.perf_counter()
         try:
             run_benchmark(path, args.quick)
         except Exception as err:  # one failing benchmark must not hide the others
             results.append((name, "FAILED", time.perf_counter() - t0, f"{type(err).__name__}: {err}"))
-            _say(f"FAILED: {type(err).__name__}: {err}")
+            say(f"FAILED: {type(err).__name__}: {err}")
             continue
         results.append((name, "ok", time.perf_counter() - t0, ""))
-    _say("\n=== summary")
+    say("\n=== summary")
     for name, status, seconds, note in results:
-        _say(f"{name:10s} {status:8s} {seconds:7.1f} s  {note}")
+        say(f"{name:10s} {status:8s} {seconds:7.1f} s  {note}")
     return 1 if any(status == "FAILED" for _, status, _, _ in results) else 0

@@ -11,7 +11,7 @@ import argparse
 import time
 
 from ..brdf_io.errors import BadInputError
-from .common import stderr, stdout
+from .common import say, stderr
 from .report.demo import run_demo
 
 HELP = "run orders, a fit, a prefilter, a preview render and reports on built-in data (default ./shrm-demo)"
@@ -21,10 +21,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", default="shrm-demo", help="output folder (default ./shrm-demo)")
     p.add_argument("--size", type=int, default=384, help="preview render size in pixels (default 384)")
     p.add_argument("--no-progress", action="store_true", help="no progress messages on stderr")
-
-
-def _say(text: str) -> None:
-    stdout.print(text, soft_wrap=True, markup=False, highlight=False)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -44,9 +40,9 @@ def run(args: argparse.Namespace) -> int:
 
     steps = run_demo(args.out, progress=progress, report_progress=report_progress, size=args.size)
     for step in steps:
-        _say(f"{step.step}: {step.detail} ({step.seconds:.1f} s)")
+        say(f"{step.step}: {step.detail} ({step.seconds:.1f} s)")
         for path in step.paths:
-            _say(f"    {path}")
+            say(f"    {path}")
     failed = next((s.info.get("n_failed", 0) for s in steps if s.step == "reports"), 0)
-    _say(f"demo finished in {time.perf_counter() - t0:.1f} s; open {steps[-1].paths[-2]} in a browser")
+    say(f"demo finished in {time.perf_counter() - t0:.1f} s; open {steps[-1].paths[-2]} in a browser")
     return 0 if not failed else 1

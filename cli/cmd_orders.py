@@ -7,6 +7,7 @@ SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
 from __future__ import annotations
 
 import argparse
+import contextlib
 
 import numpy as np
 from rich.table import Table
@@ -22,6 +23,7 @@ from .common import (
     add_order_rule,
     add_rgl_incident,
     brdf_help,
+    in_cli_terms,
     load_env_arg,
     order_rule,
     print_json,
@@ -52,7 +54,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     brdf = load_brdf(rgl_brdf_arg(args.brdf, args))
-    with stderr.status(f"choosing orders for {brdf.name} ...", spinner="dots") if not args.json else _null():
+    busy = contextlib.nullcontext() if args.json else stderr.status(f"choosing orders for {brdf.name} ...",
+                                                                    spinner="dots")
+    with busy:
         orders = choose_orders(brdf, eps=args.eps, max_F=args.max_F, max_P=args.max_P, **order_rule(args))
     doc = {
         "brdf": brdf.name,
@@ -88,14 +92,6 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-class _null:
-    def __enter__(self) -> None:
-        return None
-
-    def __exit__(self, *exc: object) -> None:
-        return None
-
-
 def _print_tables(doc: dict, table: np.ndarray) -> None:
     rule = ("every view band to " f"{doc['max_view_deg']:g}°" if doc["criterion"] == "bands" else "RH02, all views")
     summary = Table(title=f"orders for {doc['brdf']} at eps = {doc['tolerance']:g} ({rule})")
@@ -128,7 +124,7 @@ def _print_tables(doc: dict, table: np.ndarray) -> None:
             print_view_bands(doc["scene_view_bands"], f"reflected field by view band at (F_B, P_B) = "
                              f"({doc['F_B']}, {doc['P_B']}), exact lookup")
     if doc["message"]:
-        stdout.print(f"[yellow]note:[/yellow] {doc['message']}")
+        stdout.print(f"[yellow]note:[/yellow] {in_cli_terms(doc['message'])}")
     F, P = doc["F"], doc["P"]
     rows = sorted(set(np.unique(np.linspace(0, min(table.shape[0] - 1, max(2 * F, 8)), 9).astype(int))) | {F})
     cols = list(range(min(table.shape[1], max(P + 3, 5))))

@@ -26,6 +26,7 @@ from .common import (
     add_pixel_rule_option,
     add_rgl_incident,
     add_window_option,
+    in_cli_terms,
     load_env_arg,
     order_rule,
     print_json,
@@ -123,8 +124,8 @@ def run(args: argparse.Namespace) -> int:
                  markup=False, soft_wrap=True)
     if shrm.meta.get("capped"):
         stdout.print(f"[yellow]capped:[/yellow] eps {shrm.tolerance:g} is not met in every view band inside the "
-                     f"limit ({', '.join(shrm.meta['capped_by'])})", soft_wrap=True)
+                     f"limit ({in_cli_terms(', '.join(shrm.meta['capped_by']))})", soft_wrap=True)
     if shrm.meta.get("orders_message"):
-        stdout.print(f"[yellow]note:[/yellow] {shrm.meta['orders_message']}")
+        stdout.print(f"[yellow]note:[/yellow] {in_cli_terms(shrm.meta['orders_message'])}")
     stdout.print(f"wrote {out}")
     return 0

@@ -43,6 +43,7 @@ from .common import (
     load_env_sequence,
     order_rule,
     rgl_brdf_arg,
+    say,
 )
 
 HELP = "render a mesh shaded by the SHRM of ENV and BRDF to PNG (and linear EXR), offscreen"
@@ -178,22 +179,22 @@ def _validate(args: argparse.Namespace, sequence: bool = False) -> tuple[list[Ca
 
 def _report(args: argparse.Namespace, result: SceneRender) -> None:
     timings = result.timings
-    print(f"mesh {result.mesh.name}: {result.mesh.n_triangles} triangles")
+    say(f"mesh {result.mesh.name}: {result.mesh.n_triangles} triangles")
     for line in result.built.description:
-        print(line)
+        say(line)
     skipped = "".join(f"; {name} skipped: {why}" for name, why in skipped_window_classes()
                       if name != timings.backend)
-    print(f"renderer: {timings.backend}, mode {result.mode}, {args.size}x{args.size}, {args.camera}{skipped}")
-    print(f"first frame: {timings.first_frame_s:.3f} s")
+    say(f"renderer: {timings.backend}, mode {result.mode}, {args.size}x{args.size}, {args.camera}{skipped}")
+    say(f"first frame: {timings.first_frame_s:.3f} s")
     if timings.fps_frames:
-        print(f"frames per second: {timings.fps:.1f} (over {timings.fps_frames} frames)")
+        say(f"frames per second: {timings.fps:.1f} (over {timings.fps_frames} frames)")
     if args.light_turntable:
         built = _build_seconds(result.built.info)
         again = "" if built is None else (
             f"; built once in {built:.3f} s = {built / timings.later_frame_s:.3g} frames "
             f"(building anew per frame would cost {args.light_turntable * built:.3f} s)")
-        print(f"light turntable: {args.light_turntable} frames, {1e3 * timings.later_frame_s:.1f} ms per frame "
-              f"after the first (view-time rotation, per-frame map, draw, readback, background){again}")
+        say(f"light turntable: {args.light_turntable} frames, {1e3 * timings.later_frame_s:.1f} ms per frame "
+            f"after the first (view-time rotation, per-frame map, draw, readback, background){again}")
 
 
 def _build_seconds(info: dict) -> float | None:
@@ -221,12 +222,12 @@ def _stated_error(info: dict) -> str:
 def _report_sequence(args: argparse.Namespace, seq: SequenceRender) -> None:
     """Per map: its prefilter cost beside the error stated for it; then the sequence's totals."""
     first = seq.renders[0]
-    print(f"mesh {first.mesh.name}: {first.mesh.n_triangles} triangles")
-    print(f"renderer: {first.timings.backend}, mode {first.mode}, {args.size}x{args.size}, {args.camera}")
+    say(f"mesh {first.mesh.name}: {first.mesh.n_triangles} triangles")
+    say(f"renderer: {first.timings.backend}, mode {first.mode}, {args.size}x{args.size}, {args.camera}")
     n = len(seq.renders)
     if seq.orders is not None:
-        print(f"orders: F={seq.orders.F} P={seq.orders.P} of the BRDF chosen once in {seq.orders_seconds:.3f} s "
-              f"for {n} maps")
+        say(f"orders: F={seq.orders.F} P={seq.orders.P} of the BRDF chosen once in {seq.orders_seconds:.3f} s "
+            f"for {n} maps")
     builds = []
     for k, (result, name, seconds) in enumerate(zip(seq.renders, seq.environments, seq.frame_seconds, strict=True)):
         info = result.built.info
@@ -236,14 +237,14 @@ def _report_sequence(args: argparse.Namespace, seq: SequenceRender) -> None:
                  else result.built.description[0])
         cost = "" if built is None else f"prefilter {built:.3f} s, "
         lights = (info.get("lights") or {}).get("count", 0)
-        print(f"frame {k:04d} {name}: {model}, {cost}"
-              f"{_stated_error(info)}{f', {lights} light(s)' if lights else ''}; frame total {seconds:.3f} s")
+        say(f"frame {k:04d} {name}: {model}, {cost}"
+            f"{_stated_error(info)}{f', {lights} light(s)' if lights else ''}; frame total {seconds:.3f} s")
     known = [b for b in builds if b is not None]
     if known:
         mean = sum(known) / len(known)
-        print(f"environment sequence: {n} maps, prefilter {mean:.3f} s per map (min {min(known):.3f}, max "
-              f"{max(known):.3f}), {sum(seq.frame_seconds) / n:.3f} s per frame with the render"
-              + ("" if seq.orders is None else f"; the order choice ({seq.orders_seconds:.3f} s) paid once"))
+        say(f"environment sequence: {n} maps, prefilter {mean:.3f} s per map (min {min(known):.3f}, max "
+            f"{max(known):.3f}), {sum(seq.frame_seconds) / n:.3f} s per frame with the render"
+            + ("" if seq.orders is None else f"; the order choice ({seq.orders_seconds:.3f} s) paid once"))
 
 
 def _write(args: argparse.Namespace, frames: list[Frame], n_frames: int | None = None) -> None:
@@ -266,15 +267,15 @@ def _write(args: argparse.Namespace, frames: list[Frame], n_frames: int | None =
                 for frame, tmp in zip(frames, exr_temps, strict=True):
                     write_exr(tmp, frame.linear, frame.alpha, atomic=False)
             write_gif(gif_temp, images, atomic=False)
-        print(f"wrote {pngs[0]} ... {pngs[-1]} and {gif}")
+        say(f"wrote {pngs[0]} ... {pngs[-1]} and {gif}")
     else:
         with atomic_paths([args.output, *([args.exr] if args.exr else [])]) as temps:
             write_png(temps[0], png(frames[0]), atomic=False)
             if args.exr:
                 write_exr(temps[1], frames[0].linear, frames[0].alpha, atomic=False)
-        print(f"wrote {args.output}")
+        say(f"wrote {args.output}")
         if args.exr:
-            print(f"wrote {args.exr} (linear radiance, channels R G B A)")
+            say(f"wrote {args.exr} (linear radiance, channels R G B A)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -301,5 +302,5 @@ def run(args: argparse.Namespace) -> int:
     errors = error_image(result) if args.error_image else None  # computed before any file is written
     _write(args, result.frames)
     if errors is not None:
-        print(write_error_image_line(args.error_image, errors))
+        say(write_error_image_line(args.error_image, errors))
     return 0

@@ -40,6 +40,7 @@ from .common import (
     number_in,
     order_rule,
     rgl_brdf_arg,
+    say,
     tolerance,
 )
 
@@ -118,17 +119,17 @@ def run(args: argparse.Namespace) -> int:
     for one, env in zip(shrms, envs, strict=True):
         worst = max((band["predicted_rel_rms"] for band in one.meta["view_bands"] if band["inside"]), default=0.0)
         lights = len(one.meta["lights"])
-        print(("" if len(shrms) == 1 else f"{env.name}: ")
-              + f"SHRM F={one.F} P={one.P} on {one.height}x{one.width} (eps {args.eps:g}: predicted relative RMS "
-              f"{worst:.3g} in the worst view band to {one.meta['max_view_deg']:g} degrees)"
-              + (f", {lights} light(s) shaded exactly" if lights else ""))
-    print(f"page: P={s['P']}, maps {s['height']}x{s['width']}, mesh {mesh['name']} {mesh['triangles']} triangles, "
-          f"still image: {page.still_renderer}"
-          + ("" if len(shrms) == 1 else f", {len(shrms)} environments (switched in the page, #env_index=K)"))
+        say(("" if len(shrms) == 1 else f"{env.name}: ")
+            + f"SHRM F={one.F} P={one.P} on {one.height}x{one.width} (eps {args.eps:g}: predicted relative RMS "
+            f"{worst:.3g} in the worst view band to {one.meta['max_view_deg']:g} degrees)"
+            + (f", {lights} light(s) shaded exactly" if lights else ""))
+    say(f"page: P={s['P']}, maps {s['height']}x{s['width']}, mesh {mesh['name']} {mesh['triangles']} triangles, "
+        f"still image: {page.still_renderer}"
+        + ("" if len(shrms) == 1 else f", {len(shrms)} environments (switched in the page, #env_index=K)"))
     for note in page.notes:
-        print(f"note: {note}")
-    print(f"wrote {out} ({len(text.encode('utf-8')) / 2**20:.2f} MiB of {budget.page_bytes / 2**20:g} MiB); open it "
-          f"in a browser, e.g. {out.resolve().as_uri()}#azimuth={args.azimuth:g}&elevation={args.elevation:g}"
-          + ("" if args.env_rotation is None else f"&env_azimuth={rotation[0]:g}&env_elevation={rotation[1]:g}"
-             + (f"&env_roll={rotation[2]:g}" if rotation[2] else "")))
+        say(f"note: {note}")
+    say(f"wrote {out} ({len(text.encode('utf-8')) / 2**20:.2f} MiB of {budget.page_bytes / 2**20:g} MiB); open it "
+        f"in a browser, e.g. {out.resolve().as_uri()}#azimuth={args.azimuth:g}&elevation={args.elevation:g}"
+        + ("" if args.env_rotation is None else f"&env_azimuth={rotation[0]:g}&env_elevation={rotation[1]:g}"
+           + (f"&env_roll={rotation[2]:g}" if rotation[2] else "")))
     return 0

@@ -28,6 +28,8 @@ from ..brdf_io.rgl import RGL_INCIDENT
 from ..brdf_io.specs import BRDF_FILE_TYPES
 
 __all__ = [
+    "say",
+    "in_cli_terms",
     "brdf_help",
     "add_env_orientation",
     "add_window_option",
@@ -178,6 +180,24 @@ def add_lights_option(parser: argparse.ArgumentParser) -> None:
         f"{LIGHT_CONTRAST:g}x brighter than the map's median within a {MAX_LIGHT_RADIUS_DEG:g} degree cap, at most "
         f"{MAX_LIGHTS}); N: at most N; none: keep them in the map (they ring)",
     )
+
+
+def say(text: str) -> None:
+    """One line of plain text on :data:`stdout`, as ``print`` writes it (no markup, highlighting,
+    emoji codes or wrapping)."""
+    stdout.print(text, soft_wrap=True, markup=False, highlight=False, emoji=False)
+
+
+#: The library's names of the limits a message may advise raising, and the options that set them.
+_OPTION_OF = (("max_F/max_P", "--max-F/--max-P"),)
+
+
+def in_cli_terms(text: str) -> str:
+    """A library message (which names the API's parameters, ``max_F/max_P``) as the command line
+    says it (the options that set them, ``--max-F/--max-P``)."""
+    for name, option in _OPTION_OF:
+        text = text.replace(name, option)
+    return text
 
 
 def brdf_help(*, many: bool = False) -> str:

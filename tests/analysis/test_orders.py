@@ -139,6 +139,8 @@ def test_cap_on_F_below_cap_on_P_is_reported_not_a_crash():
     o = shrmkit.choose_orders(shrmkit.load_brdf("phong:s=32"), eps=0.03, max_F=8)
     assert o.capped and o.F == 8 and "not met" in o.message
     assert np.all(np.isfinite(o.table))
+    # a library message names the parameters to raise, not the command line's options
+    assert "raise max_F/max_P" in o.message and "--max" not in o.message
 
 
 def test_lobe_sharper_than_the_first_grid_is_not_called_zero():

@@ -56,6 +56,13 @@ def test_orders_table_output(capsys):
     assert "eps(F, P)" in out and "orders for microfacet:sigma=0.4" in out
 
 
+def test_capped_note_names_the_options(capsys):
+    """The library's advice ("raise max_F/max_P") is printed with the options that set the caps."""
+    assert main(["orders", "phong:s=32", "--max-F", "8"]) == 0
+    out = capsys.readouterr().out
+    assert "raise --max-F/--max-P" in out and "max_F" not in out
+
+
 def test_bad_input_exit_2_one_line(capsys, run_main):
     for args in (["orders", "nosuch:a=1"], ["orders", "phong:s=8", "--eps", "2"], ["orders", "/no/file.binary"]):
         code, err = run_main(*args)
