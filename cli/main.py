@@ -18,9 +18,12 @@ from __future__ import annotations
 
 import argparse
 import ast
+import difflib
 import importlib
 import pkgutil
+import re
 import sys
+import warnings
 from pathlib import Path
 
 from .._version import __version__
@@ -63,7 +66,33 @@ def _help(verb: str) -> str:
     return _module(verb).HELP
 
 
-class _VerbParser(argparse.ArgumentParser):
+class _Parser(argparse.ArgumentParser):
+    """argparse with "did you mean" for a misspelt verb or option (Python 3.14's
+    ``suggest_on_error``, for the Pythons we support)."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        choice = re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message)
+        if choice:
+            close = difflib.get_close_matches(choice.group(1), re.findall(r"'([^']*)'", choice.group(2)), n=1)
+            if close:
+                message += f"; did you mean '{close[0]}'?"
+        unknown = re.search(r"unrecognized arguments: (.*)", message)
+        if unknown:
+            options = [o for action in self._actions for o in action.option_strings]
+            hints = [f"'{word}' → '{close[0]}'" for word in unknown.group(1).split() if word.startswith("--")
+                     for close in [difflib.get_close_matches(word.split("=")[0], options, n=1)] if close]
+            if hints:
+                message += f" (did you mean {', '.join(hints)}?)"
+        if "arguments are required" in message and any(
+                a.nargs in ("+", "*") and a.option_strings for a in self._actions):
+            greedy = sorted(o for a in self._actions if a.nargs in ("+", "*") for o in a.option_strings
+                            if o.startswith("--"))
+            verb = "takes every value after it" if len(greedy) == 1 else "take every value after them"
+            message += f" ({'/'.join(greedy)} {verb}: give the positional arguments first, or end the list with --)"
+        super().error(message)
+
+
+class _VerbParser(_Parser):
     """The parser of one verb: its module is imported and its arguments added on first use
     (when the verb is parsed, or by :meth:`load`)."""
 
@@ -83,7 +112,7 @@ class _VerbParser(argparse.ArgumentParser):
 
 
 def _parser(lazy: bool) -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="shrm",
         description="Measured-BRDF toolkit: frequency-space orders (RH02), fits, SHRM rendering.",
     )
@@ -118,9 +147,23 @@ def shorten(text: str, limit: int = MAX_MESSAGE_CHARS) -> str:
     return f"{head} … ({len(text) - len(head) - len(tail):,} characters left out) … {tail}"
 
 
+def _one_line_warnings(verb: str) -> None:
+    """Python warnings reach a CLI user as one plain line, ``shrm VERB: warning: …`` (no source
+    file and line of the library that raised them)."""
+    def show(message, category, filename, lineno, file=None, line=None) -> None:  # noqa: ANN001
+        print(f"shrm {verb}: warning: {shorten(str(message))}", file=file or sys.stderr)
+
+    warnings.showwarning = show
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = _parser(lazy=True)
-    args = parser.parse_args(argv)
+    args, extra = parser.parse_known_args(argv)
+    if extra:  # reported by the verb's parser, which knows the verb's options ("did you mean")
+        verbs = next((a.choices for a in parser._actions if isinstance(a, argparse._SubParsersAction)), {})
+        (verbs.get(getattr(args, "verb", None)) or parser).error(f"unrecognized arguments: {' '.join(extra)}")
+    if getattr(args, "verb", None):
+        _one_line_warnings(args.verb)
     if not getattr(args, "_run", None):
         parser.print_help()
         return 0

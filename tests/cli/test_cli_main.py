@@ -128,3 +128,38 @@ def test_unwritable_outputs_exit_2_without_traceback(tmp_path):
         assert code == 2, (args, stderr)
         assert "Traceback" not in stderr and stderr.startswith("shrm "), stderr
     assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("argv, hint", [
+    (["ordres", "phong:s=4"], "did you mean 'orders'?"),
+    (["orders", "phong:s=4", "--epss", "0.1"], "did you mean '--epss' → '--eps'?"),
+    (["report", "--env", "builtin:sky", "builtin:studio", "--quick"], "--env takes every value after it"),
+])
+def test_usage_errors_suggest_the_fix(argv, hint, capsys):
+    from shrmkit.cli.main import main
+
+    with pytest.raises(SystemExit) as stop:
+        main(argv)
+    err = capsys.readouterr().err
+    assert stop.value.code == 2 and hint in err and "Traceback" not in err
+
+
+def test_end_of_a_greedy_list_keeps_the_positionals():
+    from shrmkit.cli.main import build_parser
+
+    args = build_parser().parse_args(["report", "--env", "builtin:sky", "builtin:studio", "--", "phong:s=4"])
+    assert args.env == ["builtin:sky", "builtin:studio"] and args.brdfs == ["phong:s=4"]
+
+
+def test_library_warnings_reach_the_user_as_one_line(capsys, monkeypatch):
+    import warnings as warnings_module
+
+    from shrmkit.cli import main as cli_main
+
+    monkeypatch.setattr(warnings_module, "showwarning", warnings_module.showwarning)
+    cli_main._one_line_warnings("orders")
+    with warnings_module.catch_warnings():
+        warnings_module.simplefilter("always")
+        warnings_module.warn("a library's message\nover two lines", UserWarning, stacklevel=1)
+    err = capsys.readouterr().err
+    assert err == "shrm orders: warning: a library's message over two lines\n"
