@@ -289,10 +289,23 @@ def _prefiltered(
             "pixel_errors": shrm.meta["pixel_errors"], "pixel_rule": shrm.meta["pixel_rule"], "lights": light_info}
     meta = shrm.meta
     used = meta["window"] if meta["window"] == "none" else f"{meta['window']} x{meta['window_strength']:.3g}"
-    lines = (f"SHRM F={shrm.F} P={shrm.P} on {shrm.height}x{shrm.width} (eps {eps:g}, achieved eps_B "
-             f"{shrm.eps['reflected']:.3g})", f"window: {used} ({meta['window_reason']})", pixel_line(meta),
+    lines = (f"SHRM F={shrm.F} P={shrm.P} on {shrm.height}x{shrm.width} ({stated_line(shrm, eps)})",
+             f"window: {used} ({meta['window_reason']})", pixel_line(meta),
              light_line, f"prefilter: {seconds:.3f} s")
     return BuiltModel(shrm, info, lines)
+
+
+def stated_line(shrm: SHRM, eps: float) -> str:
+    """The SHRM's stated error as a user reads it: the worst view band inside the rule's view limit,
+    predicted and bound, as relative RMS radiance errors (the units of a measured error), beside
+    the tolerance and its √ε — not ε_B, an energy fraction over all views that reads like failure."""
+    bands = [b for b in shrm.meta.get("view_bands") or [] if b.get("inside", True)]
+    if not bands:
+        return f"eps {eps:g}, predicted eps_B {shrm.eps['reflected']:.3g} over all views"
+    worst = max(bands, key=lambda b: b["bound_rel_rms"])
+    predicted = max(b["predicted_rel_rms"] for b in bands)
+    return (f"eps {eps:g}: worst view band to {shrm.meta['max_view_deg']:g} deg, relative RMS predicted "
+            f"{predicted:.3g}, bound {worst['bound_rel_rms']:.3g}; sqrt(eps) {eps ** 0.5:.3g}")
 
 
 def build_shrm(env: EnvironmentMap, brdf: BRDF, mesh: Mesh, *, eps: float, options: RenderOptions) -> BuiltModel:
