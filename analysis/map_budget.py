@@ -134,7 +134,7 @@ def assess_map(
             note = (f"bounds uninformative in {len(flagged)} view band(s) inside the limit: the {rows}-row map's "
                     f"lookup adds up to {worst_cost:.3g} to the bound (prediction's map term {worst_map:.3g}); without "
                     f"lookup error the worst bound is {worst_exact:.3g}; {need} rows ({bytes_need / 2**20:.0f} MiB, "
-                    f"budget {budget_bytes / 2**20:.0f} MiB) would meet eps (size= or a larger budget)")
+                    f"budget {budget_bytes / 2**20:.3g} MiB) would meet eps (size= or a larger budget)")
         elif flagged:
             note = (f"bounds uninformative in {len(flagged)} view band(s) inside the limit, not because of the "
                     f"map's size ({rows} rows; without lookup error the worst bound is {worst_exact:.3g})")

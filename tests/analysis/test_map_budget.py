@@ -52,35 +52,48 @@ def test_flags_and_costs_on_hand_made_bands():
     assert quiet.note == "" and quiet.rows_needed is None and quiet.uninformative_bands == []
 
 
+def _measured(env, brdf, shrm, sample, ref) -> list[tuple[dict, dict]]:
+    """(measured, stated) per band of ``sample`` (the statement's band holding the sample's)."""
+    measured = band_error(shrm.radiance(sample.R, sample.V), ref, sample)
+    stated = {tuple(b["theta_v_deg"]): b for b in shrm.meta["view_bands"]}
+    return [(m, stated[tuple(m["theta_v_deg"])]) for m in measured]
+
+
 def test_small_budget_states_its_cost_against_brute_force():
-    """A 0.5 MiB budget holds the map of microfacet σ = 0.1 under a sun kept in the map (64 rows,
-    no explicit lights) far below 10 F.
-    The meta says so (capped_by, map_budget.capped, the rows and bytes that meet ε, beyond the
-    budget); per band inside the limit the bound holds against brute force (3 s.e. of slack), the
-    bound without lookup is below the bound, and the map of the offered size states that bound
-    (within 25 %: the rule's share) and meets it against brute force."""
+    """Microfacet σ = 0.1 under a sun kept in the map (64 rows, no explicit lights), F_B 63, P_B 10.
+
+    - A 4 MiB budget holds the map below 10 F: the meta says so (capped_by, map_budget.capped, the
+      rows and bytes that meet ε, beyond the budget, in orders_message); per band the bound holds
+      against brute force (3 s.e. of slack) and the bound without lookup is below it.
+    - ``size=12``: the lookup's term takes the bound past 1 at grazing views; those bands are
+      flagged uninformative and the note says what the lookup costs and which rows meet ε.
+    - The offered rows: the bound is within 25 % of the bound without lookup (``map_rows``'s
+      share), informative in every band inside the limit, and holds against brute force."""
     env = shrmkit.load_env("builtin:sun,height=64,elevation=35,azimuth=20")
     brdf = shrmkit.load_brdf("microfacet:sigma=0.1")
-    small = prefilter(env, brdf, eps=0.03, budget_bytes=1 << 19, pixel_rule=False, lights="none")
+    small = prefilter(env, brdf, eps=0.03, budget_bytes=4 << 20, pixel_rule=False, lights="none")
     mb = small.meta["map_budget"]
-    assert mb["capped"] and "map budget: 0.5 MiB" in small.meta["capped_by"]
-    assert mb["bytes"] <= 1 << 19 < mb["bytes_needed"] and mb["rows_needed"] > small.height
+    assert mb["capped"] and "map budget: 4 MiB" in small.meta["capped_by"]
+    assert mb["bytes"] <= 4 << 20 < mb["bytes_needed"] and mb["rows_needed"] > small.height
+    assert mb["bytes_needed"] == map_bytes(mb["rows_needed"], small.P)
     assert f"{mb['rows_needed']} rows" in small.meta["orders_message"]
-    sample = band_sample(env.radiance, 24, [0.0, 30.0, 60.0, 80.0], seed=2)
-    ref = reference_radiance(env, brdf, sample.R, sample.V)
+
+    tiny = prefilter(env, brdf, eps=0.03, size=12, pixel_rule=False, lights="none")
+    flagged = tiny.meta["map_budget"]["uninformative_bands"]
+    assert flagged and all(b["bound_rel_rms"] > 1.0 for b in tiny.meta["view_bands"]
+                           if b["theta_v_deg"] in flagged)
+    assert tiny.meta["map_budget"]["map_bound_cost"] > 0.5 > tiny.meta["map_budget"]["bound_without_lookup"]
+    assert "uninformative" in tiny.meta["orders_message"] and f"{mb['rows_needed']} rows" in tiny.meta["orders_message"]
+
     big = prefilter(env, brdf, eps=0.03, size=mb["rows_needed"], pixel_rule=False, lights="none")
-    assert (big.F, big.P) == (small.F, small.P)
+    assert (big.F, big.P) == (small.F, small.P) and big.meta["map_budget"]["uninformative_bands"] == []
+    sample = band_sample(env.radiance, 24, (0.0, 15.0, 30.0, 45.0, 60.0, 70.0, 75.0, 80.0), seed=2)
+    ref = reference_radiance(env, brdf, sample.R, sample.V)
     for shrm in (small, big):
-        measured = band_error(shrm.radiance(sample.R, sample.V), ref, sample)
-        stated = {tuple(b["theta_v_deg"]): b for b in shrm.meta["view_bands"]}
-        for m in measured:
-            b = stated[tuple(m["theta_v_deg"])] if tuple(m["theta_v_deg"]) in stated else None
-            if b is None:  # the test's 0-30 band spans two of the statement's: take the worse
-                b = max((s for k, s in stated.items() if m["theta_v_deg"][0] <= k[0] < m["theta_v_deg"][1]),
-                        key=lambda s: s["bound_rel_rms"])
+        for m, b in _measured(env, brdf, shrm, sample, ref):
             assert m["measured_rel_rms"] <= b["bound_rel_rms"] + 3 * m["stderr"], (shrm.height, m, b)
             assert b["bound_rel_rms_exact_lookup"] <= b["bound_rel_rms"] + 1e-12
     for b_small, b_big in zip(small.meta["view_bands"], big.meta["view_bands"], strict=True):
         if b_small["inside"]:
             assert b_big["bound_rel_rms"] <= 1.25 * b_small["bound_rel_rms_exact_lookup"] + 1e-9
-            assert b_small["map_bound_cost"] > b_big["map_bound_cost"]
+            assert b_small["map_bound_cost"] > b_big["map_bound_cost"] and b_big["bound_informative"]
