@@ -81,7 +81,13 @@ def report_sections(doc: dict[str, Any], image_link: Any = None) -> Iterator[tup
     ``image_link(key, file, alt)`` returns the Markdown (or HTML) of an image; the default
     links ``file`` beside the report.
     """
-    link = image_link or (lambda key, file, alt: f"![{alt}]({file})")
+    image = image_link or (lambda key, file, alt: f"![{alt}]({file})")
+    drawn = doc.get("options", {}).get("plots", True)
+
+    def link(key: str, file: str, alt: str) -> str:
+        """The image, or nothing for a plot that was not drawn (``plots: false``)."""
+        return image(key, file, alt) if drawn or key not in PLOT_TITLES else ""
+
     if doc["status"] != "ok":
         yield "Failed", f"The report of `{doc['source']}` could not be made:\n\n```\n{doc.get('error')}\n```"
         return
@@ -94,7 +100,8 @@ def report_sections(doc: dict[str, Any], image_link: Any = None) -> Iterator[tup
     if fit_lines:
         head.append("Fits (worst view band first): " + "; ".join(fit_lines) + ".")
     head.append(f"Profile `{doc['options']['profile']}`, seed {doc['options']['seed']}, "
-                f"shrmkit {doc['provenance']['shrmkit_version']}; total {fmt(doc.get('total_seconds'))} s.")
+                f"shrmkit {doc['provenance']['shrmkit_version']}; total {fmt(doc.get('total_seconds'))} s."
+                + ("" if drawn else " Plots not drawn (--no-plots): every number is in the tables and report.json."))
     yield "Summary", "\n\n".join(head)
 
     if doc["warnings"]:

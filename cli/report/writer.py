@@ -28,12 +28,14 @@ __all__ = ["report_files", "write_folder", "summary_row", "summary_columns", "wr
 
 def report_files(doc: dict[str, Any], previews: Sequence[Any] = ()) -> dict[str, bytes]:
     """Every file of a report folder: ``report.json``, ``report.md``, ``report.html`` and
-    the PNG plots and previews, as ``{file name: bytes}``.
+    the PNG plots (unless the report's options say ``plots: false``) and previews, as
+    ``{file name: bytes}``.
 
     ``previews`` is what ``collect_report`` returns beside the document: preview images
     (``preview_<key>.png``), ``explorer.ReportImage`` (the lit spheres, under their own file
     name) and ``explorer.LiveView`` (live WebGL2 previews, embedded in ``report.html`` only)."""
-    pngs = {f"plot_{key}.png": data for key, data in make_plots(doc).items()}
+    drawn = make_plots(doc) if doc.get("options", {}).get("plots", True) else {}
+    pngs = {f"plot_{key}.png": data for key, data in drawn.items()}
     views = []
     for p in previews:
         if isinstance(p, LiveView):  # embedded in report.html only
