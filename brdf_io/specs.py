@@ -52,6 +52,8 @@ from .models import (
 from .rgl import RGL_INCIDENT, read_rgl
 from .spec_params import SpecParams, parse_params
 from .table import read_table
+from .zernike import MAX_ORDER as MAX_ZERNIKE_ORDER
+from .zernike import MAX_ZERNIKE_COEFF, ZernikeBRDF, basis_count
 
 __all__ = [
     "parse_spec", "brdf_from_spec", "load_brdf", "brdf_sources", "BRDF_FILE_TYPES", "BrdfFileType", "MODEL_NAMES",
@@ -126,12 +128,25 @@ def _cook_torrance(p: SpecParams) -> BRDF:
     )
 
 
+def _zernike(p: SpecParams) -> BRDF:
+    # brdf_io/zernike.py, "Spec string": n_max, then exactly basis_count(n_max) coefficients c0, c1, ...
+    n_max = p.integer("n_max", None, 0, MAX_ZERNIKE_ORDER)
+    count = basis_count(n_max)
+    extra = sorted(k for k in p.raw if re.fullmatch(r"c\d+", k) and (len(k) > 6 or int(k[1:]) >= count))
+    if extra:
+        raise BadInputError(p.spec, f"order {n_max} has {count} Zernike coefficients c0..c{count - 1}; "
+                            f"got {extra[0]}")
+    coeffs = np.stack([p.color(f"c{a}", None, -MAX_ZERNIKE_COEFF, MAX_ZERNIKE_COEFF) for a in range(count)])
+    return ZernikeBRDF(coeffs, n_max)
+
+
 _MODELS: dict[str, Callable[[SpecParams], BRDF]] = {
     "phong": _phong,
     "microfacet": _microfacet,
     "lambert": _lambert,
     "lafortune": _lafortune,
     "cook-torrance": _cook_torrance,
+    "zernike": _zernike,
 }
 MODEL_NAMES = tuple(_MODELS)
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy.special import roots_legendre
 
-import shrmkit.analysis.fit.zernike as zmod
+import shrmkit.brdf_io.zernike as zmod
 from shrmkit.analysis.fit.sampling import FitSamples
 from shrmkit.analysis.fit.zernike import (
     TERMS_PER_ORDER,
