@@ -33,7 +33,7 @@ pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="re
 
 #: the cheapest reports: no preview, one fit on few samples, one tolerance, 16-row environments
 FAST = ["--quick", "--preview", "none", "--models", "lafortune", "--tolerances", "0.1", "--eps", "0.1",
-        "--pairs", "30", "--fit-samples", "1024", "--env-height", "16", "--no-progress"]
+        "--pairs", "30", "--fit-samples", "1024", "--env-height", "16", "--no-progress", "--no-plots"]
 SPECS = ["phong:s=8", "lambert:albedo=0.5", "phong:s=20"]
 NAMES = ["phong_s_8", "lambert_albedo_0.5", "phong_s_20"]
 #: seconds: a whole batch, a stop, the end of every process (a loaded 2-core machine)
@@ -316,7 +316,7 @@ def test_next_run_removes_the_temporaries_of_a_killed_run(tmp_path, monkeypatch)
     _leftovers(out)
     (out / ".keep").write_text("mine")
     (out / ".notes.tmp").write_text("mine")
-    result = run_batch(["lambert:albedo=0.5"], out, profile("quick", preview="none"))
+    result = run_batch(["lambert:albedo=0.5"], out, profile("quick", preview="none", plots=False))
     assert result.n_failed == 0
     assert sorted(p.name for p in out.iterdir() if p.name.startswith(".")) == [".keep", ".notes.tmp"]
     assert json.loads((out / "gold" / "report.json").read_text()) == {"kept": 1}
@@ -332,9 +332,9 @@ def test_temporaries_of_a_live_run_are_left_alone(tmp_path, monkeypatch):
     fd = os.open(out / ".shrm-report-run.deadbeef.lock", os.O_RDONLY)
     try:
         fcntl.flock(fd, fcntl.LOCK_EX)  # the other run is alive
-        run_batch(["lambert:albedo=0.5"], out, profile("quick", preview="none"))
+        run_batch(["lambert:albedo=0.5"], out, profile("quick", preview="none", plots=False))
         assert sorted(p.name for p in out.iterdir() if p.name.startswith(".")) == before
     finally:
         os.close(fd)
-    run_batch(["lambert:albedo=0.5"], out, profile("quick", preview="none"))
+    run_batch(["lambert:albedo=0.5"], out, profile("quick", preview="none", plots=False))
     assert not [p.name for p in out.iterdir() if p.name.startswith(".")]

@@ -38,14 +38,14 @@ from shrmkit.cli.report.threads import (
 
 CHEAP = ["phong:s=16", "lambert:albedo=0.5", "microfacet:sigma=0.4"]
 FAST = ["--quick", "--preview", "none", "--models", "lafortune", "--tolerances", "0.1", "--eps", "0.1",
-        "--pairs", "30", "--fit-samples", "1024", "--no-progress"]
+        "--pairs", "30", "--fit-samples", "1024", "--no-progress", "--no-plots"]
 
 
 def tiny_options():
     """The options `shrm report CHEAP *FAST` builds (the quick profile's albedo nodes included), so
     that one serial run is the reference of the library's engines and of the command line."""
     return profile("quick", preview="none", models=("lafortune",), tolerances=(0.1,), eps=0.1, n_pairs=30,
-                   fit_samples=1024)
+                   fit_samples=1024, plots=False)
 
 
 def native(report: dict) -> dict:
