@@ -19,6 +19,8 @@ from typing import Literal
 
 import numpy as np
 
+from .notebook import brdf_html, brdf_png
+
 __all__ = ["BRDF", "Kind", "as_directions"]
 
 Kind = Literal["analytic", "tabulated", "scattered"]
@@ -65,6 +67,14 @@ class BRDF(abc.ABC):
         """Cosine-weighted transfer rho(L, V) * max(L_z, 0), shape ``(..., 3)`` (RH02 §3.1)."""
         L, V = as_directions(L, V)
         return self.eval(L, V) * np.maximum(L[..., 2], 0.0)[..., None]
+
+    def _repr_html_(self) -> str:
+        """Notebook card: name, kind, a lit-sphere thumbnail (``brdf_io.notebook``)."""
+        return brdf_html(self)
+
+    def _repr_png_(self) -> bytes | None:
+        """Notebook picture: the lit sphere as PNG (None for scattered measurements)."""
+        return brdf_png(self)
 
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.name!r} ({self.kind})>"

@@ -45,6 +45,7 @@ from .latlong import (
     row_solid_angles,
 )
 from .limits import check_pixels
+from .notebook import env_html, env_png
 from .probe import probe_to_latlong
 
 __all__ = [
@@ -244,6 +245,14 @@ class EnvironmentMap:
         out = np.einsum("ai,ijc,bj->abc", rows, self.radiance.astype(np.float64), cols, optimize=True)
         out = np.maximum(out, 0.0).astype(self.radiance.dtype)  # tiny negative round-off only
         return EnvironmentMap(out, self.name, f"{self.source} [resized to {height}x{width}]")
+
+    def _repr_html_(self) -> str:
+        """Notebook card: tone-mapped thumbnail, size, orientation, dynamic range (``brdf_io.notebook``)."""
+        return env_html(self)
+
+    def _repr_png_(self) -> bytes:
+        """Notebook picture: the tone-mapped lat-long thumbnail as PNG."""
+        return env_png(self)
 
     def rotated_z(self, angle: float) -> EnvironmentMap:
         """Rotate the environment by ``angle`` radians about +z: L'(ω) = L(R_z(−angle) ω).

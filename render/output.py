@@ -9,7 +9,7 @@ Pipeline (data_specs/render_outputs.md):
 3. PNG: scale by 2^exposure, tone map (``srgb``: clip to [0, 1]; ``filmic``: the ACES
    fitted curve of Narkowicz 2015, x(2.51x + 0.03) / (x(2.43x + 0.59) + 0.14)), encode with
    the sRGB transfer function (IEC 61966-2-1), quantize to 8 bits; RGBA when the
-   background is transparent (alpha = coverage).
+   background is transparent (alpha = coverage). Step 3 lives in ``brdf_io.display`` (re-exported here).
 
 All writers are atomic (temporary file in the target folder, then ``os.replace``).
 
@@ -31,6 +31,7 @@ import OpenEXR
 from PIL import Image
 
 from ..brdf_io.atomic import atomic_path
+from ..brdf_io.display import TONE_MAPS, srgb_encode, to_8bit, tone_map  # the one tone mapping, re-exported
 from ..brdf_io.env_rotation import to_map_frame
 from ..brdf_io.latlong import bilinear_lookup
 from .camera import Camera
@@ -47,8 +48,6 @@ __all__ = [
     "write_gif",
     "turntable_paths",
 ]
-
-TONE_MAPS = ("srgb", "filmic")
 
 
 def environment_background(
@@ -71,42 +70,6 @@ def composite(radiance: np.ndarray, alpha: np.ndarray, background: np.ndarray | 
     a = np.asarray(alpha, dtype=np.float32)[..., None]
     bg = np.broadcast_to(np.asarray(background, dtype=np.float32), radiance.shape)
     return (radiance * a + bg * (1.0 - a)).astype(np.float32)
-
-
-def tone_map(linear: np.ndarray, *, exposure: float = 0.0, curve: str = "filmic") -> np.ndarray:
-    """Display-referred values in [0, 1] (before sRGB encoding) from linear radiance.
-
-    Parameters
-    ----------
-    exposure
-        Stops: values are multiplied by 2**exposure first.
-    curve
-        ``"srgb"`` (clip) or ``"filmic"`` (ACES fit, Narkowicz 2015).
-    """
-    if curve not in TONE_MAPS:
-        raise ValueError(f"tone map must be one of {TONE_MAPS}, got {curve!r}")
-    x = np.maximum(np.asarray(linear, dtype=np.float64) * 2.0 ** float(exposure), 0.0)
-    x = np.nan_to_num(x, nan=0.0, posinf=1e30)
-    if curve == "filmic":
-        x = x * (2.51 * x + 0.03) / (x * (2.43 * x + 0.59) + 0.14)
-    return np.clip(x, 0.0, 1.0)
-
-
-def srgb_encode(x: np.ndarray) -> np.ndarray:
-    """sRGB transfer function (IEC 61966-2-1) of values in [0, 1]."""
-    x = np.clip(np.asarray(x, dtype=np.float64), 0.0, 1.0)
-    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1.0 / 2.4) - 0.055)
-
-
-def to_8bit(
-    linear: np.ndarray, alpha: np.ndarray | None = None, *, exposure: float = 0.0, curve: str = "filmic"
-) -> np.ndarray:
-    """uint8 (H, W, 3) or, with ``alpha``, (H, W, 4) display image."""
-    rgb = np.round(srgb_encode(tone_map(linear, exposure=exposure, curve=curve)) * 255.0).astype(np.uint8)
-    if alpha is None:
-        return rgb
-    a = np.round(np.clip(np.asarray(alpha, dtype=np.float64), 0.0, 1.0) * 255.0).astype(np.uint8)
-    return np.concatenate([rgb, a[..., None]], axis=-1)
 
 
 def write_exr(path: str | Path, radiance: np.ndarray, alpha: np.ndarray | None = None, *,
