@@ -34,8 +34,9 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.cm import ScalarMappable
 from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
-from matplotlib.ticker import LogFormatter, NullLocator
+from matplotlib.ticker import LogFormatter, MaxNLocator, NullLocator
 
+from ...brdf_io.colour import REC709_LUMA
 from .shared_state import MATPLOTLIB_LOCK
 
 __all__ = ["PLOT_TITLES", "make_plots", "energy_plot", "accuracy_by_p_plot", "speed_error_plot",
@@ -59,7 +60,6 @@ BELOW_COLOUR = (0.62, 0.62, 0.62, 1.0)
 #: Decades of ρ shown by the explorer's log scales (slice, polar plots), below the largest value.
 _DECADES = 4
 _POLAR_DECADES = 3
-_LUMA = np.array([0.2126, 0.7152, 0.0722])
 _DPI = 100
 
 
@@ -168,8 +168,6 @@ def accuracy_by_p_plot(doc: dict[str, Any]) -> bytes:
     """ε(F, P) against P (log scale: no negative "accuracy" where a low P's error passes 1) at the
     largest tabulated F and at each tolerance's chosen F, with the tolerances as lines; P on
     integer ticks."""
-    from matplotlib.ticker import MaxNLocator
-
     table = np.array(doc["eps_table"]["eps"], dtype=float)
     fig = _figure(5.0, 3.2)
     ax = fig.add_subplot(1, 1, 1)
@@ -221,7 +219,7 @@ def speed_error_plot(doc: dict[str, Any]) -> bytes:
 def _luma(rgb: Any) -> np.ndarray:
     """Luminance of (..., 3) RGB; an empty list (no samples in a slice) gives an empty array."""
     values = np.asarray(rgb, dtype=float)
-    return values.reshape(-1, 3) @ _LUMA if values.size == 0 else values @ _LUMA
+    return values.reshape(-1, 3) @ REC709_LUMA if values.size == 0 else values @ REC709_LUMA
 
 
 def fit_slices_plot(doc: dict[str, Any]) -> bytes:
@@ -361,7 +359,7 @@ def explorer_polar_plot(doc: dict[str, Any]) -> bytes:
     theta = np.radians(np.asarray(p["theta_o_deg"], dtype=float))
 
     def lum(rgb: list) -> np.ndarray:
-        return np.array([np.nan if v is None else float(np.dot(v, _LUMA)) for v in rgb], dtype=float)
+        return np.array([np.nan if v is None else float(np.dot(v, REC709_LUMA)) for v in rgb], dtype=float)
 
     series = [lum(c["measured_rgb"]) for c in curves] + [lum(v) for c in curves for v in c["fitted_rgb"].values()
                                                           if v is not None]
@@ -412,7 +410,7 @@ def explorer_albedo_plot(doc: dict[str, Any]) -> bytes:
     top = 1.0
     for label, rgb, colour in series:
         values = np.asarray(rgb, dtype=float)
-        ax.plot(views, values @ _LUMA, "-", color=colour, lw=1.3, label=label)
+        ax.plot(views, values @ REC709_LUMA, "-", color=colour, lw=1.3, label=label)
         ax.plot(views, values.max(axis=1), ":", color=colour, lw=1)
         top = max(top, float(np.nanmax(values)))
     ax.axhline(1.0, color="crimson", lw=1, ls="--", label="energy conservation")

@@ -82,7 +82,7 @@ def test_report_lists_the_lights(tmp_path: Path) -> None:
     out = tmp_path / "rep"
     assert main(["report", "phong:s=100", "--out", str(out), "--quick", "--preview", "none", "--models", "lafortune",
                  "--tolerances", "0.1", "--eps", "0.1", "--pairs", "30", "--fit-samples", "1024", "--no-progress",
-                 "--env", SUN]) == 0
+                 "--no-plots", "--env", SUN]) == 0
     doc = json.loads((out / "phong_s_100" / "report.json").read_text())
     assert doc["options"]["lights"] == "auto"
     env = doc["environments"][0]

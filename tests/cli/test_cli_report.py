@@ -11,7 +11,7 @@ import pytest
 from shrmkit.cli.main import main
 
 FAST = ["--quick", "--preview", "none", "--models", "lafortune", "--tolerances", "0.1", "--eps", "0.1",
-        "--pairs", "30", "--fit-samples", "1024", "--no-progress"]
+        "--pairs", "30", "--fit-samples", "1024", "--no-progress", "--no-plots"]
 
 
 def test_report_all_ok_exit_0(tmp_path, capsys):

@@ -23,7 +23,8 @@ SUN = "builtin:sun,height=32"
 GOLD = "lafortune:kd=0.02/0.015/0.005,cxy=-1,cz=1,n=300,ks=36/26/10"
 
 REPORT_FAST = ["--quick", "--preview", "none", "--models", "lafortune", "--tolerances", "0.1", "--eps", "0.1",
-               "--pairs", "30", "--fit-samples", "1024", "--no-progress", "--env", SUN, "--lights", "none"]
+               "--pairs", "30", "--fit-samples", "1024", "--no-progress", "--no-plots", "--env", SUN,
+               "--lights", "none"]
 COMPARE_FAST = ["--env", SUN, "--env-height", "16", "--pairs", "100", "--lobes", "none",
                 "--cabral-reference-height", "0", "--lights", "none"]
 
