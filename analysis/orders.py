@@ -45,6 +45,7 @@ from ..brdf_io.errors import BadInputError
 from ..brdf_io.reparam import ReparamBRDF, ReparamGrid, reparameterize
 from ..brdf_io.specs import load_brdf
 from .brdf_coeffs import BRDFCoefficients, rho_lpq
+from .notebook import order_choice_html
 from .threads import single_threaded_blas
 from .tolerance import DEFAULT_EPS, check_eps
 from .view_bands import (
@@ -140,6 +141,8 @@ class OrderChoice:
     criterion: str = DEFAULT_CRITERION
     max_view_deg: float = DEFAULT_MAX_VIEW_DEG
     source: _GridData | None = field(default=None, repr=False)
+
+    _repr_html_ = order_choice_html  # notebook card (analysis.notebook)
 
     @property
     def F0(self) -> int:

@@ -31,6 +31,7 @@ from ..brdf_io.latlong import bilinear_lookup
 from ..brdf_io.specs import load_brdf
 from .lights import DEFAULT_LIGHTS, LightSet, check_lights, extract_lights, merge_error_by_band
 from .map_budget import assess_map
+from .notebook import shrm_html, shrm_png
 from .orders import (
     DEFAULT_MAX_F,
     DEFAULT_MAX_P,
@@ -154,6 +155,9 @@ class SHRM:
             self.cube.ndim != 5 or self.cube.shape[:2] != (n, 6) or self.cube.shape[2] != self.cube.shape[3]
         ):
             raise ValueError(f"cube must have shape ({n}, 6, S, S, 3), got {self.cube.shape}")
+
+    _repr_html_ = shrm_html  # notebook card and picture (analysis.notebook)
+    _repr_png_ = shrm_png
 
     @property
     def height(self) -> int:
