@@ -31,6 +31,7 @@ from ..brdf_io.specs import load_brdf
 from .camera import Camera
 from .mesh import Mesh, load_mesh
 from .modes import DEFAULT_MODE, BuiltModel, RenderOptions, get_mode, self_shadow_modes
+from .notebook import scene_render_html, scene_render_png, sequence_render_html
 from .pipeline import BACKGROUNDS, Frame, FrameTimings, render_frames
 
 __all__ = ["render_scene", "SceneRender", "render_sequence", "SequenceRender", "SIZE_RANGE"]
@@ -69,6 +70,9 @@ class SceneRender:
     frames: list[Frame]
     timings: FrameTimings
     size: int
+
+    _repr_html_ = scene_render_html  # notebook card and picture (render.notebook)
+    _repr_png_ = scene_render_png
 
     @property
     def model(self) -> Any:
@@ -209,6 +213,8 @@ class SequenceRender:
     orders: OrderChoice | None
     orders_seconds: float
     frame_seconds: tuple[float, ...]
+
+    _repr_html_ = sequence_render_html  # notebook card (render.notebook)
 
     @property
     def frames(self) -> list[Frame]:
