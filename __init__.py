@@ -8,6 +8,7 @@ Public API (see README)::
     o = shrmkit.choose_orders(brdf, eps=0.03)          # o.F, o.P, o.eps, o.table
     m = shrmkit.prefilter(env, brdf, eps=0.03)         # an SHRM
     rgb = m.radiance(R, V)
+    r = shrmkit.report(brdf, out="reports", profile="quick")  # one BRDF's report (shrm report)
 
 Names are imported on first use so that ``import shrmkit`` and the CLI start fast.
 """
@@ -34,6 +35,7 @@ _LAZY = {
     "render_scene": "shrmkit.render.api",
     "render_sequence": "shrmkit.render.api",
     "SHRMRenderer": "shrmkit.render.vtk_renderer",
+    "report": "shrmkit.cli.report.api",
 }
 
 __all__ = ["__version__", *_LAZY]

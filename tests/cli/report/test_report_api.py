@@ -1,0 +1,36 @@
+"""``shrmkit.report``: the Python entry point makes the report ``shrm report`` makes, returns it,
+and writes the folder on request; its notebook card shows the key numbers."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+import shrmkit
+from shrmkit.brdf_io.errors import BadInputError
+
+QUICK = dict(profile="quick", models=(), preview="none", tolerances=(0.1,), n_pairs=40, plots=False,
+             albedo_nodes=16)
+
+
+def test_report_returns_the_document_and_writes_the_folder(tmp_path: Path) -> None:
+    """Reference: the orders of the document are choose_orders' own at the main tolerance."""
+    brdf = shrmkit.load_brdf("phong:s=30")  # a loaded model is reloaded from its spec
+    r = shrmkit.report(brdf, out=tmp_path, **QUICK)
+    assert r.doc["status"] == "ok" and r.folder == tmp_path / brdf.name
+    choice = shrmkit.choose_orders("phong:s=30", eps=r.doc["main"]["tolerance"], max_F=96)
+    assert (r.doc["main"]["F"], r.doc["main"]["P"]) == (choice.F, choice.P)
+    on_disk = json.loads((r.folder / "report.json").read_text(encoding="utf-8"))
+    assert on_disk["main"] == r.doc["main"]
+    assert {"report.md", "report.html"} <= {p.name for p in r.folder.iterdir()}
+    assert r.summary()["F@0.03"] == choice.F
+    html = r._repr_html_()
+    row = r.doc["speed_vs_error"][-1]
+    assert f"measured {row['measured_rel_rms']:.3g}" in html and "# BRDF report" in html
+
+
+def test_report_refuses_unknown_options() -> None:
+    with pytest.raises(BadInputError, match="no_such_option"):
+        shrmkit.report("phong:s=30", no_such_option=1)
