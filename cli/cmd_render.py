@@ -9,10 +9,12 @@ the PNG/EXR/GIF files. The modes and their help come from the render-mode table
 from __future__ import annotations
 
 import argparse
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
+from ..analysis.notebook import stated_band
 from ..analysis.tolerance import DEFAULT_EPS, check_eps
 from ..brdf_io.atomic import atomic_paths, check_writable
 from ..brdf_io.errors import BadInputError
@@ -42,6 +44,7 @@ from .common import (
     load_env_arg,
     load_env_sequence,
     order_rule,
+    print_json,
     rgl_brdf_arg,
     say,
 )
@@ -127,6 +130,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_rgl_incident(p)
     p.add_argument("--exr", help="also write linear radiance (before tone mapping) to this EXR")
     p.add_argument("--error-image", metavar="PATH", help=ERROR_IMAGE_HELP)
+    p.add_argument("--json", action="store_true",
+                   help="print one JSON object (orders, stated errors, timings, files written; "
+                   "data_specs/render_outputs.md) instead of the text lines")
 
 
 def _validate(args: argparse.Namespace, sequence: bool = False) -> tuple[list[Camera], RenderOptions]:
@@ -247,7 +253,8 @@ def _report_sequence(args: argparse.Namespace, seq: SequenceRender) -> None:
             + ("" if seq.orders is None else f"; the order choice ({seq.orders_seconds:.3f} s) paid once"))
 
 
-def _write(args: argparse.Namespace, frames: list[Frame], n_frames: int | None = None) -> None:
+def _write(args: argparse.Namespace, frames: list[Frame], n_frames: int | None = None) -> list[str]:
+    """Write the PNG (and EXR, GIF) files; print a line per output unless ``--json``; return the paths."""
     def png(frame: Frame) -> np.ndarray:
         alpha = frame.alpha if frame.transparent else None
         return to_8bit(frame.linear, alpha, exposure=args.exposure, curve=args.tone)
@@ -267,15 +274,63 @@ def _write(args: argparse.Namespace, frames: list[Frame], n_frames: int | None =
                 for frame, tmp in zip(frames, exr_temps, strict=True):
                     write_exr(tmp, frame.linear, frame.alpha, atomic=False)
             write_gif(gif_temp, images, atomic=False)
-        say(f"wrote {pngs[0]} ... {pngs[-1]} and {gif}")
-    else:
-        with atomic_paths([args.output, *([args.exr] if args.exr else [])]) as temps:
-            write_png(temps[0], png(frames[0]), atomic=False)
-            if args.exr:
-                write_exr(temps[1], frames[0].linear, frames[0].alpha, atomic=False)
+        if not args.json:
+            say(f"wrote {pngs[0]} ... {pngs[-1]} and {gif}")
+        return [str(p) for p in (*pngs, *exrs, gif)]
+    with atomic_paths([args.output, *([args.exr] if args.exr else [])]) as temps:
+        write_png(temps[0], png(frames[0]), atomic=False)
+        if args.exr:
+            write_exr(temps[1], frames[0].linear, frames[0].alpha, atomic=False)
+    if not args.json:
         say(f"wrote {args.output}")
         if args.exr:
             say(f"wrote {args.exr} (linear radiance, channels R G B A)")
+    return [str(args.output), *([str(args.exr)] if args.exr else [])]
+
+
+def _model_record(info: dict, description: Sequence[str]) -> dict:
+    """The JSON record of a built model: the SHRM's orders, map size, stated error (the worst view
+    band inside the limit, and every band), window, lights, build seconds; other modes' ``info``."""
+    if "F" not in info:
+        return {"description": list(description), "info": info, "build_seconds": _build_seconds(info)}
+    bands = info.get("view_bands") or []
+    return {
+        "F": info["F"], "P": info["P"], "height": info["height"], "width": info["width"], "eps": info["eps"],
+        "criterion": info.get("criterion"), "max_view_deg": info.get("max_view_deg"),
+        "stated_error": stated_band({"view_bands": bands}), "view_bands": bands,
+        "pixel_errors": info.get("pixel_errors"), "window": info.get("window"),
+        "lights": (info.get("lights") or {}).get("count", 0), "build_seconds": _build_seconds(info),
+        "description": list(description),
+    }
+
+
+def _timings_record(timings) -> dict:
+    return {"backend": timings.backend, "first_frame_s": timings.first_frame_s, "fps": timings.fps,
+            "fps_frames": timings.fps_frames, "frame_seconds": list(timings.frame_seconds)}
+
+
+def _scene_doc(args: argparse.Namespace, result: SceneRender, outputs: list[str]) -> dict:
+    """``shrm render --json`` of one environment (data_specs/render_outputs.md)."""
+    return {
+        "mesh": result.mesh.name, "triangles": result.mesh.n_triangles, "mode": result.mode,
+        "size": result.size, "camera": args.camera, "frames": len(result.frames),
+        "model": _model_record(result.built.info, result.built.description),
+        "timings": _timings_record(result.timings), "outputs": outputs,
+    }
+
+
+def _sequence_doc(args: argparse.Namespace, seq: SequenceRender, outputs: list[str]) -> dict:
+    """``shrm render --json`` of an environment sequence (data_specs/render_outputs.md)."""
+    first = seq.renders[0]
+    orders = None if seq.orders is None else {"F": seq.orders.F, "P": seq.orders.P, "seconds": seq.orders_seconds}
+    return {
+        "mesh": first.mesh.name, "triangles": first.mesh.n_triangles, "mode": first.mode, "size": first.size,
+        "camera": args.camera, "orders": orders,
+        "sequence": [{"environment": name, "model": _model_record(r.built.info, r.built.description),
+                      "timings": _timings_record(r.timings), "frame_seconds": seconds}
+                     for r, name, seconds in zip(seq.renders, seq.environments, seq.frame_seconds, strict=True)],
+        "outputs": outputs,
+    }
 
 
 def run(args: argparse.Namespace) -> int:
@@ -290,17 +345,30 @@ def run(args: argparse.Namespace) -> int:
         seq = render_sequence(mesh, maps, rgl_brdf_arg(args.brdf, args), mode=args.mode, eps=args.eps,
                               camera=cameras[0], size=args.size, background=args.background,
                               fps_frames=0, options=options)
-        _report_sequence(args, seq)
-        _write(args, seq.frames, len(seq.frames))
+        if not args.json:
+            _report_sequence(args, seq)
+        outputs = _write(args, seq.frames, len(seq.frames))
+        if args.json:
+            print_json(_sequence_doc(args, seq, outputs))
         return 0
     env = load_env_arg(sources[0], args)
     result = render_scene(
         mesh, env, rgl_brdf_arg(args.brdf, args), mode=args.mode, eps=args.eps, camera=cameras, size=args.size,
         background=args.background, fps_frames=args.fps_frames, options=options,
     )
-    _report(args, result)
+    if not args.json:
+        _report(args, result)
     errors = error_image(result) if args.error_image else None  # computed before any file is written
-    _write(args, result.frames)
+    outputs = _write(args, result.frames)
     if errors is not None:
-        say(write_error_image_line(args.error_image, errors))
+        line = write_error_image_line(args.error_image, errors)
+        outputs.append(str(args.error_image))
+        if not args.json:
+            say(line)
+    if args.json:
+        doc = _scene_doc(args, result, outputs)
+        doc["environment"] = env.name
+        if errors is not None:
+            doc["error_image"] = errors.summary()
+        print_json(doc)
     return 0

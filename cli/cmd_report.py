@@ -32,6 +32,7 @@ from .common import (
     add_rgl_incident,
     add_window_option,
     brdf_help,
+    print_json,
     rgl_brdf_arg,
     stderr,
     stdout,
@@ -118,6 +119,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--fit-samples", type=_int_in(1, MAX_FIT_SAMPLES, "about 0.4 GiB of samples"), default=None,
                    help="fit samples (default 16384, quick 4096; at most 4,194,304)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--json", action="store_true",
+                   help="print one JSON object (the summary rows, as summary.csv holds them; "
+                   "data_specs/report_json.md)"
+                   " instead of the text lines; no progress bar")
     p.add_argument("--no-plots", action="store_true",
                    help="leave out the matplotlib plots (every number stays in report.json and the tables): "
                    "about 3x faster quick reports, for a census of a large library")
@@ -186,12 +191,18 @@ def run(args: argparse.Namespace) -> int:
     try:
         with _signals_stop_the_batch():
             result = run_with_progress(sources, args.out, options, workers=args.workers,
-                                       scheduler=args.dask_scheduler, show=not args.no_progress)
+                                       scheduler=args.dask_scheduler, show=not (args.no_progress or args.json))
     except BatchInterrupted as stop:
         stderr.print(f"shrm report: interrupted ({stop.signal_name}): {stop.written} of {stop.total} reports written "
                      f"to {stop.out_dir or args.out}; rerun to make the rest", soft_wrap=True, markup=False,
                      highlight=False)
         return stop.exit_status
+    if args.json:
+        print_json({"out_dir": str(result.out_dir), "summary_csv": str(result.out_dir / "summary.csv"),
+                    "index_html": str(result.out_dir / "index.html"), "engine": result.engine,
+                    "n_reports": len(result.rows), "n_failed": result.n_failed,
+                    "seconds": time.perf_counter() - t0, "rows": result.rows})
+        return 0 if result.ok else 1
     for row in result.rows:
         where = result.out_dir / row["name"] / "report.html"
         if row["status"] == "ok":

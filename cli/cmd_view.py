@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ..analysis.notebook import stated_band
 from ..analysis.orders import choose_orders
 from ..analysis.shrm import prefilter
 from ..analysis.tolerance import DEFAULT_EPS
@@ -39,6 +40,7 @@ from .common import (
     load_env_sequence,
     number_in,
     order_rule,
+    print_json,
     rgl_brdf_arg,
     say,
     tolerance,
@@ -84,6 +86,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="renderer of the still image shown without WebGL2: cpu (CPU reference, sphere), gl (VTK "
                    "offscreen, the mesh), auto (cpu for the sphere, gl for a mesh when available), none")
     p.add_argument("-o", "--output", required=True, help="output .html page")
+    p.add_argument("--json", action="store_true",
+                   help="print one JSON object (each map's SHRM and stated error, the page, the file written; "
+                   "data_specs/view_html.md) instead of the text lines")
     add_env_orientation(p)
     add_rgl_incident(p)
 
@@ -116,6 +121,24 @@ def run(args: argparse.Namespace) -> int:
     write_view(out, text)
     s = page.data["shrm"]
     mesh = page.data["mesh"]
+    page_bytes = len(text.encode("utf-8"))
+    url = (f"{out.resolve().as_uri()}#azimuth={args.azimuth:g}&elevation={args.elevation:g}"
+           + ("" if args.env_rotation is None else f"&env_azimuth={rotation[0]:g}&env_elevation={rotation[1]:g}"
+              + (f"&env_roll={rotation[2]:g}" if rotation[2] else "")))
+    if args.json:
+        print_json({
+            "environments": [{
+                "environment": env.name, "F": one.F, "P": one.P, "height": one.height, "width": one.width,
+                "eps": args.eps, "max_view_deg": one.meta["max_view_deg"], "stated_error": stated_band(one.meta),
+                "view_bands": one.meta["view_bands"], "lights": len(one.meta["lights"]),
+                "prefilter_seconds": one.meta["timings"]["total"],
+            } for one, env in zip(shrms, envs, strict=True)],
+            "page": {"P": s["P"], "height": s["height"], "width": s["width"], "mesh": mesh["name"],
+                     "triangles": mesh["triangles"], "still_renderer": page.still_renderer, "notes": list(page.notes),
+                     "bytes": page_bytes, "budget_bytes": budget.page_bytes},
+            "output": str(out), "url": url,
+        })
+        return 0
     for one, env in zip(shrms, envs, strict=True):
         worst = max((band["predicted_rel_rms"] for band in one.meta["view_bands"] if band["inside"]), default=0.0)
         lights = len(one.meta["lights"])
@@ -128,8 +151,6 @@ def run(args: argparse.Namespace) -> int:
         + ("" if len(shrms) == 1 else f", {len(shrms)} environments (switched in the page, #env_index=K)"))
     for note in page.notes:
         say(f"note: {note}")
-    say(f"wrote {out} ({len(text.encode('utf-8')) / 2**20:.2f} MiB of {budget.page_bytes / 2**20:g} MiB); open it "
-        f"in a browser, e.g. {out.resolve().as_uri()}#azimuth={args.azimuth:g}&elevation={args.elevation:g}"
-        + ("" if args.env_rotation is None else f"&env_azimuth={rotation[0]:g}&env_elevation={rotation[1]:g}"
-           + (f"&env_roll={rotation[2]:g}" if rotation[2] else "")))
+    say(f"wrote {out} ({page_bytes / 2**20:.2f} MiB of {budget.page_bytes / 2**20:g} MiB); open it "
+        f"in a browser, e.g. {url}")
     return 0
