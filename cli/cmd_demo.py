@@ -11,7 +11,7 @@ import argparse
 import time
 
 from ..brdf_io.errors import BadInputError
-from .common import say, stderr
+from .common import print_json, say, stderr
 from .report.demo import run_demo
 
 HELP = "run orders, a fit, a prefilter, a preview render and reports on built-in data (default ./shrm-demo)"
@@ -21,13 +21,16 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", default="shrm-demo", help="output folder (default ./shrm-demo)")
     p.add_argument("--size", type=int, default=384, help="preview render size in pixels (default 384)")
     p.add_argument("--no-progress", action="store_true", help="no progress messages on stderr")
+    p.add_argument("--json", action="store_true",
+                   help="print one JSON object (each step's files, numbers and seconds; data_specs/report_json.md) "
+                   "instead of the text lines; no progress messages")
 
 
 def run(args: argparse.Namespace) -> int:
     if not 32 <= args.size <= 2048:
         raise BadInputError(None, f"--size must be in [32, 2048], got {args.size}")
     t0 = time.perf_counter()
-    show = not args.no_progress
+    show = not (args.no_progress or args.json)
 
     def progress(step: str) -> None:
         if show:
@@ -39,10 +42,16 @@ def run(args: argparse.Namespace) -> int:
                          highlight=False)
 
     steps = run_demo(args.out, progress=progress, report_progress=report_progress, size=args.size)
+    failed = next((s.info.get("n_failed", 0) for s in steps if s.step == "reports"), 0)
+    if args.json:
+        print_json({"out_dir": str(args.out), "seconds": time.perf_counter() - t0, "open": str(steps[-1].paths[-2]),
+                    "n_failed": failed,
+                    "steps": [{"step": s.step, "detail": s.detail, "seconds": s.seconds,
+                               "paths": [str(p) for p in s.paths], **s.info} for s in steps]})
+        return 0 if not failed else 1
     for step in steps:
         say(f"{step.step}: {step.detail} ({step.seconds:.1f} s)")
         for path in step.paths:
             say(f"    {path}")
-    failed = next((s.info.get("n_failed", 0) for s in steps if s.step == "reports"), 0)
     say(f"demo finished in {time.perf_counter() - t0:.1f} s; open {steps[-1].paths[-2]} in a browser")
     return 0 if not failed else 1
