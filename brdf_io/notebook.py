@@ -76,8 +76,10 @@ def png_img(png: bytes, alt: str, *, width: int | None = None) -> str:
 
 def html_table(headers: Sequence[str], rows: Iterable[Sequence[Any]], *, caption: str = "") -> str:
     """A small HTML table; cells are escaped (numbers through :func:`number`)."""
-    head = "".join(f"<th>{html.escape(h)}</th>" for h in headers)
-    body = "".join("<tr>" + "".join(f"<td>{html.escape(number(c))}</td>" for c in row) + "</tr>" for row in rows)
+    pad = "style='padding:0 0.6em;text-align:right'"
+    head = "".join(f"<th {pad}>{html.escape(h)}</th>" for h in headers)
+    body = "".join("<tr>" + "".join(f"<td {pad}>{html.escape(number(c))}</td>" for c in row) + "</tr>"
+                   for row in rows)
     cap = f"<caption style='text-align:left'>{html.escape(caption)}</caption>" if caption else ""
     return f"<table style='border-collapse:collapse;font-size:90%'>{cap}<thead><tr>{head}</tr></thead>" \
            f"<tbody>{body}</tbody></table>"
