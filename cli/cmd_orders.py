@@ -16,7 +16,6 @@ from ..analysis.lights import extract_lights
 from ..analysis.orders import DEFAULT_MAX_F, DEFAULT_MAX_P, choose_orders
 from ..analysis.scene import scene_for
 from ..analysis.tolerance import DEFAULT_EPS
-from ..brdf_io.specs import load_brdf
 from .common import (
     add_env_orientation,
     add_lights_option,
@@ -24,11 +23,11 @@ from .common import (
     add_rgl_incident,
     brdf_help,
     in_cli_terms,
+    load_analysis_brdf,
     load_env_arg,
     order_rule,
     print_json,
     print_table,
-    rgl_brdf_arg,
     stderr,
     stdout,
     tolerance,
@@ -53,13 +52,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    brdf = load_brdf(rgl_brdf_arg(args.brdf, args))
+    source_brdf, brdf, choice = load_analysis_brdf(args.brdf, args, quiet=args.json)
     busy = contextlib.nullcontext() if args.json else stderr.status(f"choosing orders for {brdf.name} ...",
                                                                     spinner="dots")
     with busy:
         orders = choose_orders(brdf, eps=args.eps, max_F=args.max_F, max_P=args.max_P, **order_rule(args))
     doc = {
-        "brdf": brdf.name,
+        "brdf": source_brdf.name,
+        # scattered measurements: the representation the orders describe (data_specs/representation_json.md)
+        "representation": None if choice is None else choice.as_dict(),
         "F": orders.F,
         "P": orders.P,
         "eps": orders.eps,
@@ -94,6 +95,8 @@ def run(args: argparse.Namespace) -> int:
 
 def _print_tables(doc: dict, table: np.ndarray) -> None:
     rule = ("every view band to " f"{doc['max_view_deg']:g}°" if doc["criterion"] == "bands" else "RH02, all views")
+    if doc["representation"] is not None:
+        stdout.print(doc["representation"]["line"], markup=False, soft_wrap=True)
     summary = Table(title=f"orders for {doc['brdf']} at eps = {doc['tolerance']:g} ({rule})")
     for key in ("F", "P", "eps", "eps RH02", "capped", "converged", "seconds"):
         summary.add_column(key, justify="right")

@@ -18,7 +18,6 @@ from ..analysis.shrm import prefilter
 from ..analysis.tolerance import DEFAULT_EPS
 from ..brdf_io.atomic import check_writable
 from ..brdf_io.errors import BadInputError
-from ..brdf_io.specs import load_brdf
 from .common import (
     add_env_orientation,
     add_lights_option,
@@ -26,12 +25,13 @@ from .common import (
     add_pixel_rule_option,
     add_rgl_incident,
     add_window_option,
+    brdf_help,
     in_cli_terms,
+    load_analysis_brdf,
     load_env_arg,
     order_rule,
     print_json,
     print_table,
-    rgl_brdf_arg,
     stderr,
     stdout,
     tolerance,
@@ -43,7 +43,8 @@ HELP = "prefilter an environment map with a BRDF into a global SHRM file (.shrm.
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--env", required=True, help="environment: builtin:sky, builtin:studio, or a map file")
-    parser.add_argument("--brdf", required=True, help="BRDF spec or file")
+    parser.add_argument("--brdf", required=True, help=brdf_help() + "; scattered measurements go through the "
+                        "representation with the smallest held-out error")
     parser.add_argument("--eps", type=tolerance, default=DEFAULT_EPS, help=f"tolerance (default {DEFAULT_EPS:g})")
     parser.add_argument("--size", type=int, help="SHRM rows S (S x 2S lat-long); default: the smallest whose "
                         "bilinear lookup adds at most 1%% of eps to any view band's error (bands rule; 10 F for rh02)")
@@ -70,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
         raise BadInputError(None, "--cube-size needs --cube")
     check_writable(out)
     env = load_env_arg(args.env, args)
-    brdf = load_brdf(rgl_brdf_arg(args.brdf, args))
+    source_brdf, brdf, choice = load_analysis_brdf(args.brdf, args, quiet=args.json)
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=stderr,
                   disable=args.json) as bar:
         task = bar.add_task("prefiltering", total=None)
@@ -83,9 +84,12 @@ def run(args: argparse.Namespace) -> int:
     shrm.save(out)
     if args.json:
         print_json({"output": str(out), "F": shrm.F, "P": shrm.P, "height": shrm.height, "width": shrm.width,
-                    "eps": shrm.eps, "bytes": out.stat().st_size, "meta": shrm.meta})
+                    "eps": shrm.eps, "bytes": out.stat().st_size, "meta": shrm.meta,
+                    "representation": None if choice is None else choice.as_dict()})
         return 0
-    table = Table(title=f"SHRM {brdf.name} x {env.name}")
+    if choice is not None:
+        stdout.print(choice.line(), markup=False, soft_wrap=True)
+    table = Table(title=f"SHRM {source_brdf.name} x {env.name}")
     for key in ("F", "P", "map", "lights", "eps brdf", "eps reflected", "bound", "total s", "MB"):
         table.add_column(key, justify="right")
     t = shrm.meta["timings"]

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import glob
 import json
 import sys
@@ -14,10 +15,12 @@ from rich.console import Console
 from rich.measure import Measurement
 from rich.table import Table
 
+from ..analysis.fit.representation import RepresentationChoice, choose_representation
 from ..analysis.lights import DEFAULT_LIGHTS, LIGHT_CONTRAST, MAX_LIGHT_RADIUS_DEG, MAX_LIGHTS, check_lights
 from ..analysis.shrm import DEFAULT_WINDOW, WINDOW_BUDGET_EPS, WINDOW_THRESHOLD, WINDOWS
 from ..analysis.tolerance import check_eps
 from ..analysis.view_bands import CRITERIA, DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG
+from ..brdf_io.brdf import BRDF
 from ..brdf_io.cubemap import CUBE_FACES
 from ..brdf_io.env_rotation import env_rotation_matrix
 from ..brdf_io.envmap import load_env
@@ -25,7 +28,7 @@ from ..brdf_io.errors import BadInputError
 from ..brdf_io.hdr_codecs import IMAGE_SUFFIXES
 from ..brdf_io.jsonutil import to_jsonable
 from ..brdf_io.rgl import RGL_INCIDENT
-from ..brdf_io.specs import BRDF_FILE_TYPES
+from ..brdf_io.specs import BRDF_FILE_TYPES, load_brdf
 
 __all__ = [
     "say",
@@ -38,6 +41,7 @@ __all__ = [
     "add_order_rule",
     "add_rgl_incident",
     "rgl_brdf_arg",
+    "load_analysis_brdf",
     "order_rule",
     "env_orientation",
     "env_rotation_arg",
@@ -243,6 +247,32 @@ def rgl_brdf_arg(source: str, args: argparse.Namespace) -> str:
     if Path(text).suffix.lower() == ".bsdf" and choice != "camera":
         return f"{text}#{choice}"
     return text
+
+
+def load_analysis_brdf(source: str, args: argparse.Namespace, *, quiet: bool = False
+                       ) -> tuple[BRDF, BRDF, RepresentationChoice | None]:
+    """The BRDF a verb analyses: (what the file holds, what is analysed, the representation choice).
+
+    Every format ``report`` accepts is accepted: an evaluable BRDF is analysed as it is (choice
+    None); scattered measurements (CURET, Cornell, gonioreflectometer CSV) are analysed through
+    the representation with the smallest held-out worst-view-band error
+    (``analysis.fit.representation.choose_representation``), whose one line the verb prints beside
+    its orders and whose ``as_dict()`` its ``--json`` carries as ``representation``
+    (data_specs/representation_json.md). ``quiet``: no spinner (``--json``).
+
+    Raises
+    ------
+    BadInputError
+        As ``load_brdf``, or no representation could be fitted to the measurements.
+    """
+    brdf = load_brdf(rgl_brdf_arg(source, args))
+    if getattr(brdf, "kind", None) != "scattered":
+        return brdf, brdf, None
+    busy = contextlib.nullcontext() if quiet else stderr.status(
+        f"{brdf.name}: scattered measurements; choosing a representation by held-out error ...", spinner="dots")
+    with busy:
+        choice = choose_representation(brdf)
+    return brdf, choice.brdf, choice
 
 
 def add_order_rule(parser: argparse.ArgumentParser) -> None:
