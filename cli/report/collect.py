@@ -40,6 +40,7 @@ import numpy as np
 from ..._version import __version__
 from ...analysis.compare import band_error, band_sample, beside_measured, pairs_per_band, relative_rms, sample_pairs
 from ...analysis.fit import fit_brdf
+from ...analysis.fit.representation import choose_representation
 from ...analysis.lighting import lighting_coefficients
 from ...analysis.orders import OrderChoice, choose_orders_many
 from ...analysis.reciprocity import RECIPROCITY_TOLERANCE
@@ -406,21 +407,12 @@ def _warnings(checks: dict[str, Any], orders: list[dict[str, Any]], fits: list[d
 def _analysis_brdf(brdf: BRDF, fit_entries: list[dict[str, Any]], fit_results: list[Any]) -> tuple[BRDF, str, str]:
     if brdf.kind != "scattered":
         return brdf, "brdf", ""
-    # the successful fit with the smallest error, else the usable one with the smallest worst band
-    # (analysed, with its failure stated): a failed fit is still the best this toolkit has for the data
-    ok = [(not e.get("success"), _worst(e), e["errors"]["rel_rms"], i) for i, e in enumerate(fit_entries)
-          if e.get("usable", e.get("success"))]
-    if not ok:
-        raise BadInputError(brdf.name, "scattered measurements and no usable fit: nothing to analyse "
-                            "(orders need a BRDF that can be evaluated everywhere)")
-    failed, worst, rel, best = min(ok)
-    model = fit_entries[best]["model"]
-    band = fit_entries[best].get("worst_band") or {}
-    where = f", worst view band {band['lo_deg']:g}–{band['hi_deg']:g}° {worst:.3g}" if band else ""
-    return fit_results[best].brdf, f"fit:{model}", (
-        f"scattered measurements: orders, SHRMs and previews use the {model} fit "
-        f"(rel_rms {rel:.3g}{where}" + ("; the fit FAILED: its orders describe the fit, not the material)"
-                                         if failed else ")"))
+    # the representation with the smallest held-out worst-band error (Lafortune, Cook–Torrance or the
+    # cross-validated Zernike expansion; analysis.fit.representation), reusing the report's one-lobe fits
+    reuse = {r.model: r for r in fit_results if r is not None and r.options.get("lobes") in (None, 1)
+             and r.options.get("metric") == "rel"}
+    choice = choose_representation(brdf, fits=reuse)
+    return choice.brdf, f"fit:{choice.model}", f"scattered measurements: orders, SHRMs and previews use {choice.line()}"
 
 
 def _worst(entry: dict[str, Any]) -> float:
