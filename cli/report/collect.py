@@ -415,12 +415,6 @@ def _analysis_brdf(brdf: BRDF, fit_entries: list[dict[str, Any]], fit_results: l
     return choice.brdf, f"fit:{choice.model}", f"scattered measurements: orders, SHRMs and previews use {choice.line()}"
 
 
-def _worst(entry: dict[str, Any]) -> float:
-    """The relative RMS of a fit entry's worst view band (its headline when it has none)."""
-    band = entry.get("worst_band")
-    return float(band["rel_rms"]) if band else float(entry["errors"]["rel_rms"])
-
-
 def collect_report(
     source: str | Path,
     options: ReportOptions,
