@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -32,6 +33,7 @@ from ..render.modes import (
 from ..render.offscreen import skipped_window_classes
 from ..render.output import to_8bit, turntable_paths, write_exr, write_gif, write_png
 from ..render.pipeline import BACKGROUNDS, Frame, light_turntable_rotations, turntable_cameras
+from ..render.preview import preview_exposure
 from .common import (
     add_env_orientation,
     add_lights_option,
@@ -109,7 +111,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--camera", choices=("perspective", "ortho"), default="perspective")
     p.add_argument("--view", default="1,0,0", help="direction from the object toward the camera, z-up frame")
     p.add_argument("--up", default="0,0,1", help="image up direction, z-up frame (default 0,0,1)")
-    p.add_argument("--exposure", type=float, default=0.0, help="exposure in stops for the PNG (default 0)")
+    p.add_argument("--exposure", type=float, default=None,
+                   help="exposure in stops for the PNG (default: the environment's mean luminance brought to "
+                   "middle grey, as shrm view does; printed)")
     p.add_argument("--tone", choices=("filmic", "srgb"), default="filmic", help="PNG tone mapping (default filmic)")
     p.add_argument("--background", choices=BACKGROUNDS, default="env",
                    help="environment seen behind the object, black, or transparent PNG (default env)")
@@ -142,7 +146,7 @@ def _validate(args: argparse.Namespace, sequence: bool = False) -> tuple[list[Ca
     if not lo <= args.size <= hi:
         raise BadInputError(None, f"--size must be in [{lo}, {hi}], got {args.size}")
     check_eps(args.eps, "--eps")
-    if not np.isfinite(args.exposure):
+    if args.exposure is not None and not np.isfinite(args.exposure):
         raise BadInputError(None, f"--exposure must be finite, got {args.exposure}")
     if args.turntable < 0 or args.fps_frames < 0 or args.light_turntable < 0:
         raise BadInputError(None, "--turntable, --light-turntable and --fps-frames must be >= 0")
@@ -333,6 +337,17 @@ def _sequence_doc(args: argparse.Namespace, seq: SequenceRender, outputs: list[s
     }
 
 
+def _resolve_exposure(args: argparse.Namespace, env: Any) -> None:
+    """``--exposure`` when given, else the stops that bring ``env``'s mean luminance to middle grey
+    (``render.preview.preview_exposure``, the rule of ``shrm view``), said on one line: a first
+    render of a dim map (Grace's mean is 0.016) is then not nearly black."""
+    if args.exposure is None:
+        args.exposure = preview_exposure(env)
+        if not args.json:
+            say(f"exposure {args.exposure:+.2f} stops (the environment's mean brought to middle grey; "
+                "--exposure sets it)")
+
+
 def run(args: argparse.Namespace) -> int:
     sources, sequence = env_sources_arg(args.env)
     cameras, options = _validate(args, sequence)
@@ -342,6 +357,7 @@ def run(args: argparse.Namespace) -> int:
     mesh = load_mesh(args.mesh)
     if sequence:
         maps = load_env_sequence(sources, args)  # every member read first: a bad one stops before any output
+        _resolve_exposure(args, maps[0])  # one exposure for every frame (the first map's): no flicker
         seq = render_sequence(mesh, maps, rgl_brdf_arg(args.brdf, args), mode=args.mode, eps=args.eps,
                               camera=cameras[0], size=args.size, background=args.background,
                               fps_frames=0, options=options)
@@ -349,9 +365,10 @@ def run(args: argparse.Namespace) -> int:
             _report_sequence(args, seq)
         outputs = _write(args, seq.frames, len(seq.frames))
         if args.json:
-            print_json(_sequence_doc(args, seq, outputs))
+            print_json({**_sequence_doc(args, seq, outputs), "exposure": args.exposure})
         return 0
     env = load_env_arg(sources[0], args)
+    _resolve_exposure(args, env)
     result = render_scene(
         mesh, env, rgl_brdf_arg(args.brdf, args), mode=args.mode, eps=args.eps, camera=cameras, size=args.size,
         background=args.background, fps_frames=args.fps_frames, options=options,
@@ -368,6 +385,7 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         doc = _scene_doc(args, result, outputs)
         doc["environment"] = env.name
+        doc["exposure"] = args.exposure
         if errors is not None:
             doc["error_image"] = errors.summary()
         print_json(doc)

@@ -22,7 +22,9 @@ from shrmkit.brdf_io.hdr_codecs import write_image
 from shrmkit.cli.common import env_sources_arg
 from shrmkit.cli.main import main
 
-COMMON = ["builtin:sphere:subdivisions=3", "--brdf", "phong:s=8", "--size", "32", "--fps-frames", "0"]
+# one exposure for all: by default a sequence takes its first map's (no flicker) and a single render its own
+COMMON = ["builtin:sphere:subdivisions=3", "--brdf", "phong:s=8", "--size", "32", "--fps-frames", "0",
+          "--exposure", "0.5"]
 MAPS = ["builtin:studio,height=32", "builtin:sky,height=32"]
 
 

@@ -111,3 +111,26 @@ def test_lobe_options_reach_the_gaussian_lobes_builder(monkeypatch, tmp_path: Pa
     assert (options.lobes, options.elevations) == (2, RenderOptions().elevations)
     _, options = cmd_render._validate(parse(["render", "builtin:sphere", "-o", out]))
     assert (options.lobes, options.elevations) == (RenderOptions().lobes, RenderOptions().elevations)
+
+
+def test_default_exposure_brings_the_environment_mean_to_middle_grey(tmp_path, capsys):
+    """Without --exposure the PNG is exposed so that the map's mean luminance is 0.18 (Grace's
+    mean 0.016 rendered at exposure 0 was nearly black); the choice is printed and in --json."""
+    import json
+
+    import numpy as np
+
+    from shrmkit import load_env
+
+    spec = "builtin:studio,height=32"
+    env = load_env(spec)
+    # the solid-angle-weighted mean of the map (RGB average), written out
+    mean = float((env.radiance.mean(axis=2).mean(axis=1) * env.solid_angles()).sum() / env.solid_angles().sum())
+    expected = float(np.log2(0.18 / mean))
+    assert main(["render", "builtin:sphere:subdivisions=2", "--env", spec, "--brdf", "lambert:albedo=0.5",
+                 "--size", "24", "--fps-frames", "0", "-o", str(tmp_path / "a.png"), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert abs(doc["exposure"] - expected) < 1e-9
+    assert main(["render", "builtin:sphere:subdivisions=2", "--env", spec, "--brdf", "lambert:albedo=0.5",
+                 "--size", "24", "--fps-frames", "0", "-o", str(tmp_path / "b.png")]) == 0
+    assert f"exposure {doc['exposure']:+.2f} stops" in capsys.readouterr().out
