@@ -30,6 +30,7 @@ import numpy as np
 from ..brdf_io.brdf import BRDF
 from ..brdf_io.halfdiff import halfdiff_to_directions
 from ..brdf_io.masked_grid import eval_with_mask
+from ..brdf_io.notebook import lit_sphere_radiance
 
 __all__ = ["SLICE_PHI_D_DEG", "SLICE_STEP_DEG", "SPHERE_SIZE", "SPHERE_LIGHT", "PLANE_TOLERANCE_DEG",
            "plane_directions", "plane_samples",
@@ -94,28 +95,6 @@ def lit_sphere(brdf: BRDF, size: int = SPHERE_SIZE, light: Sequence[float] = SPH
     """Linear radiance (size, size, 3) of the unit sphere under one distant light, and the
     hit mask: orthographic view along −z (V = +z), pixel centres x = (2j+1)/size − 1,
     y = 1 − (2i+1)/size, N = (x, y, √(1 − x² − y²)); radiance = ρ(L, V)·max(N·L, 0)·π with
-    L and V in the tangent frame (T = the part of V across N, B = N × T, N)."""
-    Lw = np.asarray(light, dtype=np.float64)
-    Lw = Lw / np.linalg.norm(Lw)
-    c = (2.0 * np.arange(size) + 1.0) / size - 1.0
-    x, y = np.meshgrid(c, -c)
-    r2 = x * x + y * y
-    hit = r2 < 1.0
-    N = np.stack([x[hit], y[hit], np.sqrt(1.0 - r2[hit])], axis=-1)
-    Vw = np.array([0.0, 0.0, 1.0])
-    nv = N @ Vw
-    T = Vw[None, :] - nv[:, None] * N
-    tn = np.linalg.norm(T, axis=-1)
-    # at the centre V = N: any tangent will do (isotropic BRDF)
-    T = np.where(tn[:, None] > 1e-12, T / np.maximum(tn, 1e-300)[:, None], np.array([1.0, 0.0, 0.0]))
-    B = np.cross(N, T)
-    L = np.stack([T @ Lw, B @ Lw, N @ Lw], axis=-1)
-    V = np.stack([T @ Vw, B @ Vw, nv], axis=-1)
-    cos_i = np.maximum(L[:, 2], 0.0)
-    radiance = np.zeros((size, size, 3))
-    lit = cos_i > 0
-    values = np.zeros((len(N), 3))
-    if np.any(lit):
-        values[lit] = np.asarray(brdf.eval(L[lit], V[lit]), dtype=np.float64) * (np.pi * cos_i[lit])[:, None]
-    radiance[hit] = values
-    return radiance, hit
+    L and V in the tangent frame (T = the part of V across N, B = N × T, N): the lower layer's
+    ``brdf_io.notebook.lit_sphere_radiance`` (NaN of ρ kept)."""
+    return lit_sphere_radiance(brdf, size, light, nan_to_zero=False)

@@ -172,14 +172,15 @@ def env_html(env: Any) -> str:
 # ------------------------------------------------------------------------------------------------
 # BRDFs
 # ------------------------------------------------------------------------------------------------
-def lit_sphere_radiance(brdf: Any, size: int = SPHERE_PIXELS, light: Sequence[float] = SPHERE_LIGHT
-                        ) -> tuple[np.ndarray, np.ndarray]:
+def lit_sphere_radiance(brdf: Any, size: int = SPHERE_PIXELS, light: Sequence[float] = SPHERE_LIGHT, *,
+                        nan_to_zero: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """Linear radiance (size, size, 3) of the unit sphere of ``brdf`` under one distant light of
     irradiance π (a white Lambertian surface facing it gives 1), and the hit mask: orthographic view
     along −z (V = +z), pixel centres x = (2j+1)/size − 1, y = 1 − (2i+1)/size, normal
     N = (x, y, √(1 − x² − y²)); ρ evaluated once per lit pixel in the local frame (T = V's part
-    across N, B = N × T, N). The same picture as ``analysis.brdf_views.lit_sphere``, here so that
-    this layer's objects can show it."""
+    across N, B = N × T, N); ``nan_to_zero``: a NaN of ρ (no measurement) drawn as 0. The one
+    lit sphere of the package: ``analysis.brdf_views.lit_sphere`` (the report's explorer) calls it
+    with ``nan_to_zero=False``."""
     lw = np.asarray(light, dtype=np.float64)
     lw = lw / np.linalg.norm(lw)
     c = (2.0 * np.arange(size) + 1.0) / size - 1.0
@@ -199,7 +200,7 @@ def lit_sphere_radiance(brdf: Any, size: int = SPHERE_PIXELS, light: Sequence[fl
     values = np.zeros((len(N), 3))
     if np.any(lit):
         rho = np.asarray(brdf.eval(L[lit], V[lit]), dtype=np.float64)
-        values[lit] = np.nan_to_num(rho, nan=0.0) * (math.pi * L[lit, 2])[:, None]
+        values[lit] = (np.nan_to_num(rho, nan=0.0) if nan_to_zero else rho) * (math.pi * L[lit, 2])[:, None]
     radiance = np.zeros((size, size, 3))
     radiance[hit] = values
     return radiance, hit
