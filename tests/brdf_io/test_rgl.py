@@ -13,7 +13,15 @@ from scipy import integrate
 
 from shrmkit.brdf_io import rgl
 from shrmkit.brdf_io.errors import BadInputError
-from shrmkit.brdf_io.rgl import GRAZING_COS, RGLBRDF, RGLGamutWarning, read_rgl, read_tensor_file, write_tensor_file
+from shrmkit.brdf_io.rgl import (
+    GRAZING_COS,
+    RGLBRDF,
+    RGLGamutWarning,
+    read_rgl,
+    read_tensor_file,
+    rgl_anisotropy,
+    write_tensor_file,
+)
 
 RGL_FILES = (
     "paper_white_rgb",
@@ -718,3 +726,47 @@ def test_huge_positive_rgb_is_corruption(tmp_path: Path, value: float) -> None:
     with pytest.raises(BadInputError, match=r"1 value\(s\) above 1e\+06.*corrupt") as raised:
         read_rgl(path)
     assert str(path) in str(raised.value)
+
+
+# ------------------------------------------------------------------------------ anisotropic files
+
+
+def _anisotropic_fields(pattern: float, rows: int = 65) -> dict[str, object]:
+    """Four incident azimuths 0, π/2, π, 3π/2; a uniform VNDF (the warp is the identity), D = 1/π,
+    σ = 1, and R = 1 + pattern·cos(2π y) on every slice (y the φ coordinate of the square: the
+    half vector's absolute azimuth φ_h, y = (φ_h + π)/2π)."""
+    fields = _fields()
+    T, w = 3, 5
+    y = np.linspace(0.0, 1.0, rows)
+    R = (1.0 + pattern * np.cos(2.0 * np.pi * y))[:, None] * np.ones(w)
+    fields.update(
+        phi_i=np.float32([0.0, 0.5 * np.pi, np.pi, 1.5 * np.pi]),
+        vndf=np.ones((4, T, 8, 16), np.float32),
+        rgb=np.broadcast_to(R, (4, T, 3, rows, w)).astype(np.float32),
+        luminance=np.ones((4, T, rows, w), np.float32),
+    )
+    return fields
+
+
+def test_anisotropy_of_a_synthetic_anisotropic_file() -> None:
+    """Closed form: R = 1 − ½ cos φ_h at φ_h = φ_k + β over the four azimuths φ_k gives, at every
+    probe, Σ_k (v_k − v̄)² = ¼ Σ_k cos²(φ_k + β) = ½ and Σ_k v_k² = 4 + ½ (in units of (1/4π)²):
+    A = 1/9 (bilinear interpolation of the cosine on 65 rows: 10⁻³ relative)."""
+    f = _anisotropic_fields(0.5)
+    a = rgl_anisotropy(f["theta_i"], f["phi_i"], f["ndf"], f["sigma"], f["vndf"], f["rgb"])
+    assert a == pytest.approx(1.0 / 9.0, rel=2e-3)
+    # a pattern that does not depend on φ_h: every azimuth slice sees the same values
+    flat = _anisotropic_fields(0.0)
+    assert rgl_anisotropy(flat["theta_i"], flat["phi_i"], flat["ndf"], flat["sigma"], flat["vndf"],
+                          flat["rgb"]) < 1e-12
+
+
+def test_anisotropic_file_refused_with_its_anisotropy(tmp_path: Path) -> None:
+    path = write_tensor_file(tmp_path / "grain_rgb.bsdf", _anisotropic_fields(0.5))
+    with pytest.raises(BadInputError, match=r"anisotropic material \(4 incident azimuths φ_i\): anisotropy 0\.111 "
+                       r".*only isotropic files") as err:
+        read_rgl(path)
+    assert str(path) in str(err.value) and "\n" not in str(err.value)
+    flat = write_tensor_file(tmp_path / "flat_rgb.bsdf", _anisotropic_fields(0.0))
+    with pytest.raises(BadInputError, match=r"anisotropy 0 "):
+        read_rgl(flat)
