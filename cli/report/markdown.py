@@ -96,6 +96,7 @@ def report_sections(doc: dict[str, Any], image_link: Any = None) -> Iterator[tup
             f"**F = {doc['main']['F']}, P = {doc['main']['P']}** (ε(F, P) = {fmt(doc['main']['eps'])})."]
     if b["analysis_of"] != "brdf":
         head.append(f"Orders, SHRMs and previews use `{b['analysis_of']}` (scattered measurements).")
+    head += [_scene_headline(doc, e) for e in doc["environments"]]
     fit_lines = [_fit_headline(f) for f in doc["fits"]]
     if fit_lines:
         head.append("Fits (worst view band first): " + "; ".join(fit_lines) + ".")
@@ -297,6 +298,22 @@ def _explorer_body(doc: dict[str, Any], e: dict[str, Any], link: Any) -> str:
                      + ", ".join(f"{i['label']} (peak luminance {fmt(i['max_lum'])})" for i in sp["images"]) + ".")
         parts.append(link("explorer_sphere", sp["file"], "Lit sphere under one distant light"))
     return "\n\n".join(parts)
+
+
+def _scene_headline(doc: dict[str, Any], env: dict[str, Any]) -> str:
+    """One environment in the summary's first lines: the scene's orders, the worst view band's error
+    stated and measured, and the prefilter's time beside brute force's for the same map."""
+    tol = doc["main"]["tolerance"]
+    row = next((r for r in doc.get("speed_vs_error", []) if r["env"] == env["name"] and r["tolerance"] == tol), {})
+    line = (f"Under **{env['name']}** ({env['height']}×{env['width']}), ε = {fmt(tol)}: F_B = {env['F_B']}, "
+            f"P_B = {env['P_B']}; worst view band relative RMS predicted {fmt(env.get('predicted_rel_rms'))}, "
+            f"bound {fmt(env.get('bound_rel_rms'))}, **measured {fmt(env['measured_rel_rms'])}** "
+            f"({env['n_pairs']} pairs)")
+    if row.get("prefilter_seconds") is not None and row.get("reference_map_seconds"):
+        line += (f"; prefilter {fmt(row['prefilter_seconds'])} s against ≈ {fmt(row['reference_map_seconds'])} s "
+                 f"for brute-force angular integration of the same map "
+                 f"({fmt(row['reference_map_seconds'] / max(row['prefilter_seconds'], 1e-12))}× faster)")
+    return line + "."
 
 
 def _fit_headline(f: dict[str, Any]) -> str:
