@@ -283,6 +283,17 @@ class Browser:
                                          captureBeyondViewport=False)["data"])
         return np.asarray(Image.open(io.BytesIO(png)).convert("RGB"))
 
+    def view_frame(self, hash_params: str, element_id: str = "shrm-view") -> np.ndarray:
+        """Set the URL hash of a view page, wait for the frame its viewer draws for it, and return
+        the whole page as a screenshot (H, W, 3) uint8."""
+        el = f"document.getElementById({json.dumps(element_id)})"
+        frames = self.evaluate(f"{el}.dataset.frames")
+        self.evaluate(f"location.hash = {json.dumps(hash_params)}")
+        self.wait(f"{el}.dataset.frames !== {json.dumps(frames)}", "a new frame")
+        self.evaluate("new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))", await_promise=True)
+        png = base64.b64decode(self.call("Page.captureScreenshot", session=True, format="png")["data"])
+        return np.asarray(Image.open(io.BytesIO(png)).convert("RGB"))
+
     def close(self) -> None:
         try:
             self.call("Browser.close")

@@ -10,13 +10,8 @@ chromium (SwiftShader WebGL2) through the ``browser_class`` driver of tests/conf
 
 from __future__ import annotations
 
-import base64
-import io
-import json
-
 import numpy as np
 import pytest
-from PIL import Image
 from scipy.ndimage import binary_dilation, binary_erosion
 
 import shrmkit
@@ -39,12 +34,8 @@ def browser(chromium, browser_class):
 
 
 def _screenshot(browser, hash_params: str) -> np.ndarray:
-    frames = browser.evaluate("document.getElementById('shrm-view').dataset.frames")
-    browser.evaluate(f"location.hash = {json.dumps(hash_params)}")
-    browser.wait(f"document.getElementById('shrm-view').dataset.frames !== {json.dumps(frames)}", "a new frame")
-    browser.evaluate("new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))", await_promise=True)
-    png = base64.b64decode(browser.call("Page.captureScreenshot", session=True, format="png")["data"])
-    return np.asarray(Image.open(io.BytesIO(png)).convert("RGB"))
+    """The view page after setting its URL hash (``Browser.view_frame`` of tests/conftest.py)."""
+    return browser.view_frame(hash_params)
 
 
 def reference(shrm, page, mode: str, env_az: float, env_el: float) -> tuple[np.ndarray, np.ndarray]:

@@ -11,7 +11,6 @@ rolled by a quarter turn at load (``load_env(azimuth=90)``: 16 of 64 columns, pr
 
 from __future__ import annotations
 
-import base64
 import io
 import json
 from pathlib import Path
@@ -50,12 +49,8 @@ def scenes():
 
 
 def _screenshot(browser, hash_params: str) -> np.ndarray:
-    frames = browser.evaluate("document.getElementById('shrm-view').dataset.frames")
-    browser.evaluate(f"location.hash = {json.dumps(hash_params)}")
-    browser.wait(f"document.getElementById('shrm-view').dataset.frames !== {json.dumps(frames)}", "a new frame")
-    browser.evaluate("new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))", await_promise=True)
-    png = base64.b64decode(browser.call("Page.captureScreenshot", session=True, format="png")["data"])
-    return np.asarray(Image.open(io.BytesIO(png)).convert("RGB"))
+    """The view page after setting its URL hash (``Browser.view_frame`` of tests/conftest.py)."""
+    return browser.view_frame(hash_params)
 
 
 def _reference(shrm, env_radiance, exposure: float, mode: str) -> tuple[np.ndarray, np.ndarray]:

@@ -67,13 +67,8 @@ def _open(browser, url: str) -> str:
 
 
 def _screenshot(browser, hash_params: str) -> np.ndarray:
-    """Set the URL hash, wait for the frame drawn for it, return the screenshot (H, W, 3) uint8."""
-    frames = browser.evaluate("document.getElementById('shrm-view').dataset.frames")
-    browser.evaluate(f"location.hash = {json.dumps(hash_params)}")
-    browser.wait(f"document.getElementById('shrm-view').dataset.frames !== {json.dumps(frames)}", "a new frame")
-    browser.evaluate("new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))", await_promise=True)
-    png = base64.b64decode(browser.call("Page.captureScreenshot", session=True, format="png")["data"])
-    return np.asarray(Image.open(io.BytesIO(png)).convert("RGB"))
+    """The view page after setting its URL hash (``Browser.view_frame`` of tests/conftest.py)."""
+    return browser.view_frame(hash_params)
 
 
 @pytest.fixture(scope="module")
