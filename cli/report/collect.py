@@ -412,7 +412,7 @@ def _analysis_brdf(brdf: BRDF, fit_entries: list[dict[str, Any]], fit_results: l
     reuse = {r.model: r for r in fit_results if r is not None and r.options.get("lobes") in (None, 1)
              and r.options.get("metric") == "rel"}
     choice = choose_representation(brdf, fits=reuse)
-    return choice.brdf, f"fit:{choice.model}", f"scattered measurements: orders, SHRMs and previews use {choice.line()}"
+    return choice.brdf, f"fit:{choice.model}", f"scattered measurements: orders, SHRMs and previews are {choice.line()}"
 
 
 def collect_report(

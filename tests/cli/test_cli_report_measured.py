@@ -27,7 +27,7 @@ def test_luma_of_no_samples_is_empty():
 def test_report_on_curet_rgl_and_nist(shared_data, tmp_path, capsys):
     brdf = shared_data / "brdf"
     # CURET #7 (velvet): neither one-lobe model represents it (worst view band > 0.5 for both, issue 24):
-    # the report is still made, through the better failed fit, and says so in its first lines
+    # both fits are marked failed, and the analysis goes through the Zernike expansion
     sources = [f"{brdf / 'curet' / 'abrdf.dat'}#7", str(brdf / "rgl" / "paper_white_rgb.bsdf"),
                f"{brdf / 'nist_ptfe' / 'PTFE.data.csv'}#532"]
     # one tolerance and 30 pairs: the checks are that every kind of measured file makes a report
@@ -47,8 +47,11 @@ def test_report_on_curet_rgl_and_nist(shared_data, tmp_path, capsys):
     assert not any(f["success"] for f in velvet["fits"])
     failed = [w["message"] for w in velvet["warnings"] if w["code"] == "fit_failed"]
     assert len(failed) == 2 and all("view band" in m for m in failed)
+    # the analysis goes through the representation with the smallest held-out worst band: the
+    # cross-validated Zernike expansion, which holds velvet (held-out worst band 0.2)
     note = next(w["message"] for w in velvet["warnings"] if w["code"] == "analysis_on_fit")
-    assert "FAILED" in note and "worst view band" in note
+    assert "analysed through zernike" in note and "held-out worst view band" in note and "FAILED" not in note
+    assert velvet["brdf"]["analysis_of"] == "fit:zernike"
     md = (tmp_path / "abrdf-7" / "report.md").read_text()
     assert "Fits (worst view band first): lafortune **FAILED**" in md
     import csv
