@@ -84,7 +84,6 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from scipy.special import eval_jacobi
 
 from .brdf import BRDF, Kind, as_directions
 from .errors import BadInputError
@@ -216,6 +215,8 @@ def zernike_radial(n: int, m: int, rho: np.ndarray) -> np.ndarray:
     ValueError
         Invalid (n, m).
     """
+    from scipy.special import eval_jacobi  # imported on use: load_brdf's registry must not pull scipy into start-up
+
     _check_nm(n, m)
     m = abs(m)
     k = (n - m) // 2
