@@ -9,7 +9,8 @@ reciprocal isotropic Zernike expansion with its order and ridge chosen by cross-
 (``zernike.fit_zernike_cv``) — scores each by its **held-out** error (``crossval.py``: every
 measurement predicted by a fit that did not see it, on one sample set and one fold split for
 all candidates), and returns the one with the smallest held-out worst-view-band relative RMS
-(``summary.worst_band``), with every candidate's errors and, where the measurements hold the
+(``summary.worst_band``) — or, when no candidate's worst band is at most 0.5, the one with the
+smallest held-out relative RMS over all samples — with every candidate's errors and, where the measurements hold the
 azimuth of incidence, how far the material is from isotropic (``isotropy.py``).
 
 A chosen representation whose held-out worst band is above
@@ -217,8 +218,9 @@ def choose_representation(
     fits: Mapping[str, FitResult] | None = None,
     isotropy: bool = True,
 ) -> RepresentationChoice:
-    """Fit every candidate to scattered measurements and keep the one with the smallest held-out
-    worst-view-band error (module docstring).
+    """Fit every candidate to scattered measurements and keep the successful one with the smallest
+    held-out worst-view-band error, else the one with the smallest held-out error over all samples
+    (module docstring).
 
     Parameters
     ----------
@@ -293,7 +295,12 @@ def choose_representation(
     if not usable:
         reasons = "; ".join(f"{r.model}: {r.error or 'not usable'}" for r in results)
         raise BadInputError(name, f"no representation could be fitted to the measurements ({reasons})")
-    best = min(usable, key=lambda r: r.score)
+    # the successful candidate with the smallest held-out worst band; when none succeeds, the one with
+    # the smallest held-out error over all samples: a worst band near 1 is also what a heavily damped
+    # expansion that predicts almost nothing in that band scores (Cornell cayman: Zernike at ridge 0.1,
+    # 1.02, against Cook–Torrance's 2.0 that overshoots a peak), while the energy-weighted error still
+    # ranks the models by how much of the material they hold
+    best = min(usable, key=lambda r: (not r.success, r.score if r.success else r.held_out_rel_rms))
     iso, note = None, ""
     if not isotropy:
         note = "not asked"

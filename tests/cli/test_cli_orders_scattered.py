@@ -33,16 +33,17 @@ def test_fit_bad_model_is_a_usage_error(bad: str, capsys) -> None:
 
 @pytest.mark.slow
 def test_orders_on_scattered_files(shared_data, capsys) -> None:
-    """CURET velvet, Cornell and NIST PTFE: orders through the chosen representation, its line
-    before the tables, ``representation`` in --json (the chosen one has the smallest held-out worst band)."""
+    """CURET velvet and felt, NIST PTFE: orders through the chosen representation, its line before
+    the tables, ``representation`` in --json (the chosen one has the smallest held-out worst band)."""
     brdf = shared_data / "brdf"
     for source in (f"{brdf / 'curet' / 'abrdf.dat'}#7", str(brdf / "nist_ptfe" / "PTFE.data.csv") + "#532"):
         assert main(["orders", source, "--eps", "0.1", "--json"]) == 0
         doc = json.loads(capsys.readouterr().out)
         rep = doc["representation"]
         assert rep["model"] in ("lafortune", "cook-torrance", "zernike") and doc["F"] >= 0
-        scores = [c["held_out_worst_band"]["rel_rms"] for c in rep["candidates"] if c["held_out_worst_band"]]
-        assert rep["held_out_worst_band"]["rel_rms"] == min(scores)
+        # CURET velvet and PTFE: some candidate succeeds, and the chosen one has the smallest held-out worst band
+        scores = [c["held_out_worst_band"]["rel_rms"] for c in rep["candidates"] if c["success"]]
+        assert rep["success"] and rep["held_out_worst_band"]["rel_rms"] == min(scores)
     assert main(["orders", f"{brdf / 'curet' / 'abrdf.dat'}#1", "--eps", "0.1"]) == 0
     out = capsys.readouterr().out
     assert out.startswith("analysed through") and "held-out worst view band" in out and "anisotropy" in out
