@@ -22,7 +22,6 @@ from ..analysis.compare import CompareOptions, compare_representations
 from ..analysis.tolerance import DEFAULT_EPS
 from ..brdf_io.atomic import atomic_path, check_writable
 from ..brdf_io.errors import BadInputError
-from ..brdf_io.specs import load_brdf
 from ..render.mesh import load_mesh
 from ..render.strip import write_comparison_strip
 from .common import (
@@ -32,11 +31,11 @@ from .common import (
     add_rgl_incident,
     add_window_option,
     brdf_help,
+    load_analysis_brdf,
     load_env_arg,
     number_in,
     print_json,
     print_table,
-    rgl_brdf_arg,
     stderr,
     stdout,
     tolerance,
@@ -126,7 +125,7 @@ def run(args: argparse.Namespace) -> int:
     if args.strip and Path(args.strip).suffix.lower() != ".png":
         raise BadInputError(args.strip, "--strip must name a .png file")
     mesh = load_mesh(args.mesh) if args.mesh else None
-    brdf = load_brdf(rgl_brdf_arg(args.brdf, args))
+    _, brdf, choice = load_analysis_brdf(args.brdf, args, quiet=args.json)  # scattered data: its representation
     for path in (args.strip, args.markdown):
         if path:
             check_writable(path)
@@ -148,8 +147,10 @@ def run(args: argparse.Namespace) -> int:
         with atomic_path(args.markdown) as tmp:
             Path(tmp).write_text(result["markdown"], encoding="utf-8")
     if args.json:
-        print_json(result)
+        print_json({**result, "representation": None if choice is None else choice.as_dict()})
         return 0
+    if choice is not None:
+        stdout.print(choice.line(), markup=False, soft_wrap=True)
     table = Table(title=f"{result['brdf']} under {result['environment']}, eps {result['eps']:g}, "
                         f"window {result['window']}, {result['n_pairs']} pairs "
                         f"(reference {result['reference']['seconds']:.2f} s)")

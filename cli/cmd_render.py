@@ -43,11 +43,11 @@ from .common import (
     add_window_option,
     env_rotation_arg,
     env_sources_arg,
+    load_analysis_brdf,
     load_env_arg,
     load_env_sequence,
     order_rule,
     print_json,
-    rgl_brdf_arg,
     say,
 )
 
@@ -337,6 +337,17 @@ def _sequence_doc(args: argparse.Namespace, seq: SequenceRender, outputs: list[s
     }
 
 
+def _analysed_brdf(args: argparse.Namespace) -> Any:
+    """The BRDF rendered: the file's, or for scattered measurements the representation chosen by
+    held-out error (``cli.common.load_analysis_brdf``), whose line is said and whose record goes to
+    ``--json`` as ``representation`` (kept on ``args``)."""
+    _, brdf, choice = load_analysis_brdf(args.brdf, args, quiet=args.json)
+    args.representation = None if choice is None else choice.as_dict()
+    if choice is not None and not args.json:
+        say(choice.line())
+    return brdf
+
+
 def _resolve_exposure(args: argparse.Namespace, env: Any) -> None:
     """``--exposure`` when given, else the stops that bring ``env``'s mean luminance to middle grey
     (``render.preview.preview_exposure``, the rule of ``shrm view``), said on one line: a first
@@ -358,19 +369,22 @@ def run(args: argparse.Namespace) -> int:
     if sequence:
         maps = load_env_sequence(sources, args)  # every member read first: a bad one stops before any output
         _resolve_exposure(args, maps[0])  # one exposure for every frame (the first map's): no flicker
-        seq = render_sequence(mesh, maps, rgl_brdf_arg(args.brdf, args), mode=args.mode, eps=args.eps,
+        brdf = _analysed_brdf(args)
+        seq = render_sequence(mesh, maps, brdf, mode=args.mode, eps=args.eps,
                               camera=cameras[0], size=args.size, background=args.background,
                               fps_frames=0, options=options)
         if not args.json:
             _report_sequence(args, seq)
         outputs = _write(args, seq.frames, len(seq.frames))
         if args.json:
-            print_json({**_sequence_doc(args, seq, outputs), "exposure": args.exposure})
+            print_json({**_sequence_doc(args, seq, outputs), "exposure": args.exposure,
+                        "representation": args.representation})
         return 0
     env = load_env_arg(sources[0], args)
     _resolve_exposure(args, env)
+    brdf = _analysed_brdf(args)
     result = render_scene(
-        mesh, env, rgl_brdf_arg(args.brdf, args), mode=args.mode, eps=args.eps, camera=cameras, size=args.size,
+        mesh, env, brdf, mode=args.mode, eps=args.eps, camera=cameras, size=args.size,
         background=args.background, fps_frames=args.fps_frames, options=options,
     )
     if not args.json:
@@ -386,6 +400,7 @@ def run(args: argparse.Namespace) -> int:
         doc = _scene_doc(args, result, outputs)
         doc["environment"] = env.name
         doc["exposure"] = args.exposure
+        doc["representation"] = args.representation
         if errors is not None:
             doc["error_image"] = errors.summary()
         print_json(doc)

@@ -16,7 +16,6 @@ from ..analysis.shrm import prefilter
 from ..analysis.tolerance import DEFAULT_EPS
 from ..brdf_io.atomic import check_writable
 from ..brdf_io.errors import BadInputError
-from ..brdf_io.specs import load_brdf
 from ..render.output import TONE_MAPS
 from ..render.webgl_page import (
     DEFAULT_MESH,
@@ -37,11 +36,11 @@ from .common import (
     add_window_option,
     env_rotation_angles,
     env_sources_arg,
+    load_analysis_brdf,
     load_env_sequence,
     number_in,
     order_rule,
     print_json,
-    rgl_brdf_arg,
     say,
     tolerance,
 )
@@ -105,7 +104,9 @@ def run(args: argparse.Namespace) -> int:
     sources, _ = env_sources_arg(args.env)
     check_writable(out)
     envs = load_env_sequence(sources, args)  # every map read first: a bad one stops before any prefilter
-    brdf = load_brdf(rgl_brdf_arg(args.brdf, args))
+    _, brdf, choice = load_analysis_brdf(args.brdf, args, quiet=args.json)  # scattered data: its representation
+    if choice is not None and not args.json:
+        say(choice.line())
     rule = order_rule(args)
     # the orders depend on the BRDF only: chosen once for every map
     orders = choose_orders(brdf, eps=args.eps, **rule) if len(envs) > 1 else None
@@ -137,6 +138,7 @@ def run(args: argparse.Namespace) -> int:
                      "triangles": mesh["triangles"], "still_renderer": page.still_renderer, "notes": list(page.notes),
                      "bytes": page_bytes, "budget_bytes": budget.page_bytes},
             "output": str(out), "url": url,
+            "representation": None if choice is None else choice.as_dict(),
         })
         return 0
     for one, env in zip(shrms, envs, strict=True):

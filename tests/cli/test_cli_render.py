@@ -134,3 +134,17 @@ def test_default_exposure_brings_the_environment_mean_to_middle_grey(tmp_path, c
     assert main(["render", "builtin:sphere:subdivisions=2", "--env", spec, "--brdf", "lambert:albedo=0.5",
                  "--size", "24", "--fps-frames", "0", "-o", str(tmp_path / "b.png")]) == 0
     assert f"exposure {doc['exposure']:+.2f} stops" in capsys.readouterr().out
+
+
+def test_render_of_scattered_measurements_goes_through_their_representation(shared_data, tmp_path, capsys):
+    """Every verb accepts what report accepts (issue 24): a CURET sample is rendered through the
+    representation chosen by held-out error, named in --json."""
+    import json
+
+    source = f"{shared_data / 'brdf' / 'curet' / 'abrdf.dat'}#1"
+    assert main(["render", "builtin:sphere:subdivisions=2", "--env", "builtin:sky,height=16", "--brdf", source,
+                 "--size", "16", "--fps-frames", "0", "-o", str(tmp_path / "c.png"), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    rep = doc["representation"]
+    assert rep is not None and rep["line"].startswith("analysed through")
+    assert (tmp_path / "c.png").is_file()
