@@ -147,7 +147,7 @@ def run(args: argparse.Namespace) -> int:
         with atomic_path(args.markdown) as tmp:
             Path(tmp).write_text(result["markdown"], encoding="utf-8")
     if args.json:
-        print_json({**result, "representation": None if choice is None else choice.as_dict()})
+        print_json({"representation": None if choice is None else choice.as_dict(), **result})
         return 0
     if choice is not None:
         stdout.print(choice.line(), markup=False, soft_wrap=True)
