@@ -31,6 +31,7 @@ from ..brdf_io.latlong import bilinear_lookup
 from ..brdf_io.specs import load_brdf
 from .lights import DEFAULT_LIGHTS, LightSet, check_lights, extract_lights, merge_error_by_band
 from .map_budget import assess_map
+from .map_size import DEFAULT_MAP_BUDGET_BYTES, default_size, fast_map_rows, map_rows
 from .notebook import shrm_html, shrm_png
 from .orders import (
     DEFAULT_MAX_F,
@@ -46,8 +47,8 @@ from .sh import real_sph_harm
 from .shrm_file import read_shrm_fields, save_shrm
 from .synthesis import (
     LOCAL_VIEWS_DEG,
-    fast_rows,
     global_from_local,
+    global_shrm_cube,
     global_shrm_latlong,
     local_shrm_at,
     local_shrm_direct,
@@ -279,87 +280,6 @@ def cube_directions(size: int) -> np.ndarray:
     return cube_map_directions(size)
 
 
-DEFAULT_MAP_BUDGET_BYTES = 256 << 20
-
-
-def default_size(F: int, P: int = 0, budget_bytes: int = DEFAULT_MAP_BUDGET_BYTES) -> int:
-    """S_B from the rule S ≈ 10F (RH02 §5.2), clamped to [32, 1024] and to a memory budget.
-
-    The global SHRM holds (P+1)² float32 RGB maps of S × 2S: the default S is lowered
-    until they fit in ``budget_bytes`` (256 MiB), which keeps high-P materials usable;
-    pass ``size=`` to override.
-    """
-    rule = int(np.clip(10 * F, 32, 1024))
-    per_row_squared = (P + 1) ** 2 * 2 * 3 * 4  # bytes per S² texels of all maps
-    fits = int(np.sqrt(budget_bytes / per_row_squared))
-    return max(8, min(rule, fits))
-
-
-def _fast_rows(rows: int, F: int, P: int, budget_bytes: int = DEFAULT_MAP_BUDGET_BYTES) -> int:
-    """``rows`` raised to the next size with fast FFTs (:func:`~shrmkit.analysis.synthesis.fast_rows`)
-    while that stays within the memory budget's :func:`default_size`, else ``rows``."""
-    fast = fast_rows(rows)
-    return fast if fast <= max(default_size(F, P, budget_bytes), rows) else rows
-
-
-#: Under the ``"bands"`` rule the map is the smallest whose bilinear lookup adds at most this
-#: fraction of ε to the predicted error energy of every view band inside the limit (:func:`map_rows`).
-MAP_ERROR_SHARE = 0.01
-#: … and whose bound (which takes the lookup error of the global maps at degree l + P, RH02 eq. 8)
-#: is at most this fraction above the bound of exact evaluation.
-MAP_BOUND_SHARE = 0.25
-#: … and holds at least this many samples per period of the highest degree F + P (S >= 2.5 (F + P)).
-MAP_MIN_SAMPLES = 5.0
-
-
-def map_rows(
-    profile: Any, coefficients: Any, band_energy: np.ndarray, F: int, P: int, eps: float, *,
-    sigma: np.ndarray | None = None, q_max: int | None = None, lighting_rows: tuple[int, int] | None = None,
-    max_view_deg: float = DEFAULT_MAX_VIEW_DEG, budget_bytes: int = DEFAULT_MAP_BUDGET_BYTES,
-) -> tuple[int, bool]:
-    """Rows S of the S × 2S maps for the ``"bands"`` rule, and whether the memory budget bound them.
-
-    The error-driven size: the smallest S in [max(32, 2.5 (F + P)), :func:`default_size`] (five
-    samples per period of the highest degree; RH02's 10 F within the budget) for which bilinear
-    lookup in the maps adds at most :data:`MAP_ERROR_SHARE` × ε to the predicted error energy of
-    every view band inside the limit (the map term of
-    :func:`~shrmkit.analysis.view_bands.shrm_view_bands`, κ_l ≈ (l(l+1))² h⁴/160 per degree,
-    h = π/S, beside the same statement without lookup) and raises no band's bound by more than
-    :data:`MAP_BOUND_SHARE`. The lookup error falls as h⁴, so this is typically S ≈ 3–5 F instead
-    of RH02's 10 F: what the stated error needs, not more.
-    """
-    rule_hi = int(np.clip(10 * F, 32, 1024))
-    hi = default_size(F, P, budget_bytes)
-    inside = bands_inside(profile, max_view_deg)
-
-    def statement(rows: int | None) -> list:
-        return shrm_view_bands(profile, coefficients, band_energy, F, P, sigma=sigma, q_max=q_max, map_rows=rows,
-                               lighting_rows=lighting_rows, max_view_deg=max_view_deg).bands
-
-    exact = statement(None)
-    allowed = MAP_ERROR_SHARE * eps
-
-    def fits(rows: int) -> bool:
-        bands = statement(rows)
-        return all(
-            bands[b]["map_rel_rms"] ** 2 - exact[b]["map_rel_rms"] ** 2 <= allowed
-            and bands[b]["bound_rel_rms"] <= (1.0 + MAP_BOUND_SHARE) * exact[b]["bound_rel_rms"]
-            for b in inside
-        )
-
-    # at least MAP_MIN_SAMPLES samples per period of the highest degree F + P in R: the lookup error
-    # is an average over R, and near a sharp feature (what is left of a light) it is larger
-    lo = min(max(32, int(np.ceil(MAP_MIN_SAMPLES * (F + P) / 2.0))), hi)
-    if not fits(hi):
-        return hi, hi < rule_hi
-    if fits(lo):
-        return lo, False
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        lo, hi = (lo, mid) if fits(mid) else (mid, hi)
-    return hi, False
-
-
 def _check_finite(coeffs: np.ndarray, env: Any) -> np.ndarray:
     """``coeffs`` when every value is finite, else :class:`BadInputError` naming the map."""
     if not np.all(np.isfinite(coeffs)):
@@ -570,8 +490,8 @@ def prefilter(
         if size is not None:
             return int(size)
         if orders.criterion == "rh02":
-            return _fast_rows(default_size(F_, P_B, budget_bytes), F_, P_B, budget_bytes)
-        return _fast_rows(map_rows(orders.profile, base, band_energy, F_, P_B, eps, q_max=q_max,
+            return fast_map_rows(default_size(F_, P_B, budget_bytes), F_, P_B, budget_bytes)
+        return fast_map_rows(map_rows(orders.profile, base, band_energy, F_, P_B, eps, q_max=q_max,
                                    lighting_rows=lighting_rows, max_view_deg=orders.max_view_deg,
                                    budget_bytes=budget_bytes)[0], F_, P_B, budget_bytes)
 
@@ -607,14 +527,14 @@ def prefilter(
     elif orders.criterion == "rh02":
         S = default_size(F_B, P_B, budget_bytes)  # RH02 §5.2: S ≈ 10 F
         budget_bound = S < int(np.clip(10 * F_B, 32, 1024))
-        S = _fast_rows(S, F_B, P_B, budget_bytes)
+        S = fast_map_rows(S, F_B, P_B, budget_bytes)
     else:
         S, budget_bound = map_rows(
             orders.profile, base, band_energy, F_B, P_B, eps, sigma=sigma, q_max=q_max,
             lighting_rows=(lighting.rows, lighting.source_rows), max_view_deg=orders.max_view_deg,
             budget_bytes=budget_bytes,
         )
-        S = _fast_rows(S, F_B, P_B, budget_bytes)
+        S = fast_map_rows(S, F_B, P_B, budget_bytes)
     if S < 2 or S > 8192:
         raise BadInputError(None, f"SHRM size must be in [2, 8192] rows, got {S}")
     timings["map size"] = time.perf_counter() - t0
@@ -634,15 +554,8 @@ def prefilter(
         n_cube = max(2, S // 2) if cube_size is None else int(cube_size)
         if n_cube < 2 or n_cube > 4096:
             raise BadInputError(None, f"cube face size must be in [2, 4096], got {n_cube}")
-        dirs = cube_directions(n_cube).reshape(-1, 3)
-        alpha = np.arccos(np.clip(dirs[:, 2], -1.0, 1.0))
-        beta = np.arctan2(dirs[:, 1], dirs[:, 0])
-        local_cube = local_shrm_at(lighting, coefficients, F_B, P_B, alpha, beta, nthreads=nthreads)
-        if azimuth_free:
-            local_cube[:, np.arange(2 * P_B + 1) != P_B] = 0.0
-        cube_coeffs = global_from_local(local_cube, alpha, beta).reshape(
-            ((P_B + 1) ** 2, 6, n_cube, n_cube, 3)
-        ).astype(np.float32)
+        cube_coeffs = global_shrm_cube(lighting, coefficients, F_B, P_B, n_cube, nthreads=nthreads,
+                                       azimuth_free=azimuth_free)
         timings["cube"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     def state(signal: np.ndarray | None = None, rows: int | None = S):
@@ -679,7 +592,7 @@ def prefilter(
     map_budget = assess_map(
         statement.bands, raw_bands, state(signal_energy, None).bands, rows=S, P=P_B, budget_bytes=budget_bytes,
         inside=list(bands_inside(orders.profile, orders.max_view_deg)), capped=budget_bound,
-        rows_needed=lambda: _fast_rows(map_rows(
+        rows_needed=lambda: fast_map_rows(map_rows(
             orders.profile, base, band_energy, F_B, P_B, eps, sigma=sigma, q_max=q_max,
             lighting_rows=(lighting.rows, lighting.source_rows), max_view_deg=orders.max_view_deg,
             budget_bytes=1 << 62)[0], F_B, P_B, 1 << 62))

@@ -15,6 +15,7 @@ import itertools
 import ducc0
 import numpy as np
 
+from ..brdf_io.cubemap import cube_map_directions
 from ..brdf_io.latlong import pixel_angles
 from .brdf_coeffs import BRDFCoefficients
 from .lighting import LightingCoefficients, alm_index
@@ -27,6 +28,7 @@ __all__ = [
     "global_shrm_latlong",
     "local_shrm_direct",
     "global_from_local",
+    "global_shrm_cube",
     "local_view_field",
     "LOCAL_VIEWS_DEG",
     "sample_rows",
@@ -393,3 +395,28 @@ def local_view_field(
         else:
             out[c, v] += 2.0 * (field[0] * np.cos(s * psi[v]) + field[1] * np.sin(s * psi[v]))
     return out.reshape(n_out, -1)
+
+
+def global_shrm_cube(
+    lighting: LightingCoefficients,
+    coefficients: BRDFCoefficients,
+    F: int,
+    P: int,
+    size: int,
+    *,
+    nthreads: int = 1,
+    azimuth_free: bool = False,
+) -> np.ndarray:
+    """The global SHRM on a 6 × S × S cube map (faces of ``brdf_io.cubemap``, texel centres) by
+    ducc0's general synthesis of the local SHRM (:func:`local_shrm_at`) rotated to the global
+    frame (:func:`global_from_local`); ``azimuth_free`` keeps q = 0 as :func:`global_shrm_latlong`.
+
+    Returns float32 ((P+1)², 6, S, S, 3), real basis.
+    """
+    dirs = cube_map_directions(size).reshape(-1, 3)
+    alpha = np.arccos(np.clip(dirs[:, 2], -1.0, 1.0))
+    beta = np.arctan2(dirs[:, 1], dirs[:, 0])
+    local = local_shrm_at(lighting, coefficients, F, P, alpha, beta, nthreads=nthreads)
+    if azimuth_free:
+        local[:, np.arange(2 * P + 1) != P] = 0.0
+    return global_from_local(local, alpha, beta).reshape(((P + 1) ** 2, 6, size, size, 3)).astype(np.float32)

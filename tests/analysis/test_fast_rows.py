@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 import shrmkit
-from shrmkit.analysis.shrm import default_size
+from shrmkit.analysis.map_size import default_size
 from shrmkit.analysis.synthesis import fast_rows, sample_rows
 
 

@@ -195,8 +195,8 @@ def test_budget_shrunk_map_is_counted():
     """A map shrunk below what the error needs (here 24 rows for F ≈ 46) adds bilinear-lookup
     error: the statement grows with it, and still bounds the measured error. The default size is
     the smallest whose lookup adds at most 1 % of ε to any band's predicted error energy, far
-    below RH02's S ≈ 10F (``analysis.shrm.map_rows``)."""
-    from shrmkit.analysis.shrm import MAP_ERROR_SHARE
+    below RH02's S ≈ 10F (``analysis.map_size.map_rows``)."""
+    from shrmkit.analysis.map_size import MAP_ERROR_SHARE
 
     env = shrmkit.load_env("builtin:studio,height=64")
     brdf = shrmkit.load_brdf("phong:s=400")
