@@ -23,14 +23,8 @@ may go negative; :meth:`ZernikeBRDF.negative_fraction` measures how much.
 
 References
 ----------
-J. J. Koenderink, A. J. van Doorn, M. Stavridi, "Bidirectional reflection distribution
-function expressed in terms of surface scattering modes", ECCV 1996, LNCS 1065, pp. 28–39,
-doi:10.1007/3-540-61123-1_125.
-K. J. Dana, B. van Ginneken, S. K. Nayar, J. J. Koenderink, "Reflectance and texture of
-real-world surfaces", ACM Trans. Graph. 18(1), 1999, doi:10.1145/300776.300778 (CURET).
-M. Born, E. Wolf, *Principles of Optics*, Appendix VII (Zernike circle polynomials).
-R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering", SIGGRAPH 2002
-(RH02), doi:10.1145/566654.566611, Fig. 8.
+Koenderink et al. 1996 (the basis), Dana et al. 1999 (CURET), RH02 Fig. 8: see the model's
+module, :mod:`shrmkit.brdf_io.zernike`.
 """
 
 from __future__ import annotations
