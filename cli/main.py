@@ -18,8 +18,10 @@ from __future__ import annotations
 
 import argparse
 import ast
+import contextlib
 import difflib
 import importlib
+import os
 import pkgutil
 import re
 import sys
@@ -103,6 +105,9 @@ class _VerbParser(_Parser):
             module = _module(self.verb)
             self.verb = None
             module.add_arguments(self)
+            self.add_argument("-q", "--quiet", action="store_true",
+                              help="print nothing on stdout but what --json asks for (errors and warnings still "
+                              "go to stderr; the exit status says how it went)")
             self.set_defaults(_run=module.run)
         return self
 
@@ -167,8 +172,11 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "_run", None):
         parser.print_help()
         return 0
+    quiet = getattr(args, "quiet", False) and not getattr(args, "json", False)
     try:
-        return int(args._run(args) or 0)
+        with open(os.devnull, "w") if quiet else contextlib.nullcontext() as sink:
+            with contextlib.redirect_stdout(sink) if quiet else contextlib.nullcontext():
+                return int(args._run(args) or 0)
     except ShrmError as err:
         print(f"shrm {args.verb}: error: {shorten(str(err))}", file=sys.stderr)
         return 2

@@ -163,3 +163,15 @@ def test_library_warnings_reach_the_user_as_one_line(capsys, monkeypatch):
         warnings_module.warn("a library's message\nover two lines", UserWarning, stacklevel=1)
     err = capsys.readouterr().err
     assert err == "shrm orders: warning: a library's message over two lines\n"
+
+
+def test_quiet_prints_nothing_but_json_and_errors(capsys):
+    from shrmkit.cli.main import main
+
+    assert main(["orders", "phong:s=5", "--eps", "0.1", "--quiet"]) == 0
+    assert capsys.readouterr().out == ""
+    assert main(["orders", "phong:s=5", "--eps", "0.1", "-q", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["F"] >= 0
+    assert main(["orders", "no-such-file.binary", "-q"]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and "no-such-file.binary" in captured.err
