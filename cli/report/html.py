@@ -32,6 +32,9 @@ img{max-width:100%;border:1px solid #ddd;margin:.3em 0}code{background:#f4f4f4;p
 pre{background:#f4f4f4;padding:.6em;overflow:auto}.failed{color:#b00;font-weight:bold}.ok{color:#070}
 th.sortable{cursor:pointer}th.sortable:after{content:" \\2195";color:#999}
 .live-view{margin:.6em 0}.live-view .shrm-view{max-width:480px}.live-view .shrm-view img{border:0;margin:0}
+.scroll{overflow-x:auto;max-width:100%}.scroll th{white-space:normal;min-width:4.5em;vertical-align:bottom}
+.scroll td:first-child,.scroll th:first-child{position:sticky;left:0;background:#fff;z-index:1}
+.scroll th:first-child{background:#f0f0f0}img.thumb{width:48px;height:48px;border:0;margin:0;vertical-align:middle}
 """
 
 _SORT_JS = """
@@ -163,10 +166,33 @@ def report_html(doc: dict[str, Any], pngs: Mapping[str, bytes], views: Sequence[
     return _page(f"shrm report: {doc['name']}", "\n".join(parts))
 
 
+_LABELS = (  # summary.csv column → header people read (the key stays the header's tooltip)
+    (r"^F@(.+)$", r"F at ε \1"), (r"^P@(.+)$", r"P at ε \1"),
+    (r"^fit_rel_rms_(.+)$", r"\1 fit: rel. RMS, all"),
+    (r"^fit_worst_band_rel_rms_(.+)$", r"\1 fit: worst band rel. RMS"),
+    (r"^fit_worst_band_(.+)$", r"\1 fit: worst band (°)"), (r"^fit_ok_(.+)$", r"\1 fit ok"),
+    (r"^shrm_rel_rms_(.+)$", r"SHRM error under \1 (measured rel. RMS)"),
+    (r"^fit_(.+)_seconds$", r"\1 fit (s)"), (r"^prefilter_seconds$", "prefilter (s)"),
+    (r"^total_seconds$", "total (s)"),
+)
+
+
+def column_label(key: str) -> str:
+    """The index page's header of a ``summary.csv`` column (``F@0.03`` → ``F at ε 0.03``)."""
+    for pattern, label in _LABELS:
+        if re.match(pattern, key):
+            return re.sub(pattern, label, key)
+    return key
+
+
 def index_html(columns: Sequence[str], rows: Sequence[Mapping[str, Any]], title: str = "shrm report summary",
-               notes: Sequence[str] = ()) -> str:
-    """The batch summary page: one row per BRDF, linked to its report, sortable columns."""
-    head = "".join(f"<th>{html.escape(c)}</th>" for c in columns)
+               notes: Sequence[str] = (), thumbnails: Mapping[str, str] | None = None) -> str:
+    """The batch summary page: one row per BRDF, linked to its report, sortable columns with
+    readable headers (:func:`column_label`; the ``summary.csv`` key as each header's tooltip), the
+    table scrolling sideways under a fixed name column, and a thumbnail per material where
+    ``thumbnails`` maps its name to an image path relative to the page (the report's preview)."""
+    thumbnails = thumbnails or {}
+    head = "".join(f'<th title="{html.escape(c)}">{html.escape(column_label(c))}</th>' for c in columns)
     body_rows = []
     for row in rows:
         cells = []
@@ -174,14 +200,17 @@ def index_html(columns: Sequence[str], rows: Sequence[Mapping[str, Any]], title:
             value = row.get(c)
             sort_key = "" if value is None else str(value)
             if c == "name":
-                text = f'<a href="{html.escape(str(row["name"]))}/report.html">{html.escape(str(value))}</a>'
+                thumb = thumbnails.get(str(row["name"]))
+                img = f'<img class="thumb" alt="" src="{html.escape(thumb)}"> ' if thumb else ""
+                text = f'{img}<a href="{html.escape(str(row["name"]))}/report.html">{html.escape(str(value))}</a>'
             elif c == "status":
                 text = f'<span class="{"ok" if value == "ok" else "failed"}">{html.escape(str(value))}</span>'
             else:
                 text = html.escape(fmt(value))
             cells.append(f'<td data-v="{html.escape(sort_key)}">{text}</td>')
         body_rows.append("<tr>" + "".join(cells) + "</tr>")
-    table = f'<table class="sortable"><thead><tr>{head}</tr></thead><tbody>{"".join(body_rows)}</tbody></table>'
+    table = (f'<div class="scroll"><table class="sortable"><thead><tr>{head}</tr></thead>'
+             f'<tbody>{"".join(body_rows)}</tbody></table></div>')
     note_html = "".join(f"<p>{html.escape(n)}</p>" for n in notes)
     return _page(title, f"<h1>{html.escape(title)}</h1>{note_html}{table}<p>Click a column header to sort.</p>",
                  _SORT_JS)

@@ -155,6 +155,13 @@ def write_summary(out_dir: str | os.PathLike[str], rows: Sequence[Mapping[str, A
     csv_path, html_path = out / "summary.csv", out / "index.html"
     with atomic_path(csv_path) as tmp:
         tmp.write_text(buf.getvalue(), encoding="utf-8")
+    thumbnails = {}
+    for row in rows:  # the report's preview, else its lit sphere: a picture per material
+        for image in ("preview_sphere.png", "explorer_sphere.png"):
+            if (out / str(row["name"]) / image).is_file():
+                thumbnails[str(row["name"])] = f"{row['name']}/{image}"
+                break
     with atomic_path(html_path) as tmp:
-        tmp.write_text(index_html([c for c in columns if c != "source"], rows, notes=notes), encoding="utf-8")
+        tmp.write_text(index_html([c for c in columns if c != "source"], rows, notes=notes, thumbnails=thumbnails),
+                       encoding="utf-8")
     return csv_path, html_path

@@ -37,3 +37,16 @@ def test_summary_columns_union_with_error_last():
     cols = summary_columns([{"name": "a", "error": None, "x": 1}, {"name": "b", "y": 2}])
     assert cols == ["name", "x", "y", "error"]
     assert fmt(1234.5678) == "1.23e+03" and fmt([3, 4]) == "3×4"
+
+
+def test_index_headers_are_readable_with_the_csv_key_as_tooltip_and_thumbnails():
+    from shrmkit.cli.report.html import column_label
+
+    assert column_label("F@0.03") == "F at ε 0.03" and column_label("P@0.1") == "P at ε 0.1"
+    assert column_label("fit_worst_band_rel_rms_lafortune") == "lafortune fit: worst band rel. RMS"
+    assert column_label("fit_worst_band_lafortune") == "lafortune fit: worst band (°)"
+    assert column_label("shrm_rel_rms_sky") == "SHRM error under sky (measured rel. RMS)"
+    assert column_label("fit_cook-torrance_seconds") == "cook-torrance fit (s)" and column_label("name") == "name"
+    page = index_html(["name", "F@0.03"], [{"name": "a", "F@0.03": 7}], thumbnails={"a": "a/preview_sphere.png"})
+    assert '<th title="F@0.03">F at ε 0.03</th>' in page
+    assert '<img class="thumb" alt="" src="a/preview_sphere.png">' in page and 'class="scroll"' in page
