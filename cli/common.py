@@ -338,8 +338,25 @@ def load_oriented_env(spec: str, *, up: str | None, flip: bool, azimuth: float, 
 
 
 def load_env_arg(spec: str, args: argparse.Namespace, **kwargs: Any):
-    """:func:`load_oriented_env` with the options of :func:`add_env_orientation`."""
-    return load_oriented_env(spec, **env_orientation(args), **kwargs)
+    """:func:`load_oriented_env` with the options of :func:`add_env_orientation`; a lat-long file
+    read with the default orientation says so on stdout (:func:`orientation_note`), unless the
+    verb prints ``--json``."""
+    env = load_oriented_env(spec, **env_orientation(args), **kwargs)
+    note = orientation_note(env, args)
+    if note and not getattr(args, "json", False):
+        stdout.print(note, markup=False, soft_wrap=True)
+    return env
+
+
+def orientation_note(env: Any, args: argparse.Namespace) -> str | None:
+    """One line when a lat-long map *file* was read with the default orientation (z-up, as stored):
+    most lat-long panoramas in the wild are y-up (three.js, Blender, Mitsuba, Filament, Poly Haven),
+    which the default shows mirrored, so the guess is never silent. None for built-ins, cube maps,
+    probes and an explicit ``--env-up``."""
+    if getattr(args, "env_up", None) is not None or "[latlong, up=z" not in str(getattr(env, "source", "")):
+        return None
+    return (f"environment {env.name}: a lat-long file read z-up, as stored (data_specs/environment_maps.md); "
+            "most panoramas are y-up: --env-up y (and --env-flip if it is upside down)")
 
 
 _GLOB_CHARS = frozenset("*?[")

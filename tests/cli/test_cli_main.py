@@ -175,3 +175,20 @@ def test_quiet_prints_nothing_but_json_and_errors(capsys):
     assert main(["orders", "no-such-file.binary", "-q"]) == 2
     captured = capsys.readouterr()
     assert captured.out == "" and "no-such-file.binary" in captured.err
+
+
+def test_default_orientation_of_a_lat_long_file_is_never_silent(tmp_path, capsys):
+    """A lat-long file read with the default (z-up, as stored) says so and how to read a y-up
+    panorama; --env-up, built-ins and --json print no such line."""
+    from shrmkit.cli.main import main
+
+    hdr = str(__import__("pathlib").Path(__file__).parents[1] / "resources" / "tiny_4x8.hdr")
+    assert main(["prefilter", "--env", hdr, "--brdf", "phong:s=8", "--eps", "0.1", "-o", str(tmp_path / "a.npz")]) == 0
+    out = capsys.readouterr().out
+    assert "a lat-long file read z-up, as stored" in out and "--env-up y" in out
+    assert main(["prefilter", "--env", hdr, "--env-up", "y", "--brdf", "phong:s=8", "--eps", "0.1",
+                 "-o", str(tmp_path / "b.npz")]) == 0
+    assert "read z-up" not in capsys.readouterr().out
+    assert main(["prefilter", "--env", hdr, "--brdf", "phong:s=8", "--eps", "0.1", "--json",
+                 "-o", str(tmp_path / "c.npz")]) == 0
+    json.loads(capsys.readouterr().out)  # the JSON alone
