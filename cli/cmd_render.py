@@ -337,15 +337,14 @@ def _sequence_doc(args: argparse.Namespace, seq: SequenceRender, outputs: list[s
     }
 
 
-def _analysed_brdf(args: argparse.Namespace) -> Any:
-    """The BRDF rendered: the file's, or for scattered measurements the representation chosen by
-    held-out error (``cli.common.load_analysis_brdf``), whose line is said and whose record goes to
-    ``--json`` as ``representation`` (kept on ``args``)."""
+def _analysed_brdf(args: argparse.Namespace) -> tuple[Any, dict | None]:
+    """The BRDF rendered — the file's, or for scattered measurements the representation chosen by
+    held-out error (``cli.common.load_analysis_brdf``), whose line is said — and that choice's
+    record for ``--json`` (``representation``; None for an evaluable BRDF)."""
     _, brdf, choice = load_analysis_brdf(args.brdf, args, quiet=args.json)
-    args.representation = None if choice is None else choice.as_dict()
     if choice is not None and not args.json:
         say(choice.line())
-    return brdf
+    return brdf, None if choice is None else choice.as_dict()
 
 
 def _resolve_exposure(args: argparse.Namespace, env: Any) -> None:
@@ -369,7 +368,7 @@ def run(args: argparse.Namespace) -> int:
     if sequence:
         maps = load_env_sequence(sources, args)  # every member read first: a bad one stops before any output
         _resolve_exposure(args, maps[0])  # one exposure for every frame (the first map's): no flicker
-        brdf = _analysed_brdf(args)
+        brdf, representation = _analysed_brdf(args)
         seq = render_sequence(mesh, maps, brdf, mode=args.mode, eps=args.eps,
                               camera=cameras[0], size=args.size, background=args.background,
                               fps_frames=0, options=options)
@@ -378,11 +377,11 @@ def run(args: argparse.Namespace) -> int:
         outputs = _write(args, seq.frames, len(seq.frames))
         if args.json:
             print_json({**_sequence_doc(args, seq, outputs), "exposure": args.exposure,
-                        "representation": args.representation})
+                        "representation": representation})
         return 0
     env = load_env_arg(sources[0], args)
     _resolve_exposure(args, env)
-    brdf = _analysed_brdf(args)
+    brdf, representation = _analysed_brdf(args)
     result = render_scene(
         mesh, env, brdf, mode=args.mode, eps=args.eps, camera=cameras, size=args.size,
         background=args.background, fps_frames=args.fps_frames, options=options,
@@ -400,7 +399,7 @@ def run(args: argparse.Namespace) -> int:
         doc = _scene_doc(args, result, outputs)
         doc["environment"] = env.name
         doc["exposure"] = args.exposure
-        doc["representation"] = args.representation
+        doc["representation"] = representation
         if errors is not None:
             doc["error_image"] = errors.summary()
         print_json(doc)
