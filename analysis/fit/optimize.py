@@ -301,7 +301,8 @@ def fit_brdf(
     converged = code in _CONVERGED
     worst = worst_band(bands)
     at_bounds = tuple(param.bounds_reached(x, c))
-    message, success = _verdict(errors, worst, bool(np.any(c > 0)), status, converged, objective.evaluations, at_bounds)
+    nonzero, finite = bool(np.any(c > 0)), all(np.isfinite(v) for v in errors.values())
+    message, success = _verdict(errors, worst, nonzero, finite, status, converged, objective.evaluations, at_bounds)
     options = {
         "model": model,
         "lobes": int(lobes) if model == "lafortune" else None,
@@ -330,19 +331,19 @@ def fit_brdf(
         worst=worst,
         converged=converged,
         at_bounds=at_bounds,
-        usable=bool(np.any(c > 0)) and all(np.isfinite(v) for v in errors.values()),
+        usable=nonzero and finite,
     )
 
 
-def _verdict(errors: dict[str, float], worst: BandError | None, nonzero: bool, status: str, converged: bool,
-             evaluations: int, at_bounds: tuple[str, ...]) -> tuple[str, bool]:
+def _verdict(errors: dict[str, float], worst: BandError | None, nonzero: bool, finite: bool, status: str,
+             converged: bool, evaluations: int, at_bounds: tuple[str, ...]) -> tuple[str, bool]:
     """(message, success): the worst band first, then how nlopt stopped and the bounds reached."""
     stop = (f"nlopt stopped with {status} after {evaluations} evaluations"
             + ("" if converged else " (its evaluation budget, not a tolerance)"))
     tail = f"; {stop}" + (f"; {'; '.join(at_bounds)}" if at_bounds else "")
     if not nonzero:
         return "failed: the best fit is the zero BRDF: the model cannot represent this data" + tail, False
-    if not all(np.isfinite(v) for v in errors.values()):
+    if not finite:
         return "failed: non-finite errors" + tail, False
     if worst is None:
         return f"rel. RMS {errors['rel_rms']:.3g} (no view band with enough samples to judge)" + tail, True
