@@ -524,16 +524,15 @@ def prefilter(
     budget_bound = False
     if size is not None:
         S = int(size)
-    elif orders.criterion == "rh02":
-        S = default_size(F_B, P_B, budget_bytes)  # RH02 §5.2: S ≈ 10 F
-        budget_bound = S < int(np.clip(10 * F_B, 32, 1024))
-        S = fast_map_rows(S, F_B, P_B, budget_bytes)
     else:
-        S, budget_bound = map_rows(
-            orders.profile, base, band_energy, F_B, P_B, eps, sigma=sigma, q_max=q_max,
-            lighting_rows=(lighting.rows, lighting.source_rows), max_view_deg=orders.max_view_deg,
-            budget_bytes=budget_bytes,
-        )
+        if orders.criterion == "rh02":
+            S = default_size(F_B, P_B, budget_bytes)  # RH02 §5.2: S ≈ 10 F
+            budget_bound = S < int(np.clip(10 * F_B, 32, 1024))
+        else:
+            S, budget_bound = map_rows(
+                orders.profile, base, band_energy, F_B, P_B, eps, sigma=sigma, q_max=q_max,
+                lighting_rows=lighting_rows, max_view_deg=orders.max_view_deg, budget_bytes=budget_bytes,
+            )
         S = fast_map_rows(S, F_B, P_B, budget_bytes)
     if S < 2 or S > 8192:
         raise BadInputError(None, f"SHRM size must be in [2, 8192] rows, got {S}")
@@ -561,7 +560,7 @@ def prefilter(
     def state(signal: np.ndarray | None = None, rows: int | None = S):
         return shrm_view_bands(
             orders.profile, base, band_energy, F_B, P_B, sigma=sigma, q_max=q_max, map_rows=rows,
-            lighting_rows=(lighting.rows, lighting.source_rows), max_view_deg=orders.max_view_deg,
+            lighting_rows=lighting_rows, max_view_deg=orders.max_view_deg,
             signal_band_energy=signal,
         )
 
@@ -594,7 +593,7 @@ def prefilter(
         inside=list(bands_inside(orders.profile, orders.max_view_deg)), capped=budget_bound,
         rows_needed=lambda: fast_map_rows(map_rows(
             orders.profile, base, band_energy, F_B, P_B, eps, sigma=sigma, q_max=q_max,
-            lighting_rows=(lighting.rows, lighting.source_rows), max_view_deg=orders.max_view_deg,
+            lighting_rows=lighting_rows, max_view_deg=orders.max_view_deg,
             budget_bytes=1 << 62)[0], F_B, P_B, 1 << 62))
     # on the coefficients the map was made of (the projection for rh02, the view fit for bands):
     # the window's cost, the energy of its change over all views, is exact for either
@@ -607,7 +606,7 @@ def prefilter(
         reflected, bound = statement.eps_predicted, statement.eps_bound
         unwindowed = reflected if sigma is None else shrm_view_bands(
             orders.profile, base, band_energy, F_B, P_B, q_max=q_max, map_rows=S,
-            lighting_rows=(lighting.rows, lighting.source_rows), max_view_deg=orders.max_view_deg,
+            lighting_rows=lighting_rows, max_view_deg=orders.max_view_deg,
         ).eps_predicted
     # per direction (what a pixel shows), against a higher order: pixels.py
     pixels = pixel_statement(lighting, base, F_B, P_B, sigma, eps, top=top, q_max=q_max, fields=sampler,
