@@ -7,6 +7,7 @@ import json
 import os
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -182,7 +183,7 @@ def test_default_orientation_of_a_lat_long_file_is_never_silent(tmp_path, capsys
     panorama; --env-up, built-ins and --json print no such line."""
     from shrmkit.cli.main import main
 
-    hdr = str(__import__("pathlib").Path(__file__).parents[1] / "resources" / "tiny_4x8.hdr")
+    hdr = str(Path(__file__).parents[1] / "resources" / "tiny_4x8.hdr")
     assert main(["prefilter", "--env", hdr, "--brdf", "phong:s=8", "--eps", "0.1", "-o", str(tmp_path / "a.npz")]) == 0
     out = capsys.readouterr().out
     assert "a lat-long file read z-up, as stored" in out and "--env-up y" in out
