@@ -2,14 +2,14 @@
 
 Pipeline
 --------
-1. Samples (``sampling.py``): Sobol pairs in half/difference angles for analytic and
+1. Samples (``sampling.py``): low-discrepancy pairs in half/difference angles for analytic and
    tabulated BRDFs (points without data dropped), the measurements for scattered ones.
 2. Objective (``objective.py``): variable projection — the colour weights (diffuse albedo,
    lobe weights, specular colour and Fresnel f0) are solved in closed form under their
    physical bounds for every trial shape, so nlopt only searches the shape parameters
    (lobe direction ψ and ln n per Lafortune lobe; ln α; ln σ).
 3. Global stage (deterministic multi-start): the objective is evaluated at the model's
-   physically motivated starts plus a scrambled Sobol set over the parameter box (seeded by
+   physically motivated starts plus a low-discrepancy set (shifted Kronecker sequence) over the parameter box (seeded by
    ``seed``); the ``starts`` best distinct points seed the local stage.
 4. Local stage: nlopt ``LN_BOBYQA`` (derivative-free, bound constrained) from each seed,
    then a final polish of the best point with a small initial step. ``status`` is nlopt's
@@ -25,7 +25,7 @@ SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -39,7 +39,7 @@ from ...brdf_io.specs import load_brdf
 from .metrics import METRICS, error_metrics
 from .models_param import MODELS, ModelParam, make_param
 from .objective import ProjectedObjective
-from .sampling import FitSamples, collect_samples
+from .sampling import FitSamples, collect_samples, kronecker_points
 from .summary import FIT_FAIL_BAND_REL_RMS, BandError, band_errors, worst_band
 
 __all__ = ["FitResult", "fit_brdf", "STATUS_NAMES"]
@@ -100,6 +100,12 @@ class FitResult:
     at_bounds
         Sentences naming the parameters that ended at a bound of the search (an exponent at its
         cap, Fresnel f0 at 1, the energy-conservation constraint met with equality, an unused lobe).
+    shape
+        The optimizer's shape parameters x at the optimum (canonical form, ``models_param.py``:
+        (ψ, ln n) per Lafortune lobe, ln α, ln σ), dimensionless; ``fit_brdf(start=...)`` takes
+        them back. None for fits not made by nlopt (Zernike).
+    seeds
+        The starting points of the local stage, (k, dim) as tuples (``shape``'s units).
     """
 
     model: str
@@ -119,6 +125,8 @@ class FitResult:
     converged: bool = True
     at_bounds: tuple[str, ...] = ()
     usable: bool = True
+    shape: tuple[float, ...] | None = None
+    seeds: tuple[tuple[float, ...], ...] = ()
 
     def __bool__(self) -> bool:
         return self.success
@@ -141,9 +149,7 @@ def _check_options(model: str, lobes: int, metric: str, distribution: str, start
 
 def _global_candidates(param: ModelParam, seed: int, n_sobol: int) -> np.ndarray:
     m = int(np.ceil(np.log2(max(n_sobol, 2))))
-    from scipy.stats import qmc  # imported on use: scipy.stats costs ~0.5 s CPU at start-up
-
-    u = qmc.Sobol(d=param.dim, scramble=True, seed=seed).random_base2(m)
+    u = kronecker_points(1 << m, param.dim, seed)
     sobol = param.lower + u * (param.upper - param.lower)
     starts = np.clip(param.starts(), param.lower, param.upper)
     return np.concatenate([starts, sobol])
@@ -205,6 +211,7 @@ def fit_brdf(
     max_evals: int = 1000,
     samples: FitSamples | None = None,
     progress: ProgressCallback | None = None,
+    start: np.ndarray | Sequence[Sequence[float]] | None = None,
 ) -> FitResult:
     """Fit an analytic model to a BRDF (tabulated, analytic or scattered).
 
@@ -242,6 +249,14 @@ def fit_brdf(
         Use these samples instead of drawing them (e.g. to compare models on one set).
     progress
         Called as ``progress(done, total)`` after each local run.
+    start
+        Candidate starting points (k, dim) of the shape parameters (e.g. ``FitResult.shape`` and
+        ``FitResult.seeds`` of a fit of the same model and lobes) that replace the global stage:
+        they are evaluated on these samples and the ``starts`` best distinct ones seed the
+        local stage. For fits to subsets of samples already fitted as a whole (cross-validation
+        folds, ``representation.py``): the whole set's optimum and the seeds its global stage
+        found cover the basins a subset's optimum lies in, for k objective evaluations instead
+        of the global stage's 32 · dim.
 
     Returns
     -------
@@ -250,7 +265,8 @@ def fit_brdf(
     Raises
     ------
     BadInputError
-        Unknown model/metric, bad option values, or a BRDF without usable data.
+        Unknown model/metric, bad option values, a ``start`` of the wrong length or not finite,
+        or a BRDF without usable data.
     """
     t0 = time.perf_counter()
     _check_options(model, lobes, metric, distribution, starts, n_samples)
@@ -261,24 +277,16 @@ def fit_brdf(
         samples = collect_samples(brdf, n_samples=n_samples, seed=seed, max_theta_deg=max_theta_deg)
     param = make_param(model, lobes=int(lobes), distribution=distribution)
     objective = ProjectedObjective(param, samples, metric, energy_conserving)
-
-    # global stage: physically motivated starts + Sobol points over the box; a K-lobe
-    # Lafortune fit also starts from the (K-1)-lobe optimum plus each single-lobe start,
-    # so adding a lobe never makes the fit worse (the new lobe's weight can be 0)
-    candidates = _global_candidates(param, seed, n_sobol=32 * param.dim)
-    if model == "lafortune" and lobes > 1:
-        previous = fit_brdf(
-            brdf, model, lobes=int(lobes) - 1, metric=metric, seed=seed, starts=starts,
-            max_theta_deg=max_theta_deg, energy_conserving=energy_conserving, xtol_rel=xtol_rel,
-            max_evals=max_evals, samples=samples,
-        )
-        x_prev = np.concatenate([[np.arctan2(lobe["cz"], lobe["cxy"]), np.log(lobe["n"])]
-                                 for lobe in previous.params["lobes"]])
-        singles = make_param(model, lobes=1).starts()
-        nested = np.clip([np.concatenate([x_prev, one]) for one in singles], param.lower, param.upper)
-        candidates = np.concatenate([nested, candidates])
-    values = np.array([objective(x) for x in candidates])
-    seeds = _pick_distinct(candidates, values, param, starts)
+    if start is not None:
+        start = np.atleast_2d(np.asarray(start, dtype=np.float64))
+        if start.ndim != 2 or start.shape[1] != param.dim or len(start) == 0 or not np.all(np.isfinite(start)):
+            raise BadInputError(None, f"start must hold rows of {param.dim} finite shape parameters of {model}, "
+                                f"got shape {start.shape}")
+        candidates = np.clip(start, param.lower, param.upper)
+        seeds = _pick_distinct(candidates, np.array([objective(x) for x in candidates]), param, starts)
+    else:
+        seeds = _global_seeds(brdf, model, lobes, metric, seed, starts, max_theta_deg, energy_conserving, xtol_rel,
+                              max_evals, samples, param, objective)
     total = len(seeds) + 1
     span = param.upper - param.lower
     best_x, best_f = seeds[0], np.inf
@@ -314,6 +322,8 @@ def fit_brdf(
         "max_theta_deg": float(max_theta_deg),
         "energy_conserving": bool(energy_conserving),
     }
+    if start is not None:  # the local stage ran from given points, not from the global stage's seeds
+        options["start"] = np.asarray(start, dtype=np.float64).tolist()
     return FitResult(
         model=model,
         params=params,
@@ -332,7 +342,34 @@ def fit_brdf(
         converged=converged,
         at_bounds=at_bounds,
         usable=nonzero and finite,
+        shape=tuple(float(v) for v in x),
+        seeds=tuple(tuple(float(v) for v in seed_x) for seed_x in seeds),
     )
+
+
+def _global_seeds(
+    brdf: BRDF, model: str, lobes: int, metric: str, seed: int, starts: int, max_theta_deg: float,
+    energy_conserving: bool, xtol_rel: float, max_evals: int, samples: FitSamples, param: ModelParam,
+    objective: ProjectedObjective,
+) -> list[np.ndarray]:
+    """The global stage: the ``starts`` best distinct of the physically motivated starts and
+    32 · dim low-discrepancy points over the box; a K-lobe Lafortune fit also starts from the (K-1)-lobe
+    optimum plus each single-lobe start, so adding a lobe never makes the fit worse (the new
+    lobe's weight can be 0)."""
+    candidates = _global_candidates(param, seed, n_sobol=32 * param.dim)
+    if model == "lafortune" and lobes > 1:
+        previous = fit_brdf(
+            brdf, model, lobes=int(lobes) - 1, metric=metric, seed=seed, starts=starts,
+            max_theta_deg=max_theta_deg, energy_conserving=energy_conserving, xtol_rel=xtol_rel,
+            max_evals=max_evals, samples=samples,
+        )
+        x_prev = np.concatenate([[np.arctan2(lobe["cz"], lobe["cxy"]), np.log(lobe["n"])]
+                                 for lobe in previous.params["lobes"]])
+        singles = make_param(model, lobes=1).starts()
+        nested = np.clip([np.concatenate([x_prev, one]) for one in singles], param.lower, param.upper)
+        candidates = np.concatenate([nested, candidates])
+    values = np.array([objective(x) for x in candidates])
+    return _pick_distinct(candidates, values, param, starts)
 
 
 def _verdict(errors: dict[str, float], worst: BandError | None, nonzero: bool, finite: bool, status: str,
