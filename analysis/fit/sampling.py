@@ -135,7 +135,8 @@ def kronecker_points(n: int, d: int, seed: int = 0) -> np.ndarray:
 def sample_halfdiff(
     n: int, *, seed: int = 0, max_theta_deg: float = 80.0, merl_nodes: bool = False
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Low-discrepancy direction pairs (:func:`kronecker_points`) in half/difference angles, kept where θ_i, θ_o <= max_theta_deg.
+    """Low-discrepancy direction pairs (:func:`kronecker_points`) in half/difference angles,
+    kept where θ_i, θ_o <= max_theta_deg.
 
     Parameters
     ----------
