@@ -16,15 +16,28 @@ first render we re-populate both with 32-bit float colour attachments (``GL_RGBA
 :func:`read_rgba_float` returns the fragment shader's linear output bit for bit. The format
 is checked after every readback set-up; anything else raises :class:`OffscreenError`.
 
+The probe (:func:`probe_offscreen`, a subprocess that makes one 8 × 8 float context: ~0.6 s
+CPU) remembers its successes in ``offscreen_probe.json`` under ``$SHRMKIT_CACHE_DIR`` (default
+``$XDG_CACHE_HOME/shrmkit``, else ``~/.cache/shrmkit``), keyed by everything that decides which
+context works: the Python and VTK installs, the graphics environment variables (``DISPLAY``,
+``VTK_*``, ``__EGL_*``, ``LIBGL_*``, ``MESA_*``, ``LD_LIBRARY_PATH``…), glvnd's vendor files and
+the boot. Failures are never remembered, and ``SHRMKIT_PROBE_CACHE=0`` turns the cache off
+(``data_specs/render_outputs.md``).
+
 Debian packages needed (see ``.ci/apt-packages.txt``): libegl1, libegl-mesa0, libgl1,
 libgl1-mesa-dri, libglx-mesa0 (and libosmesa6 for the OSMesa fallback).
 """
 
 from __future__ import annotations
 
+import hashlib
+import json
 import os
+import re
 import subprocess
 import sys
+import time
+from pathlib import Path
 
 import numpy as np
 
@@ -33,6 +46,7 @@ from ..brdf_io.errors import ShrmError
 __all__ = [
     "OffscreenError", "make_render_window", "read_rgba_float", "probe_offscreen", "window_classes", "gl_renderer",
     "is_software_rasterizer", "SOFTWARE_RASTERIZERS", "skipped_window_classes", "egl_vendor_available",
+    "probe_key", "probe_cache_dir", "PROBE_CACHE_FILE",
 ]
 
 #: Substrings of ``GL_RENDERER`` that name a rasterizer running on the CPU (Mesa's llvmpipe,
@@ -201,11 +215,97 @@ print(w.GetClassName())
 """
 
 
-def probe_offscreen(timeout: float = 120.0) -> tuple[bool, str]:
+#: Environment variables that decide which offscreen context works (the probe cache's key).
+_GRAPHICS_ENV = re.compile(
+    r"^(DISPLAY|WAYLAND_DISPLAY|LD_LIBRARY_PATH|LD_PRELOAD|CUDA_VISIBLE_DEVICES|VTK_\w*|__EGL_\w*|__GLX_\w*"
+    r"|EGL_\w*|LIBGL_\w*|MESA_\w*|GALLIUM_\w*|NVIDIA_\w*)$"
+)
+PROBE_CACHE_FILE = "offscreen_probe.json"
+
+
+def probe_cache_dir() -> Path:
+    """Folder of the probe cache: ``$SHRMKIT_CACHE_DIR``, else ``$XDG_CACHE_HOME/shrmkit``, else
+    ``~/.cache/shrmkit``."""
+    if os.environ.get("SHRMKIT_CACHE_DIR"):
+        return Path(os.environ["SHRMKIT_CACHE_DIR"])
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / "shrmkit"
+
+
+def _stat_token(path: str) -> str:
+    try:
+        st = os.stat(path)
+    except OSError:
+        return f"{path}:-"
+    return f"{path}:{st.st_mtime_ns}:{st.st_size}"
+
+
+def probe_key() -> str:
+    """What decides whether an offscreen context works here, hashed (the probe cache's key)."""
+    import importlib.util
+
+    spec = importlib.util.find_spec("vtkmodules")
+    vtk_origin = str(spec.origin) if spec is not None and spec.origin else "-"
+    parts = [sys.executable, sys.version, _stat_token(vtk_origin), _stat_token(__file__)]
+    parts += [f"{k}={v}" for k, v in sorted(os.environ.items()) if _GRAPHICS_ENV.match(k)]
+    dirs = os.environ.get("__EGL_VENDOR_LIBRARY_DIRS")
+    for folder in (dirs.split(":") if dirs else EGL_VENDOR_DIRS):
+        parts.append(_stat_token(folder))
+        try:
+            parts += [_stat_token(os.path.join(folder, n)) for n in sorted(os.listdir(folder))]
+        except OSError:
+            pass
+    try:
+        parts.append(Path("/proc/sys/kernel/random/boot_id").read_text().strip())
+    except OSError:
+        pass
+    return hashlib.sha256("\n".join(parts).encode("utf-8", "surrogateescape")).hexdigest()
+
+
+def _cache_enabled() -> bool:
+    return os.environ.get("SHRMKIT_PROBE_CACHE", "1").strip().lower() not in ("0", "no", "off", "false")
+
+
+def _read_cache(path: Path) -> dict:
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return data if isinstance(data, dict) else {}
+
+
+def _remember(key: str, message: str) -> None:
+    """Add a success to the cache (best effort: a cache that cannot be written is skipped)."""
+    path = probe_cache_dir() / PROBE_CACHE_FILE
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        data = _read_cache(path)
+        data = {k: v for k, v in data.items() if isinstance(v, dict)}
+        data[key] = {"ok": True, "message": message, "time": time.time()}
+        if len(data) > 64:  # keep the newest entries
+            data = dict(sorted(data.items(), key=lambda kv: kv[1].get("time", 0.0))[-64:])
+        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+        tmp.write_text(json.dumps(data, indent=1), encoding="utf-8")
+        os.replace(tmp, path)
+    except OSError:
+        pass
+
+
+def probe_offscreen(timeout: float = 120.0, *, cache: bool = True) -> tuple[bool, str]:
     """Try to create an offscreen float context in a subprocess (a broken driver cannot crash us).
+
+    A success is remembered (module docstring: the probe cache) and answered from the cache
+    while nothing that decides it has changed; ``cache=False`` or ``SHRMKIT_PROBE_CACHE=0``
+    always probes.
 
     Returns ``(ok, message)``: the window class used, or why it failed.
     """
+    use_cache = cache and _cache_enabled()
+    key = probe_key() if use_cache else ""
+    if use_cache:
+        hit = _read_cache(probe_cache_dir() / PROBE_CACHE_FILE).get(key)
+        if isinstance(hit, dict) and hit.get("ok") is True and isinstance(hit.get("message"), str):
+            return True, hit["message"]
     try:
         proc = subprocess.run(
             [sys.executable, "-c", _PROBE], capture_output=True, text=True, timeout=timeout, check=False
@@ -213,6 +313,9 @@ def probe_offscreen(timeout: float = 120.0) -> tuple[bool, str]:
     except (OSError, subprocess.TimeoutExpired) as err:
         return False, f"offscreen probe failed: {err}"
     if proc.returncode == 0:
-        return True, proc.stdout.strip().splitlines()[-1] if proc.stdout.strip() else "ok"
+        message = proc.stdout.strip().splitlines()[-1] if proc.stdout.strip() else "ok"
+        if use_cache:
+            _remember(key, message)
+        return True, message
     lines = (proc.stderr or proc.stdout or "no output").strip().splitlines()
     return False, lines[-1] if lines else f"offscreen probe exited with {proc.returncode}"
