@@ -4,7 +4,7 @@
 table) and a target of :data:`~shrmkit.brdf_io.export_material.MATERIAL_TARGETS`:
 
 1. the **closest model the renderers share**: a Lambert or Cook–Torrance model is used as it
-   is; a Lafortune model without lobes is its Lambert term; every other BRDF (Lafortune lobes,
+   is; a Lafortune model without lobes (or with zero ks) is its Lambert term; every other BRDF (Lafortune lobes,
    RH02's Phong and simplified microfacet, Zernike expansions, tables) has no counterpart and
    goes through its closest Cook–Torrance GGX model, fitted by :func:`~shrmkit.analysis.fit.fit_brdf`
    (cosine-weighted relative RMS);
@@ -106,7 +106,7 @@ def closest_shared_model(brdf: BRDF, *, seed: int = 0, n_samples: int = 8192, st
     """
     if isinstance(brdf, Lambert | CookTorrance):
         return brdf, ""
-    if isinstance(brdf, Lafortune) and not brdf.lobes:
+    if isinstance(brdf, Lafortune) and not any(np.any(np.asarray(lobe.ks) > 0) for lobe in brdf.lobes):
         return Lambert(albedo=np.asarray(brdf.kd, dtype=np.float64) * np.ones(3)), ""
     kind = type(brdf).__name__ if brdf.kind == "analytic" else f"{brdf.kind} data"
     fit = fit_brdf(brdf, "cook-torrance", distribution="ggx", seed=seed, n_samples=n_samples, starts=starts)

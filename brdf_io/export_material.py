@@ -309,15 +309,21 @@ def _mitsuba(brdf: BRDF) -> ExportedMaterial:
     else:
         eta, k, _ = fit_conductor_fresnel(lambda c: schlick(f0, c))
         note = "Mitsuba 3 has no Schlick Fresnel: exported with the conductor Fresnel (eta, k) closest to it"
-    lobe = Conductor(ct.distribution, float(ct.alpha), eta, k, scale=ks / weight, shadowing="separable")
+    # Mitsuba 3 refuses RGB reflectances above 1 (SRGBReflectanceSpectrum): clip, and say so
+    scale, diffuse = ks / weight, (kd / (1.0 - weight) if has_diffuse else None)
+    if np.any(scale > 1.0) or (diffuse is not None and np.any(diffuse > 1.0)):
+        scale, diffuse = np.minimum(scale, 1.0), None if diffuse is None else np.minimum(diffuse, 1.0)
+        exact = False
+        note = "; ".join(filter(None, [note, "Mitsuba 3 takes RGB reflectances up to 1: kd/(1 - w) and ks/w "
+                                       "clipped to 1 (max kd + max ks > 1)"]))
+    lobe = Conductor(ct.distribution, float(ct.alpha), eta, k, scale=scale, shadowing="separable")
     conductor = {"type": "roughconductor", "distribution": ct.distribution, "alpha": float(f"{ct.alpha:.9g}"),
                  "specular_reflectance": _triple(lobe.scale)}
     conductor |= {"material": "none"} if eta is None else {"eta": _triple(eta), "k": _triple(k)}
     native = conductor if not has_diffuse else {
-        "type": "blendbsdf", "weight": weight, "diffuse": {"type": "diffuse", "reflectance": _triple(kd / (1 - weight))},
-        "specular": conductor}
-    return ExportedMaterial("mitsuba", brdf.to_spec(), kd / (1 - weight) if has_diffuse else None, lobe, weight,
-                            native, exact=exact, note=note)
+        "type": "blendbsdf", "weight": float(f"{weight:.9g}"),
+        "diffuse": {"type": "diffuse", "reflectance": _triple(diffuse)}, "specular": conductor}
+    return ExportedMaterial("mitsuba", brdf.to_spec(), diffuse, lobe, weight, native, exact=exact, note=note)
 
 
 def _pbrt(brdf: BRDF) -> ExportedMaterial:

@@ -74,7 +74,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _material_name(args: argparse.Namespace, out: Path) -> str:
-    name = args.name if args.name is not None else re.sub(r"[^A-Za-z0-9_.-]+", "_", out.name.split(".")[0]) or "material"
+    stem = re.sub(r"[^A-Za-z0-9_.-]+", "_", out.name.split(".")[0]) or "material"
+    name = stem if args.name is None else args.name
     if not re.fullmatch(r"[A-Za-z0-9_.-]+", name):
         raise BadInputError(None, f"--name {name!r}: use letters, digits, '-', '_' or '.'")
     return name

@@ -1,0 +1,130 @@
+"""DDS cube mip chains (brdf_io/dds.py) and the GGX-prefiltered cube chain (analysis/prefiltered_cube.py).
+
+References: Microsoft's DDS layout (``DDS_HEADER``, ``DDS_PIXELFORMAT``, ``DDS_HEADER_DXT10``,
+"Programming Guide for DDS") parsed here independently with ``struct``; Pillow's DDS reader
+(``PIL.DdsImagePlugin``, Pillow 13, reads the first surface of an R8G8B8A8 DX10 file); Karis's
+prefilter summed directly over every pixel of the map (the slow direct path); a constant map,
+which every level must reproduce exactly.
+"""
+
+from __future__ import annotations
+
+import struct
+
+import numpy as np
+import pytest
+
+from shrmkit.analysis.prefiltered_cube import chain_roughness, ggx_cube_chain, material_lod
+from shrmkit.brdf_io.dds import read_dds_cube, write_dds_cube
+from shrmkit.brdf_io.errors import BadInputError
+
+
+def _chain(size: int, seed: int = 0) -> list[np.ndarray]:
+    rng = np.random.default_rng(seed)
+    return [rng.uniform(0, 4, (6, max(1, size >> m), max(1, size >> m), 3)) for m in range(size.bit_length())]
+
+
+def _parse_dds(data: bytes) -> dict:
+    """An independent reader of the DDS header (Microsoft Docs field order, little-endian)."""
+    assert data[:4] == b"DDS "
+    (size, flags, height, width, pitch, depth, mips) = struct.unpack_from("<7I", data, 4)
+    pf_size, pf_flags, fourcc = struct.unpack_from("<II4s", data, 4 + 72)
+    caps, caps2 = struct.unpack_from("<II", data, 4 + 104)
+    dxgi, dim, misc, array_size, misc2 = struct.unpack_from("<5I", data, 128)
+    return dict(size=size, flags=flags, height=height, width=width, pitch=pitch, mips=mips, pf_size=pf_size,
+                pf_flags=pf_flags, fourcc=fourcc, caps=caps, caps2=caps2, dxgi=dxgi, dim=dim, misc=misc,
+                array_size=array_size, data_offset=148)
+
+
+@pytest.mark.parametrize(("fmt", "dxgi", "dtype"), [("rgba32f", 2, "<f4"), ("rgba16f", 10, "<f2")])
+def test_dds_layout_by_the_spec(tmp_path, fmt, dxgi, dtype):
+    """Header fields and the face-major surface order (each face followed by its mips)."""
+    chain = _chain(8)
+    path = write_dds_cube(tmp_path / "c.dds", chain, fmt=fmt)
+    data = path.read_bytes()
+    h = _parse_dds(data)
+    assert (h["size"], h["pf_size"], h["width"], h["height"], h["mips"]) == (124, 32, 8, 8, 4)
+    assert h["flags"] & 0x1 and h["flags"] & 0x1000 and h["flags"] & 0x20000  # CAPS, PIXELFORMAT, MIPMAPCOUNT
+    assert h["pf_flags"] & 0x4 and h["fourcc"] == b"DX10"
+    assert h["caps"] & 0x8 and h["caps"] & 0x1000 and h["caps"] & 0x400000  # COMPLEX, TEXTURE, MIPMAP
+    assert h["caps2"] == 0x200 | 0xFC00  # CUBEMAP and all six faces
+    assert (h["dxgi"], h["dim"], h["misc"], h["array_size"]) == (dxgi, 3, 0x4, 1)
+    texels = np.frombuffer(data, dtype=dtype, offset=h["data_offset"]).astype(np.float64)
+    assert texels.size == 6 * (64 + 16 + 4 + 1) * 4
+    at = 0
+    tol = 0 if fmt == "rgba32f" else 2e-3
+    for face in range(6):
+        for level in chain:
+            s = level.shape[1]
+            block = texels[at : at + s * s * 4].reshape(s, s, 4)
+            assert np.allclose(block[..., :3], level[face], rtol=tol, atol=1e-6)
+            assert np.all(block[..., 3] == 1.0)
+            at += s * s * 4
+    back, name = read_dds_cube(path)
+    assert name == fmt and [b.shape for b in back] == [c.shape for c in chain]
+
+
+def test_pillow_reads_the_first_surface(tmp_path):
+    """Pillow's DDS reader (an outside parser) sees a 16 x 16 RGBA image equal to face +X, level 0."""
+    image = pytest.importorskip("PIL.Image")
+    chain = [np.clip(level / 4, 0, 1) for level in _chain(16, seed=3)]
+    path = write_dds_cube(tmp_path / "c8.dds", chain, fmt="rgba8")
+    with image.open(path) as im:
+        assert im.format == "DDS" and im.size == (16, 16) and im.mode == "RGBA"
+        pixels = np.asarray(im)
+    assert np.array_equal(pixels[..., :3], np.rint(chain[0][0] * 255).astype(np.uint8))
+    assert np.all(pixels[..., 3] == 255)
+
+
+def test_dds_refusals(tmp_path):
+    chain = _chain(4)
+    with pytest.raises(BadInputError, match="mip level 1 has shape"):
+        write_dds_cube(tmp_path / "a.dds", [chain[0], chain[0]])
+    with pytest.raises(BadInputError, match="float16"):
+        write_dds_cube(tmp_path / "a.dds", [np.full((6, 1, 1, 3), 1e5)])
+    with pytest.raises(BadInputError, match="NaN"):
+        write_dds_cube(tmp_path / "a.dds", [np.full((6, 1, 1, 3), np.nan)])
+    assert not list(tmp_path.iterdir())
+    path = write_dds_cube(tmp_path / "b.dds", chain)
+    path.write_bytes(path.read_bytes()[:-8])
+    with pytest.raises(BadInputError, match="the header implies"):
+        read_dds_cube(path)
+
+
+def _pixel_grid(height: int) -> tuple[np.ndarray, np.ndarray]:
+    """Pixel-centre directions (H, 2H, 3) and solid angles (H,) of a lat-long map, DESIGN §2."""
+    theta = (np.arange(height) + 0.5) * np.pi / height
+    phi = (np.arange(2 * height) + 0.5) * np.pi / height
+    d = np.stack([np.sin(theta)[:, None] * np.cos(phi), np.sin(theta)[:, None] * np.sin(phi),
+                  np.broadcast_to(np.cos(theta)[:, None], (height, 2 * height))], axis=-1)
+    edges = np.cos(np.arange(height + 1) * np.pi / height)
+    return d, (np.pi / height) * (edges[:-1] - edges[1:])
+
+
+def test_chain_against_direct_prefilter_sums():
+    """Every texel of face +Y (the zenith face, project direction (v, −u, 1) for face coordinates
+    (u, v)) at the α = 0.25 level equals Karis's prefilter summed over every pixel, within 2 %; a
+    constant map gives a constant chain; level m holds roughness m/(N − 1)."""
+    height = 32
+    d, omega = _pixel_grid(height)
+    radiance = np.stack([1 + np.maximum(d[..., 2], 0) * 3, 1 + np.maximum(d[..., 0], 0) ** 4 * 8,
+                         np.full(d.shape[:2], 0.5)], axis=-1)
+    chain = ggx_cube_chain(radiance, face_size=16)
+    assert chain.roughness == tuple(chain_roughness(5)) == (0.0, 0.25, 0.5, 0.75, 1.0)
+    assert [level.shape for level in chain.levels] == [(6, s, s, 3) for s in (16, 8, 4, 2, 1)]
+    alpha = 0.25
+    level = chain.levels[2]
+    c = 2 * (np.arange(4) + 0.5) / 4 - 1
+    u, v = np.meshgrid(c, c)  # columns, rows
+    R = np.stack([v, -u, np.ones_like(u)], axis=-1)
+    R /= np.linalg.norm(R, axis=-1, keepdims=True)
+    cos_g = np.einsum("rcx,hwx->rchw", R, d)
+    c2 = (1 + cos_g) / 2
+    k = alpha**2 / (np.pi * (c2 * (alpha**2 - 1) + 1) ** 2) * np.maximum(cos_g, 0) * omega[:, None]
+    direct = np.einsum("rchw,hwk->rck", k, radiance) / k.sum(axis=(2, 3))[..., None]
+    assert np.allclose(level[2], direct, rtol=0.02)
+    flat = ggx_cube_chain(np.full((16, 32, 3), 0.7), face_size=4)
+    assert all(np.allclose(lv, 0.7, rtol=1e-5) for lv in flat.levels)
+    assert material_lod(0.25, 5) == pytest.approx(2.0)
+    with pytest.raises(BadInputError, match="power of two"):
+        ggx_cube_chain(radiance, face_size=12)
