@@ -40,6 +40,7 @@ import numpy as np
 from ...brdf_io.brdf import BRDF
 from ...brdf_io.errors import BadInputError
 from ...brdf_io.specs import load_brdf
+from ..threads import single_threaded_blas
 from .crossval import DEFAULT_FOLDS, held_out
 from .isotropy import Isotropy, measure_isotropy
 from .metrics import rel_rms
@@ -53,8 +54,14 @@ __all__ = ["CANDIDATES", "CandidateError", "RepresentationChoice", "choose_repre
 
 #: The representations tried, in this order (a tie goes to the earlier one).
 CANDIDATES = ("lafortune", "cook-torrance", "zernike")
-#: Multi-start seeds of each fold's nlopt fit (the fit to all samples uses ``fit_brdf``'s 4).
-FOLD_STARTS = 2
+#: Local runs of each fold's nlopt fit (then the polish). The fold's starting points are the
+#: fit to all samples' optimum and its global stage's seeds (``fit_brdf(start=...)``), ranked on
+#: the fold's own samples: one run from the best of them gave the held-out errors of a full
+#: multi-start search per fold (global stage and 2 runs) to 5 digits on 12 of 12 CURET
+#: nlopt candidates, at 40 % of its cost (benchmarks/chooser_speed.py).
+FOLD_STARTS = 1
+#: Local runs of a fold fit that has no fit to all samples to start from (its own global stage).
+FOLD_STARTS_GLOBAL = 2
 
 
 @dataclass(frozen=True)
@@ -249,6 +256,17 @@ def choose_representation(
         A BRDF that is not scattered (analyse it directly), an unknown candidate, no candidate
         that could be fitted, or too few samples.
     """
+    # the chooser's matrices are small (at most 140 terms, 205 CURET samples): OpenBLAS's threads
+    # cost more than they save, and on a busy machine much more (analysis/threads.py)
+    with single_threaded_blas():
+        return _choose(brdf, candidates=candidates, folds=folds, seed=seed, max_theta_deg=max_theta_deg, fits=fits,
+                       isotropy=isotropy)
+
+
+def _choose(
+    brdf: BRDF | str | Path, *, candidates: tuple[str, ...], folds: int, seed: int, max_theta_deg: float,
+    fits: Mapping[str, FitResult] | None, isotropy: bool,
+) -> RepresentationChoice:
     t0 = time.perf_counter()
     if isinstance(brdf, str | Path):
         brdf = load_brdf(brdf)
@@ -279,9 +297,14 @@ def choose_representation(
                 full = given if given is not None else fit_brdf(brdf, model, samples=samples, seed=seed,
                                                                 max_theta_deg=max_theta_deg)
 
-                def predict(train: FitSamples, test: FitSamples, model: str = model) -> np.ndarray:
-                    fold_fit = fit_brdf(brdf, model, samples=train, seed=seed, starts=FOLD_STARTS,
-                                        max_theta_deg=max_theta_deg)
+                # the folds start from the whole set's optimum and its global stage's seeds, ranked
+                # on the fold (the global stage, 32 · dim evaluations, is not repeated per fold)
+                shared = {} if full.shape is None else {"start": [full.shape, *full.seeds], "starts": FOLD_STARTS}
+
+                def predict(train: FitSamples, test: FitSamples, model: str = model,
+                            shared: dict[str, Any] = shared) -> np.ndarray:
+                    fold_fit = fit_brdf(brdf, model, samples=train, seed=seed, max_theta_deg=max_theta_deg,
+                                        **({"starts": FOLD_STARTS_GLOBAL} | shared))
                     return fold_fit.brdf.eval(test.L, test.V)
 
                 held = held_out(samples, predict, folds, seed=seed)
