@@ -35,7 +35,7 @@ from shrmkit.cli.report.explorer import (
     explore,
 )
 from shrmkit.cli.report.options import profile
-from shrmkit.cli.report.plots import BELOW_COLOUR, MISSING_COLOUR, explorer_slice_plot
+from shrmkit.cli.report.plots import BELOW_COLOUR, MISSING_COLOUR, explorer_slice_plot, image_row_plot
 from shrmkit.cli.report.writer import report_files
 
 LAMBERT = "lambert:albedo=0.2/0.4/0.8"
@@ -214,3 +214,16 @@ def test_report_holds_the_views_and_their_plots() -> None:
     assert "## BRDF Explorer views" in md and f"]({SPHERE_FILE})" in md and "](plot_explorer_polar.png)" in md
     assert html.count("data:image/png;base64,") >= 9 and "BRDF Explorer views" in html
     json.dumps(doc, allow_nan=False)
+
+
+def test_the_sphere_row_holds_every_image_unchanged_under_its_title() -> None:
+    rng = np.random.default_rng(4)
+    images = [rng.integers(0, 256, (40, 40, 3), dtype=np.uint8), rng.integers(0, 256, (40, 40, 3), dtype=np.uint8)]
+    row = np.asarray(Image.open(io.BytesIO(image_row_plot(images, ["brdf", "lafortune"]))).convert("RGB"))
+    # find each tile by its exact pixels: the row is lossless and the tiles are not resampled
+    for image in images:
+        hits = [(y, x) for y in range(row.shape[0] - 39) for x in range(row.shape[1] - 39)
+                if np.array_equal(row[y, x], image[0, 0]) and np.array_equal(row[y:y + 40, x:x + 40], image)]
+        assert len(hits) == 1 and hits[0][0] > 8  # below its title
+    title_band = row[: hits[0][0]]
+    assert (title_band < 128).any()  # dark title text above the tiles
