@@ -44,7 +44,7 @@ from .latlong import (
     row_edges_cos,
     row_solid_angles,
 )
-from .limits import check_pixels
+from .limits import check_memory, check_pixels
 from .notebook import env_html, env_png
 from .probe import probe_to_latlong
 
@@ -62,6 +62,11 @@ __all__ = [
 #: Negative radiance up to this fraction of the map's white level is clamped to 0 (with a
 #: warning); beyond it the map is refused (data_specs/environment_maps.md §6).
 NEGATIVE_CLAMP_FRACTION = 1e-3
+#: Peak bytes per pixel while :func:`load_env` reads and orients a map, beside the file's bytes
+#: (the reader's arrays, the checked copy, the y-up transform: measured 24-54 B/px for 2048 x 1024
+#: EXR, RGBE and PFM maps), and per output pixel of a resampling (a cube, a probe, ``height=``):
+#: the memory plan of data_specs/limits.md, checked on the header before a pixel is decoded.
+ENV_PEAK_BYTES_PER_PIXEL = 64
 #: The white level: this percentile of the per-pixel largest channel (robust to a sun or a
 #: lamp covering less than 0.1 % of the pixels).
 WHITE_PERCENTILE = 99.9
@@ -558,6 +563,7 @@ def _load_file(
             raise BadInputError(path, "no such cube-map folder")
         faces = _cube_faces(path, folder, layer, part)
         n = faces["px"].shape[0]
+        _check_env_memory(folder, 6 * n, n, int(height or 2 * n))
         radiance = cube_to_latlong(faces, int(height or 2 * n)).astype(np.float32)
         return EnvironmentMap(radiance, folder.name, f"{folder}" + _options_text("y", False, azimuth, "cube"))
     if not path.exists():
@@ -565,9 +571,11 @@ def _load_file(
     if path.suffix.lower() == ".exr":
         def check_windows(display: tuple[int, int], data: tuple[int, int], envmap: str | None) -> None:
             if envmap is None:
-                _plain_shape(path, *display, probe)
+                is_probe = _plain_shape(path, *display, probe)
+                _check_env_memory(path, *display, height or (display[0] // 2 if is_probe else None))
             else:
                 _envmap_shape(path, envmap, *data, height)
+                _check_env_memory(path, *data, _envmap_rows(envmap, *data, height))
 
         exr = read_exr_image(path, layer=layer, part=part, check_windows=check_windows)
         if exr.envmap is not None:
@@ -576,7 +584,11 @@ def _load_file(
     else:
         if layer is not None or part is not None:
             raise BadInputError(path, "layer and part apply to OpenEXR files only")
-        image = read_image(path, check_shape=lambda h, w: _plain_shape(path, h, w, probe))  # before decoding
+        def check_shape(h: int, w: int) -> None:  # before a pixel is decoded
+            is_probe = _plain_shape(path, h, w, probe)
+            _check_env_memory(path, h, w, height or (max(1, h // 2) if is_probe else None))
+
+        image = read_image(path, check_shape=check_shape)
     h, w = image.shape[:2]
     is_probe = _plain_shape(path, h, w, probe)
     image = _check_radiance(path, image)
@@ -610,6 +622,18 @@ def _plain_shape(path: Path, h: int, w: int, probe: bool | None) -> bool:
             path, f"a lat-long map must be 2:1 (width = 2 x height), got {w} x {h}; pass probe=True for angular maps"
         )
     return bool(is_probe)
+
+
+def _check_env_memory(path: Path, h: int, w: int, rows_out: int | None) -> None:
+    """The memory plan of loading an h × w image as a map resampled to ``rows_out`` rows (None: kept
+    as read): refused before a pixel is decoded when over ``SHRM_MAX_MEMORY_BYTES``."""
+    try:
+        size = path.stat().st_size if path.is_file() else 0
+    except OSError:
+        size = 0
+    out = 2 * rows_out * rows_out if rows_out else 0
+    into = f" into {2 * rows_out} x {rows_out}" if rows_out else ""
+    check_memory(path, size + ENV_PEAK_BYTES_PER_PIXEL * (h * w + out), f"loading a {w} x {h} map{into}")
 
 
 def _envmap_rows(kind: str, h: int, w: int, height: int | None) -> int:

@@ -44,6 +44,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import math
 import os
 import sys
 import tempfile
@@ -57,7 +58,7 @@ import OpenEXR
 
 from .errors import BadInputError
 from .image_common import atomic_image_path, check_rgb
-from .limits import check_elements, check_pixels, regular_file
+from .limits import check_elements, check_memory, check_pixels, regular_file
 
 __all__ = ["ExrImage", "read_exr_image", "read_exr", "write_exr", "luminance_weights", "REC709_CHROMATICITIES"]
 
@@ -266,6 +267,8 @@ def _check_sizes(path: Path, parts: list[_Part], size: int) -> None:
         else:
             chunks += -(-h // _LINES_PER_CHUNK.get(_enum_name(p.header.get("compression")), 256))
     check_elements(path, (elements,), "OpenEXR pixel data (all parts and channels)")
+    # the memory plan (data_specs/limits.md): the file, every channel decoded (float32 at most)
+    check_memory(path, size + 4 * elements, f"decoding {elements:,} OpenEXR channel samples")
     if chunks * _MIN_BYTES_PER_CHUNK > size:
         raise BadInputError(
             path, f"file of {size:,} bytes is too small for the {chunks:,} chunks its header declares "
@@ -483,6 +486,12 @@ def _read_planes(path: Path, chosen: _Part, wanted: list[str], n_parts: int) -> 
     return planes, out.text
 
 
+#: Peak bytes per data-window pixel of :func:`read_exr_image` beside the file's bytes and the
+#: display window's float32 RGB (12 B/px): the decoded planes, their RGB stack (measured 25 B/px in
+#: all for equal windows).
+EXR_PEAK_BYTES_PER_PIXEL = 28
+
+
 def read_exr_image(
     path: str | Path,
     *,
@@ -521,8 +530,8 @@ def read_exr_image(
     BadInputError
         Missing or special file, too large (``SHRM_MAX_FILE_BYTES``), not OpenEXR, corrupt
         or truncated (first line of the library's message), declared sizes beyond
-        ``SHRM_MAX_PIXELS``/``SHRM_MAX_ELEMENTS`` or beyond what the file can hold (checked
-        before any pixel is read), deep parts, no colour channels, an ambiguous or unknown
+        ``SHRM_MAX_PIXELS``/``SHRM_MAX_ELEMENTS``/``SHRM_MAX_MEMORY_BYTES`` or beyond what the
+        file can hold (checked before any pixel is read), deep parts, no colour channels, an ambiguous or unknown
         part or layer, subsampled R/G/B or Y, chroma sampling other than 1 or 2, degenerate
         chromaticities.
     """
@@ -535,6 +544,8 @@ def read_exr_image(
     name, kind, names = _choose_layer(path, chosen, layer, len(parts) > 1)
     display = _box(chosen.header.get("displayWindow", chosen.header["dataWindow"]))
     check_pixels(path, *_box_size(display))
+    check_memory(path, size + EXR_PEAK_BYTES_PER_PIXEL * math.prod(_box_size(chosen.data_window))
+                 + 12 * math.prod(_box_size(display)), "reading the data and display windows")
     data_window = chosen.data_window
     envmap_kind = _envmap_kind(chosen.header.get("envmap"))
     if check_windows is not None:

@@ -23,7 +23,13 @@ a 1 GB table) and overridable through the environment (documented in
     16384 × 8192 map);
 ``SHRM_MAX_ELEMENTS``
     largest array a reader allocates from a file's declared shape, elements (default
-    2²⁹ ≈ 5.4 · 10⁸, 4 GiB of float64).
+    2²⁹ ≈ 5.4 · 10⁸, 4 GiB of float64);
+``SHRM_MAX_MEMORY_BYTES``
+    largest peak memory a reader or a verb may plan to spend, bytes (default 8 GiB, a third
+    of a 24 GiB machine):
+    each estimates its peak from the header and the options before it allocates
+    (:func:`check_memory`), so that a few kilobytes declaring 2²⁸ pixels or a table that
+    inflates a thousand-fold cost a look at the header, not 8 GB.
 
 Raises :class:`~shrmkit.brdf_io.errors.BadInputError` naming the file for every
 violation, so the CLI prints one line and exits with status 2.
@@ -46,11 +52,15 @@ __all__ = [
     "read_bytes",
     "check_pixels",
     "check_elements",
+    "max_memory_bytes",
+    "check_memory",
+    "format_bytes",
 ]
 
 DEFAULT_MAX_FILE_BYTES = 8 * 2**30
 DEFAULT_MAX_PIXELS = 2**28
 DEFAULT_MAX_ELEMENTS = 2**29
+DEFAULT_MAX_MEMORY_BYTES = 8 * 2**30
 
 
 def _env_limit(name: str, default: int) -> int:
@@ -79,6 +89,56 @@ def max_pixels() -> int:
 def max_elements() -> int:
     """Largest array a reader allocates from declared sizes (``SHRM_MAX_ELEMENTS``, default 2²⁹)."""
     return _env_limit("SHRM_MAX_ELEMENTS", DEFAULT_MAX_ELEMENTS)
+
+
+def max_memory_bytes() -> int:
+    """Largest peak memory a reader or verb plans to spend, in bytes (``SHRM_MAX_MEMORY_BYTES``,
+    default 8 GiB)."""
+    return _env_limit("SHRM_MAX_MEMORY_BYTES", DEFAULT_MAX_MEMORY_BYTES)
+
+
+def format_bytes(nbytes: float) -> str:
+    """``nbytes`` in words for a message: ``"8.3 GiB"``, ``"512 MiB"``, ``"40 KiB"``, ``"12 bytes"``."""
+    for unit, size in (("GiB", 2**30), ("MiB", 2**20), ("KiB", 2**10)):
+        if nbytes >= size:
+            value = nbytes / size
+            return f"{value:,.1f} {unit}" if value < 100 else f"{value:,.0f} {unit}"
+    return f"{int(nbytes)} bytes"
+
+
+def check_memory(source: object, nbytes: float, what: str) -> int:
+    """Refuse a planned peak of ``nbytes`` bytes over :func:`max_memory_bytes`, before it is spent.
+
+    Parameters
+    ----------
+    source
+        The file, or the option (``"--size 100000"``), the estimate comes from: named first
+        in the message.
+    nbytes
+        The estimated peak, bytes: the arrays the reader or verb will hold at once, from the
+        declared sizes (header) and the options (data_specs/limits.md lists each estimate).
+    what
+        What needs it, in words (``"reading 23170 x 11585 pixels"``).
+
+    Returns
+    -------
+    int
+        ``nbytes`` rounded up (for callers that add estimates).
+
+    Raises
+    ------
+    BadInputError
+        ``nbytes`` over the limit: one line naming ``source``, ``what``, the estimate and the
+        limit (``SHRM_MAX_MEMORY_BYTES``).
+    """
+    need = int(math.ceil(float(nbytes))) if math.isfinite(float(nbytes)) else 2**63
+    limit = max_memory_bytes()
+    if need > limit:
+        raise BadInputError(
+            source, f"{what} needs an estimated {format_bytes(need)} of memory, over the {format_bytes(limit)} "
+            "limit (SHRM_MAX_MEMORY_BYTES)",
+        )
+    return need
 
 
 def regular_file(path: str | Path, what: str = "file") -> int:

@@ -20,6 +20,7 @@ reader ``BRDFRead.cpp`` (MERL, 2006).
 
 from __future__ import annotations
 
+import math
 import os
 from pathlib import Path
 
@@ -29,7 +30,7 @@ from .atomic import atomic_path
 from .brdf import BRDF, Kind
 from .errors import BadInputError
 from .halfdiff import directions_to_halfdiff, halfdiff_to_directions
-from .limits import check_elements, regular_file
+from .limits import check_elements, check_memory, regular_file
 from .masked_grid import MaskedTableBRDF, MissingAwareGrid, eval_with_mask
 from .table import MAX_TABLE_RHO
 
@@ -48,6 +49,8 @@ __all__ = [
 # (θ_half, θ_diff, φ_diff) resolution; BRDFRead.cpp: BRDF_SAMPLING_RES_THETA_H = 90,
 # BRDF_SAMPLING_RES_THETA_D = 90, BRDF_SAMPLING_RES_PHI_D / 2 = 180
 MERL_DIMS = (90, 90, 180)
+#: Peak bytes per stored value while a MERL file is read and set up (measured: see data_specs/limits.md).
+MERL_PEAK_BYTES_PER_VALUE = 48
 # rho = stored value * scale, per channel R, G, B (BRDFRead.cpp RED/GREEN/BLUE_SCALE)
 MERL_SCALE = np.array([1.0 / 1500.0, 1.15 / 1500.0, 1.66 / 1500.0])
 _N = MERL_DIMS[0] * MERL_DIMS[1] * MERL_DIMS[2]
@@ -182,6 +185,8 @@ def read_merl(path: str | os.PathLike[str]) -> MerlBRDF:
             if dims != MERL_DIMS:
                 raise BadInputError(path, f"header dims {dims}; only the MERL sampling {MERL_DIMS} is supported")
             check_elements(path, (3, *dims), "MERL table")
+            # the memory plan: the file's bytes, the values, the missing mask and the grid
+            check_memory(path, MERL_PEAK_BYTES_PER_VALUE * 3 * math.prod(dims), "reading a MERL table")
             data = handle.read(expected - _HEADER_BYTES + 1)
     except OSError as err:
         raise BadInputError(path, f"cannot read MERL file ({err.strerror or err})") from None
@@ -205,6 +210,8 @@ def read_merl(path: str | os.PathLike[str]) -> MerlBRDF:
             path, f"{int(huge.sum())} value(s) above rho = {MAX_TABLE_RHO:g} 1/sr, first stored "
             f"{float(stored[c, i, j, k])!r} at channel {c}, index ({i}, {j}, {k})"
         )
+    if np.all(np.isnan(values)):
+        raise BadInputError(path, "every sample is missing (negative): no measured value to analyse")
     return MerlBRDF(values, name=path.stem, source=str(path))
 
 

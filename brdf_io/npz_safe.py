@@ -16,7 +16,10 @@ characters, an object (pickle) array, or a member that decompresses a thousand-f
    :data:`MAX_HEADER_BYTES` bytes) and checks its dtype (the expected kind, never an object,
    structured or sub-array dtype), its shape (:func:`~shrmkit.brdf_io.limits.check_elements`),
    its byte count against the member's declared size (header + data, exactly) and a cap on
-   its bytes;
+   its bytes, and the reader's planned peak memory for it (``peak_bytes_per_element`` ×
+   elements, :func:`~shrmkit.brdf_io.limits.check_memory`: a member that inflates a
+   thousand-fold within the element limit, 2.35 MB declaring 2²⁸ elements, would need
+   8 GB once read and analysed);
 4. only then reads the data, in chunks, into an array of the checked size (the zip CRC is
    verified at the end of each member).
 
@@ -41,7 +44,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import BadInputError
-from .limits import check_elements, max_elements, regular_file
+from .limits import check_elements, check_memory, max_elements, regular_file
 
 __all__ = ["NpzMember", "read_npz", "max_member_bytes", "MAX_DEFLATE_RATIO", "MAX_HEADER_BYTES"]
 
@@ -85,6 +88,10 @@ class NpzMember:
         Whether a missing member is an error.
     max_bytes
         Cap on the member's data bytes (None: :func:`max_member_bytes`).
+    peak_bytes_per_element
+        The caller's peak memory per element of this member once read and converted
+        (bytes; 0: not planned), checked against ``SHRM_MAX_MEMORY_BYTES`` from the
+        ``.npy`` header, before the data is inflated.
     """
 
     kinds: str
@@ -93,6 +100,7 @@ class NpzMember:
     itemsize: int | None = None
     required: bool = True
     max_bytes: int | None = None
+    peak_bytes_per_element: float = 0.0
 
 
 def _read_exact(fp: io.BufferedIOBase, n: int) -> bytes:
@@ -177,6 +185,8 @@ def _read_member(path: Path, key: str, spec: NpzMember, zf: zipfile.ZipFile, inf
         limit = spec.max_bytes if spec.max_bytes is not None else max_member_bytes()
         if nbytes > limit:
             raise BadInputError(path, f"{key} of {described} holds {nbytes:,} bytes, over the {limit:,}-byte limit")
+        if spec.peak_bytes_per_element:
+            check_memory(path, count * spec.peak_bytes_per_element, f"reading {key} of {described}")
         if header_bytes + nbytes != info.file_size:
             raise BadInputError(
                 path, f"{key} declares {described} = {nbytes:,} data bytes, but its archive member holds "

@@ -14,7 +14,7 @@ import numpy as np
 
 from .errors import BadInputError
 from .image_common import atomic_image_path, check_rgb
-from .limits import check_pixels, read_bytes
+from .limits import check_memory, check_pixels, read_bytes
 
 __all__ = ["read_pfm", "write_pfm"]
 
@@ -24,6 +24,10 @@ _HEADER_RE = re.compile(rb"(P[Ff])\s+(\S+)\s+(\S+)\s+(\S+)\s")
 _HEADER_MAX_BYTES = 1024
 _SIZE_RE = re.compile(rb"\d{1,30}")
 _SCALE_RE = re.compile(rb"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+
+
+#: Peak bytes per pixel of :func:`read_pfm` beside the file's own bytes (the float32 result).
+PFM_PEAK_BYTES_PER_PIXEL = 16
 
 
 def read_pfm(path: str | Path, check_shape: Callable[[int, int], None] | None = None) -> np.ndarray:
@@ -53,7 +57,8 @@ def read_pfm(path: str | Path, check_shape: Callable[[int, int], None] | None = 
     ------
     BadInputError
         Not a regular file or over ``SHRM_MAX_FILE_BYTES``; wrong magic; a malformed
-        or truncated header; zero or non-numeric sizes; W·H over ``SHRM_MAX_PIXELS``
+        or truncated header; zero or non-numeric sizes; W·H over ``SHRM_MAX_PIXELS``;
+        a planned peak over ``SHRM_MAX_MEMORY_BYTES``
         (checked before anything is allocated); a zero or non-finite scale; fewer data
         bytes than 4·W·H·channels.
 
@@ -93,6 +98,8 @@ def read_pfm(path: str | Path, check_shape: Callable[[int, int], None] | None = 
     check_pixels(path, height, width)
     if check_shape is not None:  # ``check_shape(height, width)`` before the pixels are read (read_hdr's)
         check_shape(height, width)
+    # the memory plan (data_specs/limits.md): the file's bytes and the float32 result (measured 24 B/px in all)
+    check_memory(path, len(data) + PFM_PEAK_BYTES_PER_PIXEL * height * width, f"reading {width} x {height} pixels")
     if scale == 0 or not np.isfinite(scale):
         raise BadInputError(path, f"bad PFM scale {scale_text[:32].decode()!r} (must be a non-zero finite number)")
     pos = match.end()

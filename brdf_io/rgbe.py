@@ -32,12 +32,16 @@ import numpy as np
 
 from .errors import BadInputError
 from .image_common import atomic_image_path, check_rgb
-from .limits import check_pixels, read_bytes
+from .limits import check_memory, check_pixels, read_bytes
 
 __all__ = ["read_hdr", "write_hdr"]
 
 
 _RLE_MIN_WIDTH, _RLE_MAX_WIDTH = 8, 32767  # color.c MINELEN, MAXELEN
+#: Peak bytes per pixel while a Radiance picture is decoded, beside the file's own bytes (the RGBE
+#: bytes, the float32 result, the decoder's run tables; measured 38 on a 2048 x 1024 map): the
+#: memory plan of data_specs/limits.md, checked on the resolution line.
+HDR_PEAK_BYTES_PER_PIXEL = 40
 _HEADER_END_RE = re.compile(rb"\n\r?\n")  # an empty line, "\n" or "\r\n" (header.c getheader)
 _RESOLUTION_RE = re.compile(rb"^\s*([-+])([XY])\s+(\d{1,12})\s+([-+])([XY])\s+(\d{1,12})\s*$")
 _NUMBER_RE = re.compile(rb"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)")
@@ -541,7 +545,8 @@ def read_hdr(path: str | Path, check_shape: Callable[[int, int], None] | None = 
     BadInputError
         Not a regular file or over ``SHRM_MAX_FILE_BYTES``; not a Radiance picture; an
         unsupported ``FORMAT``, unreadable ``EXPOSURE``/``COLORCORR``/``PRIMARIES`` or
-        resolution line; W·H over ``SHRM_MAX_PIXELS``; fewer bytes than the most compact
+        resolution line; W·H over ``SHRM_MAX_PIXELS``; a planned peak over
+        ``SHRM_MAX_MEMORY_BYTES`` (:data:`HDR_PEAK_BYTES_PER_PIXEL`); fewer bytes than the most compact
         encoding of the declared size (checked before anything is allocated); truncated
         or corrupt scanlines; values that overflow float32 after the scalings.
 
@@ -572,6 +577,8 @@ def read_hdr(path: str | Path, check_shape: Callable[[int, int], None] | None = 
             f"truncated RGBE data: {available:,} bytes after the header, but {scanlines:,} scanlines of "
             f"{length:,} pixels need at least {needed:,} in any encoding",
         )
+    check_memory(path, len(data) + HDR_PEAK_BYTES_PER_PIXEL * head.height * head.width,
+                 f"decoding {head.width} x {head.height} pixels")
     rgbe = _Decoder(path, data, head.pos, scanlines, length).run()
     del data
 

@@ -51,13 +51,19 @@ TABLE_FORMAT_VERSION = 1
 #: and above any analytic model within its parameter bounds (< 1e33 even at the horizon,
 #: data_specs/spec_strings.md), low enough that sums and squares of values stay finite.
 MAX_TABLE_RHO = 1e40
+#: Largest order :meth:`TableBRDF.resolved_order` returns (far above any order cap of the analysis).
+MAX_RESOLVED_ORDER = 1_000_000
 _MAX_NAME = 1000  # longest metadata name used as the BRDF's name
 _REAL = "a real-number array (float, int)"
+#: Peak bytes per value while a table is read and set up (measured 33 for float32 and float64
+#: RGB tables of 12.6 million values: the member, its float64 copy, the masks, the missing-aware
+#: grid); the memory plan (data_specs/limits.md) uses this before the values are inflated.
+TABLE_PEAK_BYTES_PER_VALUE = 40
 _MEMBERS = {
     "theta_i": NpzMember("fiu", _REAL),
     "theta_o": NpzMember("fiu", _REAL),
     "phi_d": NpzMember("fiu", _REAL),
-    "values": NpzMember("fiu", "floating point values"),
+    "values": NpzMember("fiu", "floating point values", peak_bytes_per_element=TABLE_PEAK_BYTES_PER_VALUE),
     # 0-d unicode string; 2**24 characters is far more than the metadata ever needs
     "metadata": NpzMember("U", "a JSON string", ndim=0, max_bytes=4 * 2**24),
 }
@@ -173,7 +179,8 @@ class TableBRDF(MaskedTableBRDF):
         where fewer than two are measured); None for a grid of one node per axis (a constant).
         Beyond it the spectrum is the trilinear interpolation's kinks and edges (a table holding
         one measured sample among 216 nodes sent the order search to F = 356 grids and never
-        settled; issue 30). Used as a cap by :func:`~shrmkit.analysis.orders.choose_orders`."""
+        settled; issue 30). Used as a cap by :func:`~shrmkit.analysis.orders.choose_orders`. At most
+        :data:`MAX_RESOLVED_ORDER` (nodes 5·10⁻³²⁴ rad apart made 2π / Δ infinite: an OverflowError)."""
         grid = self.values if self.values.ndim == 4 else self.values[..., None]
         measured = ~np.any(np.isnan(grid), axis=-1)  # (n_ti, n_to, n_pd)
         finest = np.inf
@@ -182,7 +189,11 @@ class TableBRDF(MaskedTableBRDF):
             present = present if present.size >= 2 else nodes  # fewer than two measured: the grid's own
             if present.size >= 2:
                 finest = min(finest, float(np.min(np.diff(present))))
-        return None if not np.isfinite(finest) else int(np.ceil(2.0 * np.pi / finest - 1e-9))
+        if not np.isfinite(finest):
+            return None
+        with np.errstate(over="ignore", divide="ignore"):  # a subnormal spacing (5e-324 rad) overflows to inf
+            order = 2.0 * np.pi / finest
+        return int(np.ceil(order - 1e-9)) if order < MAX_RESOLVED_ORDER else MAX_RESOLVED_ORDER
 
     def index_coordinates(self, L: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Continuous grid indices of (θ_i, θ_o, φ_d) for (N, 3) direction pairs above the surface.
@@ -313,7 +324,10 @@ def read_table(path: str | os.PathLike[str]) -> TableBRDF:
         Not a regular file, not a readable archive, missing keys, a member of the wrong
         dtype or a declared size over the limits or unlike the archive's, metadata that is
         not strict JSON or not of this format and version, an invalid grid, values that
-        are negative, infinite or above :data:`MAX_TABLE_RHO`.
+        are negative, infinite or above :data:`MAX_TABLE_RHO`, no measured (non-NaN) sample
+        at all; a values member whose planned peak (:data:`TABLE_PEAK_BYTES_PER_VALUE` per
+        value) is over ``SHRM_MAX_MEMORY_BYTES`` (refused from its ``.npy`` header, before it
+        is inflated).
     """
     path = Path(path)
     arrays = read_npz(path, _MEMBERS, what="a BRDF table")
@@ -329,9 +343,13 @@ def read_table(path: str | os.PathLike[str]) -> TableBRDF:
         raise BadInputError(path, f"units {metadata.get('units')!r}; expected '1/sr'")
     name = metadata.get("name")
     usable = isinstance(name, str) and 0 < len(name) <= _MAX_NAME and name.isprintable()
-    return TableBRDF(
+    table = TableBRDF(
         arrays["theta_i"], arrays["theta_o"], arrays["phi_d"], arrays["values"],
         name=name if usable else path.stem,
         source=str(path),
         metadata=metadata,
     )
+    nodes = table.theta_i.size * table.theta_o.size * table.phi_d.size
+    if table.n_missing == nodes:  # it would evaluate to 0 everywhere, as if measured black
+        raise BadInputError(path, f"all {nodes:,} grid points are missing (NaN): no measured sample to analyse")
+    return table
