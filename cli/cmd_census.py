@@ -1,0 +1,255 @@
+"""``shrm census``: a BRDF library tabulated as RH02 Fig. 8 does, with the orders, fits and reasons.
+
+For every material of the arguments (files, folders of BRDF files, whole multi-BRDF files such as
+CURET's ``abrdf.dat``: ``analysis.census.census_sources``) one row (``analysis.census``): the
+accuracy 1 − ε(F, p) for p = 0…P (RH02's energy over all views and the worst view band), the
+orders needed at ``--eps``, the representation analysed and its held-out worst view band, the
+anisotropy, and the reason for every miss or failure. Written to ``--out``: ``census.csv``,
+``census.json`` (``data_specs/census_json.md``) and ``census.png`` (accuracy against P per
+material, RH02 Fig. 8's layout; matplotlib, 100 dpi). The last line counts the materials above
+the threshold at (F, P), with the fit settings.
+
+Exit status: 0 when every row was analysed, 1 when some could not be (each is a failed row, with
+its error, in the table and the files), 2 for bad usage (unknown options, bad values, a named
+file that does not exist, an output folder that cannot be written: nothing is written).
+
+Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
+SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611, Fig. 8.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.table import Table
+
+from ..analysis.census import (
+    CSV_COLUMNS,
+    DEFAULT_F,
+    DEFAULT_P,
+    DEFAULT_THRESHOLD,
+    Census,
+    CensusRow,
+    census_sources,
+    run_census,
+)
+from ..analysis.fit.crossval import DEFAULT_FOLDS
+from ..analysis.fit.representation import CANDIDATES
+from ..analysis.orders import DEFAULT_MAX_F, DEFAULT_MAX_P
+from ..analysis.tolerance import DEFAULT_EPS
+from ..brdf_io.atomic import atomic_paths, check_writable
+from ..brdf_io.errors import BadInputError
+from ..brdf_io.jsonutil import to_jsonable
+from ..brdf_io.specs import BRDF_FILE_TYPES, load_brdf
+from .common import (
+    add_order_rule,
+    add_rgl_incident,
+    brdf_help,
+    number_in,
+    print_json,
+    print_table,
+    rgl_brdf_arg,
+    say,
+    stderr,
+    stdout,
+    tolerance,
+)
+
+__all__ = ["HELP", "add_arguments", "run", "plot_census", "write_census"]
+
+HELP = "census of a BRDF library: accuracy at (F, P) per material (RH02 Fig. 8), orders needed, fit error, reasons"
+
+#: Files written into ``--out``.
+CSV_NAME, JSON_NAME, PLOT_NAME = "census.csv", "census.json", "census.png"
+
+
+def _candidates(text: str) -> tuple[str, ...]:
+    items = tuple(t.strip() for t in text.split(",") if t.strip())
+    unknown = [t for t in items if t not in CANDIDATES]
+    if not items or unknown:
+        raise argparse.ArgumentTypeError(f"expected a comma-separated list of {', '.join(CANDIDATES)}, got {text!r}")
+    return items
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("brdfs", nargs="+", metavar="BRDF",
+                        help=brdf_help(many=True) + "; a folder is every BRDF file in it")
+    parser.add_argument("--out", default="shrm-census", help="output folder (default ./shrm-census)")
+    parser.add_argument("--F", type=number_in(0, DEFAULT_MAX_F, integer=True), default=DEFAULT_F, dest="F",
+                        help=f"lighting order of the accuracy table (default {DEFAULT_F}, RH02 Fig. 8)")
+    parser.add_argument("--P", type=number_in(0, DEFAULT_MAX_P, integer=True), default=DEFAULT_P, dest="P",
+                        help=f"largest view order of the accuracy table, P = 0..this (default {DEFAULT_P})")
+    parser.add_argument("--threshold", type=number_in(0.0, 1.0, lo_open=True, hi_open=True),
+                        default=DEFAULT_THRESHOLD,
+                        help=f"accuracy mark counted and explained (default {DEFAULT_THRESHOLD:g}, RH02's 90 %%)")
+    parser.add_argument("--eps", type=tolerance, default=DEFAULT_EPS,
+                        help=f"tolerance of the orders each material needs (default {DEFAULT_EPS:g})")
+    parser.add_argument("--max-F", type=int, default=DEFAULT_MAX_F, help=f"cap on F needed (default {DEFAULT_MAX_F})")
+    parser.add_argument("--max-P", type=int, default=DEFAULT_MAX_P, help=f"cap on P needed (default {DEFAULT_MAX_P})")
+    add_order_rule(parser)
+    parser.add_argument("--candidates", type=_candidates, default=CANDIDATES,
+                        help=f"representations tried for scattered data (default {','.join(CANDIDATES)})")
+    parser.add_argument("--folds", type=number_in(2, 100, integer=True), default=DEFAULT_FOLDS,
+                        help=f"cross-validation folds of the representation choice (default {DEFAULT_FOLDS})")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the folds and the fits (default 0)")
+    parser.add_argument("--max-theta", type=number_in(0.0, 90.0, lo_open=True, unit=" degrees"), default=80.0,
+                        help="measurements with θ_i or θ_o above this are not fitted (default 80)")
+    parser.add_argument("--no-plot", action="store_true", help=f"do not draw {PLOT_NAME}")
+    parser.add_argument("--json", action="store_true",
+                        help="print one JSON object (census.json's, with the files written) instead of the table")
+    add_rgl_incident(parser)
+
+
+def _check_sources(sources: list[str]) -> None:
+    """A BRDF named by a file path that does not exist is a usage error (exit 2, nothing written);
+    a file that exists but cannot be read is one failed row."""
+    for source in sources:
+        base, sep, _ = source.rpartition("#")
+        path = Path(base if sep and Path(base).suffix.lower() in BRDF_FILE_TYPES else source)
+        if path.suffix.lower() in BRDF_FILE_TYPES and not path.exists():
+            raise BadInputError(path, "no such BRDF file")
+        if not path.suffix and not path.exists() and ":" not in source and ("/" in source or "\\" in source):
+            raise BadInputError(path, "no such file or folder")
+
+
+def run(args: argparse.Namespace) -> int:
+    _check_sources(args.brdfs)
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise BadInputError(out, "is a file, not an output folder")
+    check_writable(out / CSV_NAME)
+    sources = census_sources(args.brdfs)
+    if not sources:
+        raise BadInputError(", ".join(args.brdfs), "no BRDF files found (suffixes " + ", ".join(BRDF_FILE_TYPES) + ")")
+    show = not (args.json or args.quiet)
+    columns = (TextColumn("[bold]census"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+               TextColumn("{task.fields[last]}"))
+    with Progress(*columns, console=stderr, transient=True, disable=not show) as bar:
+        task = bar.add_task("census", total=len(sources), last="")
+
+        def progress(done: int, total: int, row: CensusRow) -> None:
+            bar.update(task, completed=done, last=f"{row.name or row.source}: {row.status}")
+
+        census = run_census(
+            sources, F=args.F, P=args.P, threshold=args.threshold, eps=args.eps, criterion=args.criterion,
+            max_view_deg=args.max_view_deg, max_F=args.max_F, max_P=args.max_P, candidates=args.candidates,
+            folds=args.folds, seed=args.seed, max_theta_deg=args.max_theta,
+            load=lambda source: load_brdf(rgl_brdf_arg(source, args)), progress=progress,
+        )
+    files = write_census(census, out, plot=not args.no_plot)
+    if args.json:
+        print_json(census_doc(census, files))
+        return 0 if census.n_failed == 0 else 1
+    print_census(census)
+    say(f"written: {', '.join(str(p) for p in files.values())}")
+    say(f"census: {census.count_line()} ({census.seconds:.1f} s)")
+    return 0 if census.n_failed == 0 else 1
+
+
+def write_census(census: Census, out: Path, *, plot: bool = True) -> dict[str, Path]:
+    """Write ``census.csv``, ``census.json`` and (with ``plot``) ``census.png`` into ``out``,
+    all together or none (``atomic_paths``); returns ``{"csv": path, "json": path[, "plot": path]}``.
+
+    Raises
+    ------
+    BadInputError
+        The folder cannot be written (nothing is then changed).
+    """
+    out.mkdir(parents=True, exist_ok=True)
+    files = {"csv": out / CSV_NAME, "json": out / JSON_NAME} | ({"plot": out / PLOT_NAME} if plot else {})
+    with atomic_paths(list(files.values())) as temps:
+        tmp = dict(zip(files, temps, strict=True))
+        rows = census.csv_rows()
+        fields = list(rows[0]) if rows else list(CSV_COLUMNS)
+        with open(tmp["csv"], "w", newline="", encoding="utf-8") as f:
+            writer = csv.DictWriter(f, fieldnames=fields)
+            writer.writeheader()
+            writer.writerows(rows)
+        tmp["json"].write_text(json.dumps(to_jsonable(census.as_dict()), indent=1) + "\n", encoding="utf-8")
+        if plot:
+            plot_census(census, tmp["plot"])
+    return files
+
+
+def plot_census(census: Census, path: Path, title: str | None = None) -> None:
+    """RH02 Fig. 8's layout: 1 − ε(F, p) per material for each p = 0…P, the materials sorted by
+    their accuracy at P, with the threshold; left RH02's criterion (energy over all views),
+    right the worst view band. Failed rows are left out. PNG at 100 dpi (matplotlib, Agg)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.ticker import MaxNLocator
+
+    ok = [r for r in census.rows if r.ok]
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), sharey=True)
+    panels = (("accuracy_rh02", "RH02's criterion: energy over all views", "rh02"),
+              ("accuracy_bands", f"worst view band to {census.max_view_deg:g}° (point light)", "bands"))
+    for ax, (key, label, criterion) in zip(axes, panels, strict=True):
+        table = np.array([getattr(r, key) for r in ok]).reshape(len(ok), census.P + 1)
+        order = np.argsort(-table[:, census.P], kind="stable")
+        x = np.arange(1, len(ok) + 1)
+        for p in range(census.P + 1):
+            ax.plot(x, table[order, p], marker="o", markersize=2.5, linewidth=1, label=f"P = {p}")
+        ax.axhline(census.threshold, color="k", linestyle="--", linewidth=0.8)
+        ax.set_xlabel(f"materials, sorted by accuracy at P = {census.P}")
+        ax.set_title(f"{label}\n{census.count_above(criterion)} of {len(census.rows)} above "
+                     f"{census.threshold:.0%} at F = {census.F}, P = {census.P}", fontsize=9)
+        ax.set_ylim(0.0, 1.0)
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel(f"accuracy 1 − ε(F = {census.F}, P)")
+    axes[0].legend(loc="lower center", ncol=3, fontsize=8)
+    fig.suptitle(title or f"census of {len(census.rows)} materials (RH02 Fig. 8 layout)", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100, format="png")
+    plt.close(fig)
+
+
+def _fit_cell(row: CensusRow) -> str:
+    if row.fit_worst is None:
+        return "" if row.fit_ok is None else "n/a"
+    w = row.fit_worst
+    return f"{w['rel_rms']:.2g} {w['lo_deg']:g}–{w['hi_deg']:g}°" + ("" if row.fit_ok else " FAILED")
+
+
+def _model_cell(row: CensusRow) -> str:
+    """``"zernike 6"`` (its order), ``"cook-torrance"``, or ``"as given"``."""
+    if row.model == "zernike" and row.representation_record is not None:
+        return f"zernike {row.representation_record['label'].split()[2]}"
+    return row.model or row.representation
+
+
+def print_census(census: Census) -> None:
+    """The census table on stdout: one row per material (the reasons spelt out below it)."""
+    P = census.P
+    table = Table(title=f"census: accuracy 1 − ε(F = {census.F}, P), RH02's energy over all views and the worst "
+                  f"view band; orders needed at ε = {census.eps:g} ({census.criterion} rule)")
+    for key, justify in (("material", "left"), ("analysed as", "left"), ("fit: worst band", "right"),
+                         (f"RH02, P = 0…{P}", "left"), (f"band P={P}", "right"), ("F, P needed", "right"),
+                         ("aniso.", "right"), ("reasons", "left")):
+        table.add_column(key, justify=justify)
+    for r in census.rows:
+        if not r.ok:
+            table.add_row(r.name or r.source, "[red]failed[/red]", "", "", "", "", "", ", ".join(r.reasons))
+            continue
+        acc = " ".join(f"{v:.2f}" for v in r.accuracy_rh02)
+        needed = f"{r.F_needed}, {r.P_needed}" + (" capped" if r.capped else "")
+        aniso = "" if r.anisotropy is None else f"{r.anisotropy:.1g}" + (" A" if r.anisotropic else "")
+        table.add_row(r.name, _model_cell(r), _fit_cell(r), acc, f"{r.accuracy('bands'):.2f}", needed, aniso,
+                      ", ".join(r.reasons))
+    print_table(table)
+    for r in census.rows:
+        if r.reason_text:
+            stdout.print(f"{r.name or r.source}: {r.reason_text}", markup=False, soft_wrap=True, highlight=False)
+
+
+def census_doc(census: Census, files: dict[str, Path]) -> dict[str, Any]:
+    """The ``--json`` object: census.json's with the files written."""
+    return census.as_dict() | {"files": {k: str(v) for k, v in files.items()}}
