@@ -84,9 +84,10 @@ def material_lod(alpha: float, n_levels: int) -> float:
 
 
 def _rows_for(height: int, alpha: float, face: int) -> int:
-    """Smallest divisor of the map's rows H that is at least min(4π/α, 4·S_m) and 8: a pixel
-    pitch of α/4 for the lobe (``default_level_rows``), never finer than half a texel."""
-    target = max(8.0, min(4.0 * np.pi / alpha, 4.0 * face))
+    """Smallest divisor of the map's rows H that is at least min(4π/α, 4·S_m) and 64: a pixel
+    pitch of α/4 for the lobe (``default_level_rows``), never finer than needed for the level's
+    texels, never coarser than 2.8° (benchmarks/export_accuracy.py measures the lookup's error)."""
+    target = max(64.0, min(4.0 * np.pi / alpha, 4.0 * face))
     return next((d for d in range(1, height + 1) if height % d == 0 and d >= target), height)
 
 
