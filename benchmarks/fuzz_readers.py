@@ -7,7 +7,16 @@ by our own writers, plus the real files in ``../shared/data`` when present — w
 truncations, byte flips, int32 header fields set to extremes, numbers in text headers
 replaced by 0/−1/huge/NaN/5000-digit values, ``.npy`` member headers rewritten inside
 ``.npz`` archives, NaN/Inf bit patterns in the data, appended garbage and special files
-(FIFO, a link to ``/dev/zero``, an empty file, a folder).
+(FIFO, a link to ``/dev/zero``, an empty file, a folder); and files built to exhaust memory
+or to analyse nothing (issues 28 and 30): OpenEXR windows and ``envmap`` attributes
+(``exr_window``), table members that inflate up to a thousand-fold or whose zip directory
+lies (``npz_inflate``), run-length ``.hdr`` files declaring up to the pixel limit
+(``hdr_limit``), and degenerate tables (``degenerate``: one sample, all missing, one angle,
+constant values, subnormal node spacing), which are also analysed (``choose_orders``).
+
+Workers run with ``SHRM_MAX_MEMORY_BYTES`` at half the per-case budget: a reader's memory
+plan (data_specs/limits.md) must refuse what would grow past the budget, so an estimate
+short by more than 2× shows as a ``memory`` failure.
 
 Each case runs in a worker process under an address-space limit (``--memory-gib``) and
 a timeout (``--timeout``), and is classified:
@@ -54,6 +63,7 @@ import tempfile
 import time
 import traceback
 import zipfile
+import zlib
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -117,7 +127,8 @@ def _write_seeds(folder: Path) -> dict[str, Reader]:
     table = folder / "seed_table.npz"
     write_table(table, brdf, theta_i=np.radians([0.0, 30, 60, 89]), theta_o=np.radians([0.0, 45, 89]),
                 phi_d=np.radians([0.0, 90, 180]))
-    add("table", ".npz", [table], mutations=("npy_header", "npy_data", "truncate", "flip", "append", "special"))
+    add("table", ".npz", [table], mutations=("npy_header", "npy_data", "truncate", "flip", "append", "special",
+                                             "npz_inflate", "degenerate"))
 
     cornell = [folder / "seed.brdf"]
     lines = ["# seed written by the fuzz harness", "31", " ".join(str(w) for w in range(400, 710, 10))]
@@ -157,7 +168,7 @@ def _write_seeds(folder: Path) -> dict[str, Reader]:
     write_hdr(folder / "seed_rle.hdr", wide)
     write_hdr(folder / "seed_flat.hdr", wide, rle=False)
     add("hdr", ".hdr", [folder / "seed_rle.hdr", folder / "seed_flat.hdr", SHARED / "env" / "ict_small" / "grace.hdr"],
-        mutations=("truncate", "flip", "text_number", "int32", "append", "zero", "special"))
+        mutations=("truncate", "flip", "text_number", "int32", "append", "zero", "special", "hdr_limit"))
 
     write_pfm(folder / "seed.pfm", image)
     add("pfm", ".pfm", [folder / "seed.pfm"],
@@ -276,6 +287,159 @@ def _mutate_exr_window(rng: np.random.Generator, seed: bytes) -> tuple[bytes, st
     return bytes(data), f"exr_window: {name.decode()}[{corner}] = {number}"
 
 
+#: Files a mutation builds once per run (a 17 MB run-length picture, an archive inflating to 400 MB):
+#: ``_prepare`` runs in the driver, so one build serves every case that draws it.
+_BUILT: dict[tuple, bytes] = {}
+
+
+def _npy_header(shape: tuple[int, ...], descr: str = "<f8") -> bytes:
+    buf = io.BytesIO()
+    np.lib.format.write_array_header_1_0(buf, {"descr": descr, "fortran_order": False, "shape": shape})
+    return buf.getvalue()
+
+
+def _table_archive(seed: bytes, values_head: bytes, data_bytes: int, axes: tuple[int, int, int],
+                   level: int = 6) -> bytes:
+    """The seed table's metadata with axes of ``axes`` nodes and a deflated ``values`` member: the
+    .npy header ``values_head`` then ``data_bytes`` bytes of 0.25 (float64), streamed (never held whole)."""
+    members = _npz_members(seed)
+    out = io.BytesIO()
+    with zipfile.ZipFile(out, "w", compression=zipfile.ZIP_DEFLATED, compresslevel=level) as archive:
+        for key, n in zip(("theta_i", "theta_o", "phi_d"), axes, strict=True):
+            top = np.pi if key == "phi_d" else np.pi / 2
+            archive.writestr(f"{key}.npy", _npy_bytes(np.linspace(0.0, top, n)), compress_type=zipfile.ZIP_STORED)
+        archive.writestr("metadata.npy", members["metadata.npy"], compress_type=zipfile.ZIP_STORED)
+        with archive.open("values.npy", "w", force_zip64=data_bytes > 2**31) as member:
+            member.write(values_head)
+            chunk = np.full(1 << 21, 0.25).tobytes()  # a repeated 8-byte value: deflate's ~1000:1
+            left = data_bytes
+            while left > 0:
+                member.write(chunk[: min(left, len(chunk))])
+                left -= len(chunk)
+    return out.getvalue()
+
+
+def _npy_bytes(array: np.ndarray) -> bytes:
+    buf = io.BytesIO()
+    np.save(buf, array)
+    return buf.getvalue()
+
+
+def _patch_member_sizes(data: bytes, name: bytes, compressed: int | None, declared: int) -> bytes:
+    """Rewrite member ``name``'s sizes in its local header and central directory entry (zip
+    APPNOTE 4.3.7, 4.3.12; 32-bit fields)."""
+    out = bytearray(data)
+    local = out.index(name) - 30
+    central = out.rindex(name) - 46
+    for at in (local + 18, central + 20):
+        comp = compressed if compressed is not None else int.from_bytes(out[at:at + 4], "little")
+        out[at:at + 8] = comp.to_bytes(4, "little") + (declared & 0xFFFFFFFF).to_bytes(4, "little")
+    return bytes(out)
+
+
+#: ``npz_inflate`` variants: (θ_i nodes with 64 θ_o × 64 φ_d, RGB float64 of 0.25: 49K, 786K, 6.3M and 50M
+#: values: 0.4, 6, 50 and 400 MB inflated from 0.4-400 KB), a lying directory, and 2²⁸ values declared
+#: over 2.2 MB of stored deflate blocks (issue 30's 2.35 MB table that needed 8 GB).
+NPZ_INFLATE_TI = (4, 64, 512, 4096)
+
+
+def _mutate_npz_inflate(rng: np.random.Generator, seed: bytes) -> tuple[bytes, str]:
+    choice = int(rng.integers(0, len(NPZ_INFLATE_TI) + 2))
+    if choice < len(NPZ_INFLATE_TI):
+        n_ti = NPZ_INFLATE_TI[choice]
+        key = ("npz_inflate", n_ti, len(seed))
+        if key not in _BUILT:
+            shape = (n_ti, 64, 64, 3)
+            _BUILT[key] = _table_archive(seed, _npy_header(shape), 8 * int(np.prod(shape)), shape[:3], level=1)
+        return _BUILT[key], f"npz_inflate: {n_ti} x 64 x 64 x 3 float64 deflated"
+    if choice == len(NPZ_INFLATE_TI):  # the directory lies: 10,000x the true size
+        shape = (4, 64, 64, 3)
+        data = _table_archive(seed, _npy_header(shape), 8 * int(np.prod(shape)), shape[:3], level=1)
+        declared = 10_000 * (len(_npy_header(shape)) + 8 * int(np.prod(shape)))
+        return _patch_member_sizes(data, b"values.npy", None, declared), f"npz_inflate: directory declares {declared:,}"
+    shape = (1024, 1024, 256)
+    key = ("npz_inflate_pad", len(seed))
+    if key not in _BUILT:
+        head = _npy_header(shape)
+        deflate = zlib.compressobj(0, zlib.DEFLATED, -15)  # stored blocks: 2.2 MB in, 2.2 MB out
+        stream = deflate.compress(head + bytes(2_200_000)) + deflate.flush(zlib.Z_SYNC_FLUSH)
+        data = _table_archive(seed, b"", 0, (1024, 1024, 256))
+        # splice the stream in as the values member's data (it was empty), then fix its sizes and the
+        # central directory's offset
+        local = data.index(b"values.npy") - 30
+        start = local + 30 + len(b"values.npy") + int.from_bytes(data[local + 28:local + 30], "little")
+        first_central = data.index(b"PK\x01\x02")
+        old = first_central - start
+        out = bytearray(data[:start] + stream + data[first_central:])
+        shift = len(stream) - old
+        end = out.rindex(b"PK\x05\x06")
+        offset = int.from_bytes(out[end + 16:end + 20], "little")
+        out[end + 16:end + 20] = (offset + shift).to_bytes(4, "little")
+        _BUILT[key] = _patch_member_sizes(bytes(out), b"values.npy", len(stream), len(head) + 8 * 2**28)
+    return _BUILT[key], "npz_inflate: 2^28 float64 declared over 2.2 MB of stored deflate blocks"
+
+
+#: ``degenerate`` tables: (description, θ_i, θ_o, φ_d (degrees, or radians where noted), values builder)
+def _degenerate_tables() -> list[tuple[str, np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+    r = np.radians
+    six = r(np.linspace(0.0, 89.0, 6))
+    one_measured = np.full((6, 6, 6, 3), np.nan)
+    one_measured[2, 3, 1] = 0.5
+    tiny = np.array([0.0, 5e-324])
+    return [
+        ("one sample", r([10.0]), r([20.0]), r([0.0]), np.full((1, 1, 1, 3), 0.3)),
+        ("one scalar sample", r([0.0]), r([0.0]), r([0.0]), np.full((1, 1, 1), 0.3)),
+        ("all missing", r([0.0, 30, 60]), r([0.0, 30, 60]), r([0.0, 90, 180]), np.full((3, 3, 3, 3), np.nan)),
+        ("one theta_i", r([0.0]), six, r([0.0, 90, 180]), np.full((1, 6, 3, 3), 0.2)),
+        ("one phi_d", six, six, r([0.0]), np.full((6, 6, 1, 3), 0.2)),
+        ("constant", six, six, r([0.0, 90, 180]), np.full((6, 6, 3, 3), 0.2)),
+        ("zeros", six, six, r([0.0, 90, 180]), np.zeros((6, 6, 3, 3))),
+        ("one measured of 216", six, six, r(np.linspace(0.0, 180.0, 6)), one_measured),
+        ("subnormal theta_i spacing", tiny, six, r([0.0, 90, 180]), np.full((2, 6, 3, 3), 0.2)),
+        ("nodes 1e-9 apart", np.array([0.0, 1e-9]), np.array([0.0, 1e-9]), np.array([0.0, 1e-9]),
+         np.full((2, 2, 2, 3), 0.2)),
+        ("largest values", r([0.0, 45]), r([0.0, 45]), r([0.0, 180]), np.full((2, 2, 2, 3), 1e40)),
+        ("tiny values", r([0.0, 45]), r([0.0, 45]), r([0.0, 180]), np.full((2, 2, 2, 3), 1e-300)),
+        ("a spike", six, six, r(np.linspace(0.0, 180.0, 6)), np.where(np.arange(216 * 3).reshape(6, 6, 6, 3) == 0,
+                                                                       1e6, 1e-6)),
+    ]
+
+
+def _mutate_degenerate(rng: np.random.Generator, seed: bytes) -> tuple[bytes, str]:
+    tables = _degenerate_tables()
+    name, ti, to, pd, values = tables[int(rng.integers(0, len(tables)))]
+    members = _npz_members(seed)
+    members.update({"theta_i.npy": _npy_bytes(ti), "theta_o.npy": _npy_bytes(to), "phi_d.npy": _npy_bytes(pd),
+                    "values.npy": _npy_bytes(values)})
+    return _npz_bytes(members), f"degenerate table: {name}"
+
+
+#: ``hdr_limit`` sizes (height, width): 2:1 at the pixel limit (17 MB of run-length scanlines), square at
+#: the limit (not 2:1), 16384 x 8192 (the largest real map), 13 M pixels (over the harness's plan),
+#: and 512 x 1024 (decoded). Each built once per run.
+HDR_LIMIT_SHAPES = ((11585, 23170), (16384, 16384), (8192, 16384), (2560, 5120), (512, 1024))
+
+
+def _mutate_hdr_limit(rng: np.random.Generator) -> tuple[bytes, str]:
+    height, width = HDR_LIMIT_SHAPES[int(rng.integers(0, len(HDR_LIMIT_SHAPES)))]
+    value = int(rng.integers(1, 256))
+    key = ("hdr_limit", height, width, value)
+    if key not in _BUILT:
+        if len(_BUILT) > 8:  # a few files of 17 MB at most
+            _BUILT.clear()
+        runs, last = divmod(width, 127)
+        component = bytes([255, value]) * runs + (bytes([128 + last, value]) if last else b"")
+        exponent = bytes([255, 128]) * runs + (bytes([128 + last, 128]) if last else b"")
+        line = bytes([2, 2, width >> 8, width & 255]) + component * 3 + exponent
+        _BUILT[key] = (b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n" + f"-Y {height} +X {width}\n".encode()
+                       + line * height)
+    data = _BUILT[key]
+    if rng.random() < 0.2:
+        cut = int(rng.integers(len(data) // 2, len(data)))
+        return data[:cut], f"hdr_limit: {width} x {height} run-length, truncated to {cut:,} bytes"
+    return data, f"hdr_limit: {width} x {height} run-length ({len(data):,} bytes)"
+
+
 def mutate(reader: Reader, rng: np.random.Generator, seed: bytes, kind: str) -> tuple[bytes | str, str]:
     """Return (mutated content or a special-file kind, description)."""
     n = len(seed)
@@ -283,6 +447,12 @@ def mutate(reader: Reader, rng: np.random.Generator, seed: bytes, kind: str) -> 
         return seed, "unchanged seed"
     if kind == "exr_window":
         return _mutate_exr_window(rng, seed)
+    if kind == "npz_inflate":
+        return _mutate_npz_inflate(rng, seed)
+    if kind == "degenerate":
+        return _mutate_degenerate(rng, seed)
+    if kind == "hdr_limit":
+        return _mutate_hdr_limit(rng)
     if kind == "truncate":
         cut = int(rng.integers(0, min(n, 2048))) if rng.random() < 0.5 else int(rng.integers(0, max(n, 1)))
         return seed[:cut], f"truncate to {cut} of {n} bytes"
@@ -421,8 +591,10 @@ def _probe_directions() -> tuple[np.ndarray, np.ndarray]:
     return L / np.linalg.norm(L, axis=1, keepdims=True), V / np.linalg.norm(V, axis=1, keepdims=True)
 
 
-def load_and_check(reader: str, target: str) -> tuple[bool, str]:
-    """Load ``target`` with the reader's public loader; (all values finite, summary)."""
+def load_and_check(reader: str, target: str, analyse: bool = False) -> tuple[bool, str]:
+    """Load ``target`` with the reader's public loader; (all values finite, summary). ``analyse``: a
+    BRDF is also given to ``choose_orders`` (ε 0.1, F ≤ 48, the RH02 rule), whose orders and ε must be
+    finite with ε in [0, 1] (a table with one sample once took 477 s and 4.9 GB there)."""
     if reader in ("merl", "table", "cornell", "fit_json", "spec", "rgl", "curet", "gonio"):
         import warnings
 
@@ -435,7 +607,16 @@ def load_and_check(reader: str, target: str) -> tuple[bool, str]:
             return _finite(brdf.rgb) and _finite(brdf.L) and _finite(brdf.V), f"{len(brdf.rgb)} samples"
         L, V = _probe_directions()
         values = brdf.eval(L, V)
-        return _finite(values), f"{type(brdf).__name__}, max {np.max(values):.3g}"
+        summary = f"{type(brdf).__name__}, max {np.max(values):.3g}"
+        if analyse and _finite(values):
+            from shrmkit.analysis.orders import choose_orders
+
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                choice = choose_orders(brdf, eps=0.1, max_F=48, max_P=24, criterion="rh02")
+            ok = 0 <= choice.F <= 48 and 0 <= choice.P <= 24 and np.isfinite(choice.eps) and 0 <= choice.eps <= 1
+            return ok, f"{summary}; orders F {choice.F}, P {choice.P}, eps {choice.eps:.3g}"
+        return _finite(values), summary
     if reader == "shrm":
         from shrmkit.analysis.shrm import load_shrm
 
@@ -508,15 +689,15 @@ def _peak_rss_mib() -> float:
     return float("nan")
 
 
-def run_case(reader: str, target: str, names: list[str]) -> dict:
+def run_case(reader: str, target: str, names: list[str], analyse: bool = False) -> dict:
     """Classify one case (see the module docstring); ``names``: strings a clean error may
-    quote to name the file (its path, its name, a cube folder)."""
+    quote to name the file (its path, its name, a cube folder); ``analyse``: see :func:`load_and_check`."""
     from shrmkit.brdf_io.errors import BadInputError
 
     _peak_rss_reset()
     base = _peak_rss_mib()
     try:
-        finite, summary = load_and_check(reader, target)
+        finite, summary = load_and_check(reader, target, analyse)
         outcome = "valid" if finite else "garbage"
         detail = summary if finite else f"non-finite values ({summary})"
     except BadInputError as err:
@@ -558,7 +739,7 @@ def _worker_main(memory_gib: float, budget_mib: float) -> None:
     sys.stdout = sys.stderr  # stray prints must not break the protocol
     for line in sys.stdin:
         case = json.loads(line)
-        result = run_case(case["reader"], case["target"], case["names"])
+        result = run_case(case["reader"], case["target"], case["names"], bool(case.get("analyse")))
         if result["outcome"] in ("clean", "valid") and result["peak_mib"] > budget_mib:
             result = {**result, "outcome": "memory", "detail": f"peak +{result['peak_mib']:.0f} MiB; " +
                       result["detail"]}
@@ -574,7 +755,9 @@ class Worker:
 
     def __init__(self, memory_gib: float, budget_mib: float) -> None:
         env = {**os.environ, "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
-               "MALLOC_ARENA_MAX": "2", "PYTHONWARNINGS": "ignore"}
+               "MALLOC_ARENA_MAX": "2", "PYTHONWARNINGS": "ignore",
+               # the memory plan at half the budget: a reader's estimate short by 2x shows as "memory"
+               "SHRM_MAX_MEMORY_BYTES": str(int(budget_mib * 2**20 / 2))}
         self.proc = subprocess.Popen(
             [sys.executable, __file__, "--worker", str(memory_gib), str(budget_mib)],
             stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, env=env, cwd=ROOT,
@@ -679,7 +862,7 @@ def _prepare(case: dict, readers: dict[str, Reader], work: Path,
     content, desc = mutate(reader, rng, seed_bytes(source), kind)
     target, names = _materialise(case, content, seed_path, work)
     return {**case, "target": target, "names": names, "mutation": f"{seed_path.name}: {desc}",
-            "is_seed": kind == "none"}
+            "is_seed": kind == "none", "analyse": kind == "degenerate"}
 
 
 def drive(
@@ -836,7 +1019,7 @@ def _show(spec: str, seed: int) -> int:
         (work / "cases").mkdir()
         case = _prepare(case, readers, work / "cases")
         print(f"{reader_name}:{index}: {case['mutation']}\ntarget: {case['target'][:200]}")
-        finite, summary = load_and_check(reader_name, case["target"])
+        finite, summary = load_and_check(reader_name, case["target"], bool(case.get("analyse")))
         print(f"loaded: finite={finite}, {summary}")
     except Exception:  # noqa: BLE001
         traceback.print_exc()

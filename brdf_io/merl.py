@@ -32,7 +32,7 @@ from .errors import BadInputError
 from .halfdiff import directions_to_halfdiff, halfdiff_to_directions
 from .limits import check_elements, check_memory, regular_file
 from .masked_grid import MaskedTableBRDF, MissingAwareGrid, eval_with_mask
-from .table import MAX_TABLE_RHO
+from .table import MAX_TABLE_RHO, MIN_TABLE_PEAK_RHO
 
 __all__ = [
     "MERL_DIMS",
@@ -212,6 +212,12 @@ def read_merl(path: str | os.PathLike[str]) -> MerlBRDF:
         )
     if np.all(np.isnan(values)):
         raise BadInputError(path, "every sample is missing (negative): no measured value to analyse")
+    largest = float(np.nanmax(values))
+    if not largest > MIN_TABLE_PEAK_RHO:
+        raise BadInputError(
+            path, f"the largest value is {largest!r} 1/sr, at most {MIN_TABLE_PEAK_RHO:g}: nothing a measurement "
+            "can hold (an all-zero file)",
+        )
     return MerlBRDF(values, name=path.stem, source=str(path))
 
 

@@ -37,6 +37,7 @@ from .npz_safe import NpzMember, read_npz
 
 __all__ = [
     "MAX_TABLE_RHO",
+    "MIN_TABLE_PEAK_RHO",
     "TABLE_FORMAT",
     "TABLE_FORMAT_VERSION",
     "TableBRDF",
@@ -51,6 +52,10 @@ TABLE_FORMAT_VERSION = 1
 #: and above any analytic model within its parameter bounds (< 1e33 even at the horizon,
 #: data_specs/spec_strings.md), low enough that sums and squares of values stay finite.
 MAX_TABLE_RHO = 1e40
+#: A table (or MERL file) whose largest measured value is at most this (rho in 1/sr) is refused:
+#: 25 orders of magnitude below any measurement (a dark MERL sample is ~1e-5), an all-zero or
+#: underflowed table the analysis could only call "zero everywhere" (1e-300 squared is 0).
+MIN_TABLE_PEAK_RHO = 1e-30
 #: Largest order :meth:`TableBRDF.resolved_order` returns (far above any order cap of the analysis).
 MAX_RESOLVED_ORDER = 1_000_000
 _MAX_NAME = 1000  # longest metadata name used as the BRDF's name
@@ -325,9 +330,9 @@ def read_table(path: str | os.PathLike[str]) -> TableBRDF:
         dtype or a declared size over the limits or unlike the archive's, metadata that is
         not strict JSON or not of this format and version, an invalid grid, values that
         are negative, infinite or above :data:`MAX_TABLE_RHO`, no measured (non-NaN) sample
-        at all; a values member whose planned peak (:data:`TABLE_PEAK_BYTES_PER_VALUE` per
-        value) is over ``SHRM_MAX_MEMORY_BYTES`` (refused from its ``.npy`` header, before it
-        is inflated).
+        at all or none above :data:`MIN_TABLE_PEAK_RHO`; a values member whose planned peak
+        (:data:`TABLE_PEAK_BYTES_PER_VALUE` per value) is over ``SHRM_MAX_MEMORY_BYTES``
+        (refused from its ``.npy`` header, before it is inflated).
     """
     path = Path(path)
     arrays = read_npz(path, _MEMBERS, what="a BRDF table")
@@ -352,4 +357,10 @@ def read_table(path: str | os.PathLike[str]) -> TableBRDF:
     nodes = table.theta_i.size * table.theta_o.size * table.phi_d.size
     if table.n_missing == nodes:  # it would evaluate to 0 everywhere, as if measured black
         raise BadInputError(path, f"all {nodes:,} grid points are missing (NaN): no measured sample to analyse")
+    largest = float(np.nanmax(table.values))
+    if not largest > MIN_TABLE_PEAK_RHO:
+        raise BadInputError(
+            path, f"the largest value is {largest!r} 1/sr, at most {MIN_TABLE_PEAK_RHO:g}: nothing a measurement "
+            "can hold (an all-zero or underflowed table)",
+        )
     return table

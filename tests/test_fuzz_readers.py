@@ -53,3 +53,8 @@ def test_seeded_fuzz_subset_has_no_failures():
     )
     readers = {r["reader"] for r in results}
     assert len(readers) >= 13 and len(results) == sum(min(per_reader, caps.get(r, per_reader)) for r in readers)
+    # the mutations of issues 28/30 are drawn: windows, inflation, the pixel limit, degenerate tables
+    # (which are also analysed: choose_orders must finish with finite orders and eps in [0, 1])
+    drawn = " ".join(r["mutation"] for r in results)
+    for kind in ("exr_window:", "npz_inflate:", "hdr_limit:", "degenerate table:"):
+        assert kind in drawn, kind

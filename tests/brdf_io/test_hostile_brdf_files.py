@@ -199,7 +199,7 @@ def test_npz_zip_bombs_and_odd_archives_are_refused(tmp_path, monkeypatch):
     # a member over the size limit, honestly compressed
     monkeypatch.setenv("SHRM_MAX_ELEMENTS", "1000")
     path = tmp_path / "big.npz"
-    write_table(path, np.zeros((30, 30, 30)), theta_i=np.linspace(0, 1, 30), theta_o=np.linspace(0, 1, 30),
+    write_table(path, np.full((30, 30, 30), 0.1), theta_i=np.linspace(0, 1, 30), theta_o=np.linspace(0, 1, 30),
                 phi_d=np.linspace(0, 3, 30))
     _raises_naming(path, lambda: read_table(path), "limit")
     monkeypatch.delenv("SHRM_MAX_ELEMENTS")

@@ -188,7 +188,9 @@ def test_check_memory_message_and_limit(monkeypatch):
 
 def test_tables_and_merl_files_without_a_measured_sample_are_refused(tmp_path):
     """All NaN (table) or all negative (MERL): evaluated as 0 everywhere, a black surface that was never
-    measured (`shrm orders` said "zero everywhere"). Refused on reading, naming the file."""
+    measured (`shrm orders` said "zero everywhere"). All 0 or 1e-300 (the fuzz harness's degenerate
+    tables: the analysis's error named the metadata's name, not the file). Refused on reading, naming
+    the file."""
     grid = {"theta_i": np.radians([0.0, 30, 60]), "theta_o": np.radians([0.0, 30, 60]),
             "phi_d": np.radians([0.0, 90, 180])}
     write_table(tmp_path / "nan.npz", np.full((3, 3, 3, 3), np.nan), **grid)
@@ -203,6 +205,10 @@ def test_tables_and_merl_files_without_a_measured_sample_are_refused(tmp_path):
                                           + np.full(3 * 90 * 90 * 180, -1.0, "<f8").tobytes())
     with pytest.raises(BadInputError, match=r"nan.binary: every sample is missing"):
         read_merl(tmp_path / "nan.binary")
+    for name, value in (("zero", 0.0), ("underflow", 1e-300)):  # analysed as "zero everywhere", named by
+        write_table(tmp_path / f"{name}.npz", np.full((3, 3, 3, 3), value), **grid)  # the metadata's name
+        with pytest.raises(BadInputError, match=rf"{name}.npz: the largest value is {value!r} 1/sr, at most 1e-30"):
+            read_table(tmp_path / f"{name}.npz")
 
 
 def test_resolved_order_of_subnormal_node_spacing_is_capped():
