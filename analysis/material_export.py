@@ -114,8 +114,8 @@ def closest_shared_model(brdf: BRDF, *, seed: int = 0, n_samples: int = 8192, st
                       f"({fit.brdf.to_spec()})")
 
 
-def export_material(brdf: BRDF, target: str, *, seed: int = 0, n_samples: int = ERROR_SAMPLES,
-                    fit_samples: int = 8192, fit_starts: int = 2) -> MaterialExport:
+def export_material(brdf: BRDF, target: str, *, reference: BRDF | None = None, seed: int = 0,
+                    n_samples: int = ERROR_SAMPLES, fit_samples: int = 8192, fit_starts: int = 2) -> MaterialExport:
     """Convert ``brdf`` to ``target``'s closest material and measure the error (module docstring).
 
     Parameters
@@ -124,6 +124,9 @@ def export_material(brdf: BRDF, target: str, *, seed: int = 0, n_samples: int = 
         Any BRDF (analytic, tabulated; scattered measurements through their chosen representation).
     target
         A key of :data:`~shrmkit.brdf_io.export_material.MATERIAL_TARGETS`.
+    reference
+        What the error is measured against (default ``brdf``): the measurements themselves when
+        ``brdf`` is the representation chosen for scattered data (their own points are the samples).
     seed, n_samples
         The error's Sobol direction pairs (the same seed gives the same numbers).
     fit_samples, fit_starts
@@ -136,8 +139,9 @@ def export_material(brdf: BRDF, target: str, *, seed: int = 0, n_samples: int = 
     """
     model, note = closest_shared_model(brdf, seed=seed, n_samples=fit_samples, starts=fit_starts)
     material = to_target(model, target)
-    samples = collect_samples(brdf, n_samples=n_samples, seed=seed)
+    reference = brdf if reference is None else reference
+    samples = collect_samples(reference, n_samples=n_samples, seed=seed)
     rho = material.eval(samples.L, samples.V)
     bands = band_errors(samples, rho)
-    return MaterialExport(source=brdf.name, model=model, model_note=note, material=material,
+    return MaterialExport(source=reference.name, model=model, model_note=note, material=material,
                           rel_rms=rel_rms(samples, rho), bands=bands, worst=worst_band(bands))

@@ -26,7 +26,7 @@ What each target offers (single scattering; the renderers' BSDF definitions):
 
 Public objects: :class:`Conductor`, :class:`ExportedMaterial`, :data:`MATERIAL_TARGETS`,
 :func:`to_target`, :func:`material_text`, :func:`mitsuba_dict`, :func:`write_material`,
-:func:`fresnel_conductor`, :func:`fit_conductor_fresnel`, :func:`artistic_ior`,
+:func:`fresnel_conductor`, :func:`fit_conductor_fresnel`, :func:`lobe_fresnel_weight`, :func:`artistic_ior`,
 :func:`schlick`.
 
 References
@@ -60,6 +60,7 @@ import numpy as np
 from .atomic import atomic_path
 from .brdf import BRDF, as_directions
 from .errors import BadInputError
+from .halfdiff import halfdiff_to_directions
 from .models import CookTorrance, Lambert, smith_g1_over_cos
 
 __all__ = [
@@ -73,12 +74,16 @@ __all__ = [
     "write_material",
     "fresnel_conductor",
     "fit_conductor_fresnel",
+    "lobe_fresnel_weight",
     "artistic_ior",
     "schlick",
 ]
 
-#: Gauss–Legendre nodes in cos θ_d ∈ (0, 1) on which a conductor Fresnel is fitted to a target curve.
+#: Gauss–Legendre nodes in cos θ_d on which a conductor Fresnel is fitted to a target curve.
 _FRESNEL_NODES = 48
+#: The fit covers θ_d ≤ 80° (cos θ_d ≥ cos 80°), the angles an export's error is measured on: a
+#: conductor's rise to 1 at grazing incidence would otherwise outweigh the whole curve.
+_FRESNEL_COS_MIN = float(np.cos(np.radians(80.0)))
 
 
 def schlick(f0: np.ndarray, cos_d: np.ndarray) -> np.ndarray:
@@ -117,9 +122,13 @@ def _fresnel(c: np.ndarray, eta: np.ndarray, k: np.ndarray) -> np.ndarray:
     return 0.5 * (rp + rs)
 
 
-def fit_conductor_fresnel(target: Callable[[np.ndarray], np.ndarray]) -> tuple[np.ndarray, np.ndarray, float]:
+def fit_conductor_fresnel(
+    target: Callable[[np.ndarray], np.ndarray], weight: Callable[[np.ndarray], np.ndarray] | None = None
+) -> tuple[np.ndarray, np.ndarray, float]:
     """The conductor Fresnel closest to ``target`` (a function of cos θ_d returning (n, 3)):
-    per channel the (η, k) minimizing ∫₀¹ (F(c; η, k) − T(c))² dc, by a log-spaced grid search
+    per channel the (η, k) minimizing ∫ W(c) (F(c; η, k) − T(c))² dc over c = cos θ_d ∈
+    [cos 80°, 1] (:data:`_FRESNEL_COS_MIN`), W = ``weight(c)`` (default 1; :func:`lobe_fresnel_weight`
+    makes this the lobe's own squared error), by a log-spaced grid search
     over η ∈ [0.01, 100], k ∈ {0} ∪ [10⁻³, 10³] refined three times around the best node.
 
     Returns
@@ -127,11 +136,16 @@ def fit_conductor_fresnel(target: Callable[[np.ndarray], np.ndarray]) -> tuple[n
     eta, k
         (3,) float64.
     rms
-        The largest per-channel RMS of F − T over cos θ_d ∈ (0, 1) (a number of the fit, not
-        the BRDF's error).
+        The largest per-channel RMS of F − T over that range (a number of the fit, not the
+        BRDF's error).
     """
     x, w = np.polynomial.legendre.leggauss(_FRESNEL_NODES)
-    c, w = (x + 1.0) / 2.0, w / 2.0
+    lo = _FRESNEL_COS_MIN
+    c, w = lo + (x + 1.0) * (1.0 - lo) / 2.0, w / 2.0
+    if weight is not None:
+        extra = np.asarray(weight(c), dtype=np.float64)
+        if np.all(np.isfinite(extra)) and np.sum(w * extra) > 0:
+            w = w * extra / np.sum(w * extra)
     t = np.asarray(target(c), dtype=np.float64)  # (n, 3)
     eta_out, k_out, worst = np.empty(3), np.empty(3), 0.0
     for ch in range(3):
@@ -156,6 +170,32 @@ def fit_conductor_fresnel(target: Callable[[np.ndarray], np.ndarray]) -> tuple[n
         eta_out[ch], k_out[ch] = best[0], best[1]
         worst = max(worst, math.sqrt(best[2]))
     return eta_out, k_out, worst
+
+
+def lobe_fresnel_weight(lobe: Conductor) -> Callable[[np.ndarray], np.ndarray]:
+    """W(c) for :func:`fit_conductor_fresnel` that makes its objective the squared error of the
+    lobe's ρ cos θ_i (the numerator of the relative RMS an export states) integrated over
+    direction pairs with θ_i, θ_o ≤ 80°: W(c) = 2π ∫∫ (f(L, V) cos θ_i)² 4 c sin θ_h dθ_h dφ_d at
+    cos θ_d = c, with f the lobe without Fresnel (dω_i dω_o = 4 cos θ_d sin θ_h sin θ_d dθ_h dθ_d
+    dφ_h dφ_d, Rusinkiewicz 1998; 2π for φ_h by isotropy); θ_h on 64 Gauss–Legendre nodes in
+    √(θ_h/(π/2)), φ_d on 48 midpoints of [0, 2π)."""
+    bare = replace(lobe, eta=None, k=None, scale=np.ones(3))
+    x, wx = np.polynomial.legendre.leggauss(64)
+    u, wu = (x + 1.0) / 2.0, wx / 2.0
+    theta_h = u * u * np.pi / 2.0
+    d_theta_h = wu * np.pi * u  # dθ_h = π u du
+    phi_d = (np.arange(48) + 0.5) * 2.0 * np.pi / 48.0  # all of [0, 2π): (f cos θ_i)² is not reciprocal
+    cos_max = math.cos(math.radians(80.0))
+
+    def weight(c: np.ndarray) -> np.ndarray:
+        th, td, pd = np.meshgrid(theta_h, np.arccos(np.clip(c, -1.0, 1.0)), phi_d, indexing="ij")
+        L, V = halfdiff_to_directions(th, td, pd)
+        value = bare.eval(L, V)[..., 0] * L[..., 2]
+        inside = (L[..., 2] >= cos_max) & (V[..., 2] >= cos_max)
+        jac = 4.0 * np.cos(td) * np.sin(th) * d_theta_h[:, None, None] * (2.0 * np.pi / 48.0) * (2.0 * np.pi)
+        return np.sum(np.where(inside, value * value * jac, 0.0), axis=(0, 2))
+
+    return weight
 
 
 def artistic_ior(reflectivity: np.ndarray, edge_color: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -307,7 +347,8 @@ def _mitsuba(brdf: BRDF) -> ExportedMaterial:
     if exact:
         eta = k = None
     else:
-        eta, k, _ = fit_conductor_fresnel(lambda c: schlick(f0, c))
+        eta, k, _ = fit_conductor_fresnel(
+            lambda c: schlick(f0, c), lobe_fresnel_weight(Conductor(ct.distribution, float(ct.alpha), None, None)))
         note = "Mitsuba 3 has no Schlick Fresnel: exported with the conductor Fresnel (eta, k) closest to it"
     # Mitsuba 3 refuses RGB reflectances above 1 (SRGBReflectanceSpectrum): clip, and say so
     scale, diffuse = ks / weight, (kd / (1.0 - weight) if has_diffuse else None)
@@ -336,7 +377,9 @@ def _pbrt(brdf: BRDF) -> ExportedMaterial:
     # mix amount a = the conductor's share; pbrt clamps the diffuse reflectance kd/(1 - a) to [0, 1]
     weight = _mix_weight(kd, ks) if has_diffuse else 1.0
     diffuse = np.clip(kd / (1.0 - weight), 0.0, 1.0) if has_diffuse else None
-    eta, k, _ = fit_conductor_fresnel(lambda c: schlick(f0, c) * ks / weight)
+    eta, k, _ = fit_conductor_fresnel(
+        lambda c: schlick(f0, c) * ks / weight,
+        lobe_fresnel_weight(Conductor("ggx", float(ct.alpha), None, None, shadowing="height-correlated")))
     lobe = Conductor("ggx", float(ct.alpha), eta, k, shadowing="height-correlated")
     notes = ["pbrt-v4's conductor has a height-correlated Smith G, a conductor Fresnel and no scale: "
              "ks x Schlick exported as the closest conductor Fresnel"]

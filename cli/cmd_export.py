@@ -36,6 +36,7 @@ from ..brdf_io.export_formats import EXPORT_FORMATS, export_format
 from ..brdf_io.export_material import material_text, write_material
 from ..brdf_io.merl import read_merl, tabulate_merl, write_merl
 from ..brdf_io.models import CookTorrance, PhongLobe, SimplifiedMicrofacet
+from ..brdf_io.specs import load_brdf
 from .common import (
     add_env_orientation,
     add_rgl_incident,
@@ -45,6 +46,7 @@ from .common import (
     number_in,
     print_json,
     print_table,
+    rgl_brdf_arg,
     stdout,
 )
 
@@ -52,8 +54,8 @@ HELP = "export a BRDF as a Mitsuba 3 / pbrt-v4 / MaterialX material or a MERL ta
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("brdf", help=brdf_help() + "; scattered measurements go through the representation with "
-                        "the smallest held-out error")
+    parser.add_argument("brdf", help=brdf_help() + "; materials are fitted to scattered measurements directly, "
+                        "a MERL table goes through their representation with the smallest held-out error")
     parser.add_argument("-o", "--output", required=True,
                         help="output file; its suffix picks the format unless --to names it ("
                         + ", ".join(f"{f.suffix} {f.name}" for f in EXPORT_FORMATS.values()) + ")")
@@ -91,16 +93,18 @@ def run(args: argparse.Namespace) -> int:
     elif args.env is None:
         raise BadInputError(None, "--to dds needs --env (the environment to prefilter)")
     check_writable(out)
-    source_brdf, brdf, choice = load_analysis_brdf(args.brdf, args, quiet=args.json)
-    if choice is not None and not args.json:
-        stdout.print(choice.line(), markup=False, soft_wrap=True)
-    representation = None if choice is None else choice.as_dict()
-    if fmt.kind == "material":
-        doc = _export_material(args, fmt.name, out, brdf)
-    elif fmt.kind == "brdf-table":
+    representation = None
+    if fmt.kind == "brdf-table":  # a table needs values everywhere: scattered data through their representation
+        source_brdf, brdf, choice = load_analysis_brdf(args.brdf, args, quiet=args.json)
+        if choice is not None:
+            representation = choice.as_dict()
+            if not args.json:
+                stdout.print(choice.line(), markup=False, soft_wrap=True)
         doc = _export_merl(args, out, brdf)
-    else:
-        doc = _export_dds(args, out, brdf)
+    else:  # a material (or the roughness a chain is read at) is fitted to the data themselves, scattered or not
+        source_brdf = load_brdf(rgl_brdf_arg(args.brdf, args))
+        doc = (_export_material(args, fmt.name, out, source_brdf) if fmt.kind == "material"
+               else _export_dds(args, out, source_brdf))
     doc = {"format": fmt.name, "output": str(out), "source": source_brdf.name, **doc,
            "representation": representation}
     if args.json:

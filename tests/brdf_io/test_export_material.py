@@ -25,6 +25,7 @@ from shrmkit.brdf_io.export_material import (
     artistic_ior,
     fit_conductor_fresnel,
     fresnel_conductor,
+    lobe_fresnel_weight,
     material_text,
     mitsuba_dict,
     schlick,
@@ -101,6 +102,26 @@ def test_height_correlated_g_against_lambda():
     G2 = 1 / (1 + lam(L[:, 2]) + lam(V[:, 2]))
     expected = D * G2 / (4 * L[:, 2] * V[:, 2])
     assert np.allclose(lobe.eval(L, V)[:, 0], expected, rtol=1e-10)
+
+
+def test_fresnel_weight_integrates_the_lobe_energy():
+    """∫ W(c) dc over cos θ_d ∈ [cos 80°, 1] is ∫∫ (f cos θ_i)² dω_i dω_o over θ_i, θ_o ≤ 80°
+    (Rusinkiewicz's measure), checked by Monte Carlo over uniform directions."""
+    lobe = Conductor("ggx", 0.3, None, None)
+    x, w = np.polynomial.legendre.leggauss(48)
+    lo = np.cos(np.radians(80))
+    c = lo + (x + 1) * (1 - lo) / 2
+    integral = np.sum(w * (1 - lo) / 2 * lobe_fresnel_weight(lobe)(c))
+    rng = np.random.default_rng(3)
+    n = 200_000
+    z = rng.uniform(lo, 1, (2, n))
+    phi = rng.uniform(0, 2 * np.pi, (2, n))
+    d = np.stack([np.sqrt(1 - z**2) * np.cos(phi), np.sqrt(1 - z**2) * np.sin(phi), z], axis=-1)
+    H = d[0] + d[1]
+    inside_d = H @ np.array([0, 0, 1.0]) > 0
+    value = lobe.eval(d[0], d[1])[:, 0] * d[0][:, 2]
+    mc = np.mean(np.where(inside_d, value**2, 0)) * (2 * np.pi * (1 - lo)) ** 2
+    assert integral == pytest.approx(mc, rel=0.05)
 
 
 @pytest.mark.parametrize("spec", [LAMBERT, CT_F1, CT_BECKMANN])
