@@ -128,3 +128,13 @@ def test_chain_against_direct_prefilter_sums():
     assert material_lod(0.25, 5) == pytest.approx(2.0)
     with pytest.raises(BadInputError, match="power of two"):
         ggx_cube_chain(radiance, face_size=12)
+
+
+def test_docstring_example_runs():
+    """The Examples section of write_dds_cube (a round trip in a temporary folder) passes as a doctest."""
+    import doctest
+
+    from shrmkit.brdf_io import dds
+
+    result = doctest.testmod(dds, optionflags=doctest.NORMALIZE_WHITESPACE, report=False)
+    assert result.attempted >= 5 and result.failed == 0
