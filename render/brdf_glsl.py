@@ -257,9 +257,34 @@ def table_grid_for(brdf: BRDF) -> tuple[tuple[int, int, int], bool]:
     return TABLE_GRID, False
 
 
-def tabulate_brdf(brdf: BRDF, shape: tuple[int, int, int] | None = None, periodic: bool | None = None) -> BrdfTable:
+def _fill_below_surface(rho: np.ndarray, above: np.ndarray) -> np.ndarray:
+    """``rho`` (ND, NP, 3) of one θ_h slice with every sample past the last one above the surface
+    along θ_d (per φ_d column of ``above`` (ND, NP)) set to that last one (:class:`BrdfTable`)."""
+    nd, npd = above.shape
+    has = above.any(axis=0)
+    last = nd - 1 - np.argmax(above[::-1], axis=0)
+    fill = has[None, :] & (np.arange(nd)[:, None] > last[None, :])
+    return np.where(fill[..., None], rho[last, np.arange(npd)][None], rho)
+
+
+def _source_rows(above: np.ndarray) -> np.ndarray:
+    """For each sample (j, k) of a slice, the θ_d row whose value it holds (:func:`_fill_below_surface`)."""
+    nd, _ = above.shape
+    has = above.any(axis=0)
+    last = nd - 1 - np.argmax(above[::-1], axis=0)
+    rows = np.arange(nd)[:, None]
+    return np.where(has[None, :] & (rows > last[None, :]), last[None, :], rows)
+
+
+def tabulate_brdf(brdf: BRDF, shape: tuple[int, int, int] | None = None, periodic: bool | None = None,
+                  *, only: np.ndarray | None = None) -> BrdfTable:
     """ρ of ``brdf`` (its own ``eval``) on a half/difference grid (:class:`BrdfTable`); ``shape`` and
-    ``periodic`` default to :func:`table_grid_for`."""
+    ``periodic`` default to :func:`table_grid_for`.
+
+    ``only``: a boolean (NH, ND, NP) mask of the samples wanted; the others are left 0 and the
+    BRDF is evaluated only where the wanted ones read (a candidate grid's error needs the few
+    samples its lookups touch, :func:`choose_table`); ``missing`` then counts those evaluations.
+    """
     default_shape, default_periodic = table_grid_for(brdf)
     shape = default_shape if shape is None else shape
     periodic = default_periodic if periodic is None else bool(periodic)
@@ -268,32 +293,39 @@ def tabulate_brdf(brdf: BRDF, shape: tuple[int, int, int] | None = None, periodi
         raise BadInputError(getattr(brdf, "name", None), f"a BRDF table needs at least 2 samples an axis, got {shape}")
     t0 = time.perf_counter()
     th, td, pd = table_angles((nh, nd, npd), periodic)
-    values = np.zeros((nh, nd, npd, 3))
+    values = np.zeros((nh, nd, npd, 3), np.float32)
     missing = 0
     for i in range(nh):  # one θ_h slice at a time: (ND·NP) evaluations
+        if only is not None and not only[i].any():
+            continue
         L, V = halfdiff_to_directions(th[i], td[:, None], pd[None, :])
-        rho, none = brdf.eval_counted(L.reshape(-1, 3), V.reshape(-1, 3))
-        rho = np.asarray(rho, dtype=np.float64).reshape(nd, npd, 3)
+        above = (L[..., 2] > 0.0) & (V[..., 2] > 0.0)
+        if only is None:
+            rho, none = brdf.eval_counted(L.reshape(-1, 3), V.reshape(-1, 3))
+            rho = np.asarray(rho, dtype=np.float64).reshape(nd, npd, 3)
+            bad = ~np.isfinite(rho)
+            missing += int(none) + int(np.any(bad, axis=-1).sum())
+            rho[bad] = 0.0
+            # below the surface: the nearest sample above it along θ_d (θ_d rises toward the horizon)
+            values[i] = _fill_below_surface(rho, above)
+            continue
+        j, k = np.nonzero(only[i])
+        src = _source_rows(above)[j, k]
+        pairs, inverse = np.unique(np.stack([src, k], axis=1), axis=0, return_inverse=True)
+        rho, none = brdf.eval_counted(L[pairs[:, 0], pairs[:, 1]], V[pairs[:, 0], pairs[:, 1]])
+        rho = np.asarray(rho, dtype=np.float64).reshape(len(pairs), 3)
         bad = ~np.isfinite(rho)
         missing += int(none) + int(np.any(bad, axis=-1).sum())
         rho[bad] = 0.0
-        above = (L[..., 2] > 0.0) & (V[..., 2] > 0.0)
-        # below the surface: the nearest sample above it along θ_d (θ_d rises toward the horizon)
-        for k in range(npd):
-            ok = np.flatnonzero(above[:, k])
-            if ok.size and ok[-1] < nd - 1:
-                rho[ok[-1] + 1:, k] = rho[ok[-1], k]
-        values[i] = rho
-    return BrdfTable(values.astype(np.float32), 1.0, missing, time.perf_counter() - t0, periodic)
+        values[i, j, k] = rho[np.ravel(inverse)]
+    return BrdfTable(values, 1.0, missing, time.perf_counter() - t0, periodic)
 
 
-def table_lookup(table: BrdfTable, L: np.ndarray, V: np.ndarray) -> np.ndarray:
-    """ρ̂ = ρ_table · max(L_z, 0) at local directions (..., 3) as ``brdf_table.glsl`` computes it
-    (trilinear in the indices, φ_d folded as the table says; 0 unless L_z > 0 and V_z > 0), float64."""
-    L, V = np.broadcast_arrays(np.asarray(L, np.float64), np.asarray(V, np.float64))
-    nh, nd, npd = table.shape
+def _lookup_corners(shape: tuple[int, int, int], periodic: bool, L: np.ndarray, V: np.ndarray):
+    """The eight samples and weights of ``brdf_table.glsl``'s trilinear lookup at local (…, 3)
+    directions: ((i0, i1), (j0, j1), (k0, k1)) index arrays and the fractions (fu, fv, fw)."""
+    nh, nd, npd = shape
     th, td, pd = directions_to_halfdiff(L, V)
-    vals = np.asarray(table.values, np.float64)
 
     def axis(x: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         x = np.clip(x, 0.0, n - 1)
@@ -302,12 +334,32 @@ def table_lookup(table: BrdfTable, L: np.ndarray, V: np.ndarray) -> np.ndarray:
 
     i0, i1, fu = axis((nh - 1) * np.sqrt(np.clip(th / (np.pi / 2), 0.0, 1.0)), nh)
     j0, j1, fv = axis((nd - 1) * td / (np.pi / 2), nd)
-    if table.periodic:
+    if periodic:
         w = np.mod(pd, np.pi) * (npd / np.pi)
         k0 = np.minimum(np.floor(w).astype(np.intp), npd - 1)
         k1, fw = (k0 + 1) % npd, w - k0
     else:
         k0, k1, fw = axis((npd - 1) * np.abs(pd) / np.pi, npd)
+    return (i0, i1), (j0, j1), (k0, k1), (fu, fv, fw)
+
+
+def _lookup_mask(shape: tuple[int, int, int], periodic: bool, L: np.ndarray, V: np.ndarray) -> np.ndarray:
+    """Boolean (NH, ND, NP) mask of the samples the lookups at (L, V) read."""
+    (i0, i1), (j0, j1), (k0, k1), _ = _lookup_corners(shape, periodic, L, V)
+    mask = np.zeros(shape, bool)
+    for i in (i0, i1):
+        for j in (j0, j1):
+            for k in (k0, k1):
+                mask[i, j, k] = True
+    return mask
+
+
+def table_lookup(table: BrdfTable, L: np.ndarray, V: np.ndarray) -> np.ndarray:
+    """ρ̂ = ρ_table · max(L_z, 0) at local directions (..., 3) as ``brdf_table.glsl`` computes it
+    (trilinear in the indices, φ_d folded as the table says; 0 unless L_z > 0 and V_z > 0), float64."""
+    L, V = np.broadcast_arrays(np.asarray(L, np.float64), np.asarray(V, np.float64))
+    vals = np.asarray(table.values, np.float64)
+    (i0, i1), (j0, j1), (k0, k1), (fu, fv, fw) = _lookup_corners(table.shape, table.periodic, L, V)
     fu, fv, fw = fu[..., None], fv[..., None], fw[..., None]
 
     def lerp(a: np.ndarray, b: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -357,6 +409,10 @@ def choose_table(brdf: BRDF, lights: LightSet, *, max_view_deg: float = 80.0, ma
     worst view band is within ``target`` is taken, else the finest tried; ``shape`` forces one grid.
     ``store`` maps a table to what the texture will hold (e.g. half-float rounding) before its
     error is measured. The error dict adds ``target`` and ``grids_tried``.
+
+    A candidate's error is measured on the samples its lookups read, evaluated alone
+    (``tabulate_brdf(only=)``): only the grid taken is tabulated whole, and its error is measured
+    again on the whole table as stored.
     """
     base, periodic = table_grid_for(brdf)
     grids = [tuple(shape)] if shape is not None else list(dict.fromkeys(
@@ -369,25 +425,60 @@ def choose_table(brdf: BRDF, lights: LightSet, *, max_view_deg: float = 80.0, ma
             grid = scaled_grid(base, factor, periodic)
             fitting = [grid] if atlas_texels(grid) <= max_texels or min(grid) <= 2 else []
         grids = fitting
+    pairs = _ErrorPairs(brdf, lights, max_view_deg=max_view_deg)
     tried = []
-    for grid in grids:
-        table = tabulate_brdf(brdf, grid, periodic)
-        if store is not None:
-            table = store(table)
-        error = table_error(table, brdf, lights, max_view_deg=max_view_deg)
+    for n, grid in enumerate(grids):
         tried.append(list(grid))
-        if error["worst_band_rel_rms"] <= target:
-            break
-    return table, {**error, "target": float(target), "grids_tried": tried}
+        if n < len(grids) - 1:  # a candidate that may not be taken: only the samples its error reads
+            sparse = tabulate_brdf(brdf, grid, periodic, only=_lookup_mask(grid, periodic, *pairs.local))
+            if pairs.error(store(sparse) if store is not None else sparse)["worst_band_rel_rms"] > target:
+                continue
+        break
+    table = tabulate_brdf(brdf, tried[-1], periodic)
+    if store is not None:
+        table = store(table)
+    return table, {**pairs.error(table), "target": float(target), "grids_tried": tried}
 
 
 def table_light_radiance(table: BrdfTable, lights: LightSet, R: np.ndarray, V: np.ndarray) -> np.ndarray:
     """Σ_k ρ̂_table(ω_k; V, N) E_k at (n, 3) R and V, N = normalize(R + V): the lights' reflection as
     the table texture gives it (:func:`table_lookup` in the frame of N, as ``light_radiance``)."""
+    L_loc, V_loc = _local_light_directions(lights, R, V)
+    return np.einsum("knc,nc->kc", table_lookup(table, L_loc, V_loc), lights.power)
+
+
+def _local_light_directions(lights: LightSet, R: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The lights' directions and V in the frame of N = normalize(R + V), each (n_pairs, n_lights, 3)."""
     frames = local_frames(R + V)
     L_loc = np.einsum("kij,nj->kni", frames, lights.directions)
     V_loc = np.broadcast_to(np.einsum("kij,kj->ki", frames, V)[:, None, :], L_loc.shape)
-    return np.einsum("knc,nc->kc", table_lookup(table, L_loc, V_loc), lights.power)
+    return L_loc, V_loc
+
+
+class _ErrorPairs:
+    """The (R, V) pairs of :func:`table_error`, with the exact reflection of the lights on them
+    (computed once for every table measured on them)."""
+
+    def __init__(self, brdf: BRDF, lights: LightSet, *, max_view_deg: float = 80.0, per_band: int = 64,
+                 seed: int = 0) -> None:
+        self.lights, self.max_view_deg = lights, float(max_view_deg)
+        self.edges = np.linspace(0.0, float(max_view_deg), max(2, int(math.ceil(max_view_deg / 10.0)) + 1))
+        centres = np.array([light.direction for light in lights.lights]) if lights.lights else lights.directions
+        R, V, theta_v, self.w = sample_pairs_focused(per_band, self.edges, centre=centres, seed=seed)
+        self.exact = light_radiance(brdf, lights.directions, lights.power, R, V)
+        self.local = _local_light_directions(lights, R, V)
+        self.band = np.clip(np.searchsorted(np.radians(self.edges), theta_v, side="right") - 1, 0,
+                            len(self.edges) - 2)
+
+    def error(self, table: BrdfTable) -> dict[str, float]:
+        got = np.einsum("knc,nc->kc", table_lookup(table, *self.local), self.lights.power)
+        err = self.w * ((got - self.exact) ** 2).sum(axis=1)
+        sig = self.w * (self.exact**2).sum(axis=1)
+        per = [math.sqrt(err[self.band == b].sum() / sig[self.band == b].sum()) if sig[self.band == b].sum() > 0
+               else 0.0 for b in range(len(self.edges) - 1)]
+        total = math.sqrt(err.sum() / sig.sum()) if sig.sum() > 0 else 0.0
+        return {"rel_rms": total, "worst_band_rel_rms": max(per), "pairs": int(len(self.w)),
+                "max_view_deg": self.max_view_deg}
 
 
 def table_error(table: BrdfTable, brdf: BRDF, lights: LightSet, *, max_view_deg: float = 80.0,
@@ -400,19 +491,7 @@ def table_error(table: BrdfTable, brdf: BRDF, lights: LightSet, *, max_view_deg:
     over the RMS of the latter: ``rel_rms`` over all pairs and ``worst_band_rel_rms``, the
     largest per band; ``pairs`` counts them.
     """
-    edges = np.linspace(0.0, float(max_view_deg), max(2, int(math.ceil(max_view_deg / 10.0)) + 1))
-    centres = np.array([light.direction for light in lights.lights]) if lights.lights else lights.directions
-    R, V, theta_v, w = sample_pairs_focused(per_band, edges, centre=centres, seed=seed)
-    exact = light_radiance(brdf, lights.directions, lights.power, R, V)
-    got = table_light_radiance(table, lights, R, V)
-    err = w * ((got - exact) ** 2).sum(axis=1)
-    sig = w * (exact**2).sum(axis=1)
-    band = np.clip(np.searchsorted(np.radians(edges), theta_v, side="right") - 1, 0, len(edges) - 2)
-    per = [math.sqrt(err[band == b].sum() / sig[band == b].sum()) if sig[band == b].sum() > 0 else 0.0
-           for b in range(len(edges) - 1)]
-    total = math.sqrt(err.sum() / sig.sum()) if sig.sum() > 0 else 0.0
-    return {"rel_rms": total, "worst_band_rel_rms": max(per), "pairs": int(len(R)),
-            "max_view_deg": float(max_view_deg)}
+    return _ErrorPairs(brdf, lights, max_view_deg=max_view_deg, per_band=per_band, seed=seed).error(table)
 
 
 # ------------------------------------------------------------------------------------------
