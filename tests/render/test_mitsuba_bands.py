@@ -1,0 +1,107 @@
+"""An RGL sphere under an environment map, per view band, against Mitsuba 3 (issue 29).
+
+The independent reference is another renderer's output: Mitsuba 3.9.1's ``measured`` plugin under
+its ``envmap`` emitter, integrator ``direct``, recorded by ``benchmarks/mitsuba_bands.py --record``
+into ``tests/resources/mitsuba_bands_grace16.json`` (the command, Mitsuba's version and the scene
+are in the file; data_specs/rgl_bsdf.md, "Rendered against Mitsuba"). The recorded values are
+checked always; the slow test renders the scene again when ``mitsuba`` imports.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+RECORD = ROOT / "tests" / "resources" / "mitsuba_bands_grace16.json"
+
+
+def _bench():
+    spec = importlib.util.spec_from_file_location("mitsuba_bands", ROOT / "benchmarks" / "mitsuba_bands.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules.setdefault("mitsuba_bands", module)  # its dataclass looks its module up
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.fixture(scope="module")
+def recorded(shared_data: Path):
+    """The record, the benchmark module, the scene it describes and the file of the material."""
+    record = json.loads(RECORD.read_text())
+    bench = _bench()
+    scene = bench.sphere_scene(record["size"], tuple(record["view"]))
+    env = bench.scene_env(record["env_rows"], shared_data / record["env"])
+    return record, bench, scene, env, shared_data / record["material"]
+
+
+def _recorded_pixels(record: dict) -> np.ndarray:
+    return np.concatenate([np.asarray(b["mitsuba_pixels"]).reshape(-1, 3) for b in record["bands"] if b["pixels"]])
+
+
+def _order(bench, scene, record) -> np.ndarray:
+    """Our hit pixels in the record's order (band by band, image order within a band)."""
+    edges = [b["theta_v_deg"] for b in record["bands"]]
+    return np.concatenate([np.flatnonzero((scene.theta_v_deg >= lo) & (scene.theta_v_deg < hi)) for lo, hi in edges])
+
+
+def test_reference_render_matches_recorded_mitsuba_bands(recorded):
+    """The brute-force render (camera convention, the default) against Mitsuba's recorded render of
+    cc_ibiza_sunset (a satin vinyl, 8-19 % non-reciprocal): per band the mean within Mitsuba's
+    noise (2 s.e.) plus 1.5 %, the per-pixel relative RMS within Mitsuba's per-pixel noise plus 2 %
+    (measured: 0.1-1.1 % and 0.3-1.6 %, the largest at 75-85 deg where the local horizon crosses the
+    map's pixels, integrated by points). The light convention, the old default, misses in most
+    bands (band means 0.6-20 % off, pixels 4-24 %: the issue's 0.05-0.33)."""
+    record, bench, scene, env, path = recorded
+    assert [b["pixels"] for b in record["bands"]] == [
+        int(np.sum((scene.theta_v_deg >= lo) & (scene.theta_v_deg < hi))) for lo, hi in
+        (b["theta_v_deg"] for b in record["bands"])]
+    theirs = _recorded_pixels(record)
+    order = _order(bench, scene, record)
+    fails = {}
+    for convention in ("view", "light"):
+        ours = bench.reference_render(path, env, scene, table_direction=convention,
+                                      upsample=record["reference_upsample"])[order]
+        fails[convention] = []
+        start = 0
+        for band in record["bands"]:
+            n = band["pixels"]
+            if not n:
+                continue
+            o, t = ours[start:start + n], theirs[start:start + n]
+            start += n
+            m = np.asarray(band["mitsuba"])
+            np.testing.assert_allclose(t.mean(axis=0), m, rtol=1e-5, atol=1e-7)  # the record is consistent
+            diff = np.linalg.norm(o.mean(axis=0) - m) / np.linalg.norm(m)
+            rms = np.sqrt(np.sum((o - t) ** 2) / np.sum(t**2))
+            if not (diff <= band["noise"] + 0.015 and rms <= band["pix_noise"] + 0.02):
+                fails[convention].append((band["theta_v_deg"], round(diff, 4), round(rms, 4)))
+    assert not fails["view"], fails["view"]
+    assert len(fails["light"]) >= 3, fails["light"]
+
+
+@pytest.mark.slow
+def test_mitsuba_render_now_matches_record_and_reference(recorded):
+    """Mitsuba rendered now (skipped without ``mitsuba``), 4 seeds of 256 spp: the envmap's
+    orientation (Mitsuba's eval equal to the project map on most directions), then per band the
+    mean within the combined noise of the record and this render plus 0.5 %, and our reference
+    within that noise plus 1 %."""
+    pytest.importorskip("mitsuba")
+    record, bench, scene, env, path = recorded
+    check = bench.check_envmap(env.radiance, record["upsample"], n=1000)
+    assert check["equal_fraction"] > 0.5 and check["median_rel"] < 1e-5, check
+    runs = np.stack([bench.mitsuba_render(path, env.radiance, scene, spp=256, seed=7 + 1000 * s,
+                                          upsample=record["upsample"]) for s in range(4)])
+    ours = bench.reference_render(path, env, scene, upsample=record["reference_upsample"])
+    now = bench.compare_bands(runs, ours, scene.theta_v_deg)
+    for band, mine in zip(record["bands"], now, strict=True):
+        if not band["pixels"]:
+            continue
+        m = np.asarray(band["mitsuba"])
+        noise = np.hypot(band["noise"], mine["noise"])
+        assert np.linalg.norm(np.asarray(mine["mitsuba"]) - m) / np.linalg.norm(m) <= noise + 0.005, (band, mine)
+        assert mine["diff"] <= mine["noise"] + 0.01, mine
