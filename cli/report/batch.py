@@ -48,6 +48,13 @@ Lifetime of worker processes (issues 28 and 30):
   driver stops them), and exit by themselves when the driver is gone, even killed with
   SIGKILL (``PR_SET_PDEATHSIG`` on Linux, and a thread that watches ``os.getppid()``): no
   worker is left computing, or holding the caller's stdout/stderr pipes open.
+- On a Dask cluster (``scheduler=``), a worker that dies while it runs a task (the scheduler's
+  ``remove-worker`` event, and the task's own start event, :func:`_dask_started`) costs that task
+  one retry, which the scheduler makes on another worker (one ``progress("retry", …)`` line and
+  a note); a second death, or the scheduler's own ``KilledWorker``, is one failed report, and the
+  other tasks go on. A scheduler lost for :data:`DASK_SCHEDULER_LOST_SECONDS` stops the batch
+  with one line ("lost the Dask scheduler …"), the reports without a result failed in the
+  summary; distributed's loggers are held at CRITICAL meanwhile (no 30-line tracebacks).
 - The temporary files and folders of a run killed while writing (``.NAME.XXXXXXXX.tmp``,
   ``.NAME.XXXXXXXX.old``, ``.summary.csv.XXXXXXXX.csv``, ``.index.html.XXXXXXXX.html``) are
   removed by the next run into the same folder, unless another run into that folder is
@@ -536,27 +543,162 @@ def _dask_task(task: ReportTask, threads: dict[str, int], driver: str) -> Report
     return run_task(dataclasses.replace(task, nthreads=n))
 
 
-def _dask(tasks: Sequence[ReportTask], scheduler: str, progress: BatchProgress | None) -> Iterable[ReportOutcome]:
+#: Seconds between two looks at a Dask batch: finished tasks, workers the scheduler removed.
+DASK_POLL_SECONDS = 0.2
+#: Seconds the Dask client may stay disconnected from its scheduler before the batch stops.
+DASK_SCHEDULER_LOST_SECONDS = 10.0
+#: Loggers of distributed (and its tornado loop) whose tracebacks a lost worker or scheduler prints;
+#: held at CRITICAL while a batch runs: the batch says what happened in one line instead.
+_DASK_LOGGERS = ("distributed", "tornado")
+
+
+@contextlib.contextmanager
+def _quiet_dask_logs() -> Iterator[None]:
+    """distributed's own loggers quieted for the batch (their levels restored after): a worker or
+    scheduler that dies makes the client and the comms log 30-line tracebacks."""
+    import logging
+
+    loggers = [logging.getLogger(name) for name in _DASK_LOGGERS]
+    levels = [log.level for log in loggers]
+    for log in loggers:
+        log.setLevel(logging.CRITICAL)
+    try:
+        yield
+    finally:
+        for log, level in zip(loggers, levels, strict=True):
+            log.setLevel(level)
+
+
+#: Topic of the event a Dask worker logs when it starts a report task (:func:`_dask_started`).
+DASK_START_TOPIC = "shrm-report-start"
+
+
+def _dask_started(function: Callable[..., ReportOutcome], task: ReportTask, threads: dict[str, int],
+                  driver: str) -> ReportOutcome:
+    """Run ``function`` (:func:`_dask_task`) on a Dask worker after logging, to the scheduler, that
+    this worker started ``task`` (:data:`DASK_START_TOPIC`): the scheduler's ``remove-worker`` event
+    lists every task *assigned* to a lost worker, queued ones too; the start events tell the one
+    that was running there."""
+    from distributed import get_worker  # lazy: runs on a Dask worker, where distributed is loaded
+
+    worker = get_worker()
+    worker.log_event(DASK_START_TOPIC, {"key": f"shrm-report-{task.name}", "worker": worker.address})
+    return function(task, threads, driver)
+
+
+def _started_on(client: Any, since: float) -> dict[str, set[str]]:
+    """Worker address -> keys of the report tasks started there after ``since`` (:func:`_dask_started`)."""
+    started: dict[str, set[str]] = defaultdict(set)
+    for stamp, message in client.get_events(DASK_START_TOPIC):
+        if stamp >= since and isinstance(message, dict):
+            started[str(message.get("worker", ""))].add(str(message.get("key", "")))
+    return started
+
+
+def _removed_workers(client: Any, since: float, seen: set[tuple[float, str]]) -> list[tuple[str, set[str]]]:
+    """(worker address, keys it was running) of each worker the scheduler removed after ``since``
+    (its ``remove-worker`` events, distributed's ``Scheduler.remove_worker``, whose tasks that had
+    started there by :func:`_started_on`), each event once."""
+    removed = []
+    started = None
+    for stamp, message in client.get_events("all"):
+        if stamp < since or not isinstance(message, dict) or message.get("action") != "remove-worker":
+            continue
+        event = (stamp, str(message.get("worker", "")))
+        if event in seen:
+            continue
+        seen.add(event)
+        started = _started_on(client, since) if started is None else started
+        keys = {str(k) for k in message.get("processing-tasks", ())} & started.get(event[1], set())
+        removed.append((event[1], keys))
+    return removed
+
+
+def _dask(tasks: Sequence[ReportTask], scheduler: str, progress: BatchProgress | None,
+          retried: list[str] | None = None, task_function: Callable[..., ReportOutcome] | None = None,
+          ) -> Iterable[ReportOutcome]:
+    """The tasks on a Dask cluster, largest first; outcomes as they come. A worker that dies while
+    it computes a task (the scheduler's ``remove-worker`` event lists the task) costs one retry,
+    which the scheduler makes on another worker: ``progress("retry", …)`` and a note in
+    ``retried``; a second death of the task's worker is one failed report (:data:`TASK_TRIES`), as
+    is a task the scheduler gives up on itself (``KilledWorker``). The other tasks go on. A
+    scheduler that cannot be reached for :data:`DASK_SCHEDULER_LOST_SECONDS` stops the batch with
+    one ``RuntimeError`` line (``run_batch`` marks the reports without a result as failed).
+    ``task_function`` replaces :func:`_dask_task` (tests)."""
     try:  # lazy: Dask is an optional extra (shrmkit[dask]), loaded only for --dask-scheduler
         from distributed import Client, as_completed as dask_completed  # noqa: I001
     except ImportError:  # pragma: no cover - depends on the installation
         raise BadInputError(None, "--dask-scheduler needs dask.distributed: pip install 'shrmkit[dask]'") from None
-    try:
-        client = Client(scheduler, set_as_default=False, timeout="30s")
-    except (OSError, TimeoutError, ValueError) as err:
-        raise BadInputError(scheduler, f"cannot connect to the Dask scheduler: {err}") from None
-    try:
-        threads, driver = _dask_threads(client), _this_process()
-        ordered = largest_first(tasks)
-        futures = [client.submit(_dask_task, task, threads, driver, pure=False, key=f"shrm-report-{task.name}",
-                                 priority=len(ordered) - i) for i, task in enumerate(ordered)]
-        if progress is not None:
-            for task in ordered:
-                progress("start", task.name, "submitted")
-        for future in dask_completed(futures, loop=client.loop):
-            yield future.result()
-    finally:
-        client.close()
+    function = task_function or _dask_task
+    with _quiet_dask_logs():
+        try:
+            client = Client(scheduler, set_as_default=False, timeout="30s")
+        except (OSError, TimeoutError, ValueError) as err:
+            raise BadInputError(scheduler, f"cannot connect to the Dask scheduler: {err}") from None
+        try:
+            yield from _dask_run(client, dask_completed, function, tasks, scheduler, progress, retried)
+        finally:
+            with contextlib.suppress(Exception):  # a lost scheduler: nothing left to close cleanly
+                client.close(timeout=5)
+
+
+def _dask_run(client: Any, dask_completed: Any, function: Callable[..., ReportOutcome], tasks: Sequence[ReportTask],
+              scheduler: str, progress: BatchProgress | None, retried: list[str] | None) -> Iterator[ReportOutcome]:
+    """The body of :func:`_dask` on a connected ``client``."""
+    since = time.time()
+    threads, driver = _dask_threads(client), _this_process()
+    ordered = largest_first(tasks)
+    futures = [client.submit(_dask_started, function, task, threads, driver, pure=False,
+                             key=f"shrm-report-{task.name}", priority=len(ordered) - i)
+               for i, task in enumerate(ordered)]
+    running = {future.key: (future, task) for future, task in zip(futures, ordered, strict=True)}
+    if progress is not None:
+        for task in ordered:
+            progress("start", task.name, "submitted")
+    deaths: dict[str, int] = defaultdict(int)
+    seen: set[tuple[float, str]] = set()
+    disconnected: float | None = None
+    completed = dask_completed(futures, loop=client.loop)
+    while running:
+        batch = completed.next_batch(block=False)
+        for future in batch:
+            entry = running.pop(future.key, None)
+            if entry is None:  # cancelled here after a second death: already reported
+                continue
+            task = entry[1]
+            if future.status == "finished":
+                yield future.result()
+                continue
+            err = future.exception() if future.status == "error" else None
+            why = (f"its Dask worker died too often (KilledWorker: {err})" if type(err).__name__ == "KilledWorker"
+                   else f"{type(err).__name__}: {err}" if err is not None else f"the Dask task was {future.status}")
+            yield _failed_outcome(task, why)
+        if batch or not running:
+            continue
+        try:
+            removed = _removed_workers(client, since, seen)
+            disconnected = None
+        except Exception as err:  # noqa: BLE001 - any comm failure: the scheduler is gone or restarting
+            disconnected = disconnected or time.monotonic()
+            if time.monotonic() - disconnected > DASK_SCHEDULER_LOST_SECONDS or client.status in ("closed", "closing"):
+                raise RuntimeError(f"lost the Dask scheduler {scheduler} ({type(err).__name__}: "
+                                   f"{str(err).splitlines()[0][:120] if str(err) else 'no answer'})") from None
+            removed = []
+        for worker, keys in removed:
+            for key in sorted(keys & set(running)):
+                future, task = running[key]
+                deaths[key] += 1
+                how = f"Dask worker {worker} was lost"
+                if deaths[key] < TASK_TRIES:
+                    if retried is not None:
+                        retried.append(f"the Dask worker of {task.name} died ({worker}); retried on another worker")
+                    if progress is not None:
+                        progress("retry", task.name, how)
+                else:
+                    running.pop(key)
+                    future.cancel()
+                    yield _failed_outcome(task, f"its Dask worker died {deaths[key]} times (last: {worker})")
+        time.sleep(DASK_POLL_SECONDS)
 
 
 def run_batch(
@@ -605,7 +747,7 @@ def run_batch(
     try:
         _remove_stale_temporaries(out, lock[1] if lock else None)
         if scheduler:
-            outcomes, engine = _dask(tasks, scheduler, progress), f"dask ({scheduler})"
+            outcomes, engine = _dask(tasks, scheduler, progress, retried), f"dask ({scheduler})"
         elif workers > 1 and len(tasks) > 1:
             n = min(workers, len(tasks))
             engine = f"{workers} processes, {threads_per_worker(n)} thread(s) each"

@@ -338,3 +338,93 @@ def test_temporaries_of_a_live_run_are_left_alone(tmp_path, monkeypatch):
         os.close(fd)
     run_batch(["lambert:albedo=0.5"], out, profile("quick", preview="none", plots=False))
     assert not [p.name for p in out.iterdir() if p.name.startswith(".")]
+
+
+# ------------------------------------------------------------------------------ Dask
+
+
+@pytest.mark.slow
+def test_dask_worker_death_costs_one_retry_and_the_rest_of_the_batch_goes_on(tmp_path):
+    """A LocalCluster of 2 worker processes (under nannies, which restart a dead one). The task
+    "victim" SIGKILLs its worker process the first time: the scheduler's remove-worker event lists
+    it, the batch reports one retry, and its second run on another worker gives its outcome. The
+    task "doomed" kills every worker it runs on: the second death is one failed report naming it,
+    and the other tasks' outcomes all come back (tasks only queued on a dying worker are not counted
+as its victims). Tasks are stand-ins (no report is computed):
+    what is tested is the engine. Slow: a cluster of processes and two worker restarts (~10 s)."""
+    distributed = pytest.importorskip("distributed")
+    marks = tmp_path / "marks"
+    marks.mkdir()
+
+    def task_function(task, threads, driver):  # pickled by value (a closure): runs on the workers
+        if task.name == "victim" and not (marks / "victim").exists() or task.name == "doomed":
+            (marks / task.name).write_text(str(os.getpid()))
+            time.sleep(0.5)  # dies while computing: its start event has reached the scheduler
+            os.kill(os.getpid(), signal.SIGKILL)
+        return batch.ReportOutcome(task.name, True, {"name": task.name, "pid": os.getpid()}, {})
+
+    options = profile("quick", preview="none", plots=False)
+    names = ["victim", "doomed", "plain_1", "plain_2"]
+    tasks = [batch.ReportTask(f"lambert:albedo=0.{i + 1}", n, options, "none") for i, n in enumerate(names)]
+    events: list[tuple[str, str, str]] = []
+    retried: list[str] = []
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
+                                  silence_logs=50) as cluster:
+        outcomes = list(batch._dask(tasks, cluster.scheduler_address,
+                                    lambda *e: events.append(e), retried, task_function))
+    by_name = {o.name: o for o in outcomes}
+    assert sorted(by_name) == sorted(names)
+    assert by_name["victim"].ok and by_name["plain_1"].ok and by_name["plain_2"].ok
+    assert not by_name["doomed"].ok
+    assert "its Dask worker died 2 times" in by_name["doomed"].row["error"]
+    victim_retries = [e for e in events if e[:2] == ("retry", "victim")]
+    assert len(victim_retries) == 1 and "was lost" in victim_retries[0][2]
+    assert sum(1 for r in retried if r.startswith("the Dask worker of victim died")) == 1
+    assert all("\n" not in r for r in retried)
+    assert not [e for e in events if e[0] == "retry" and e[1].startswith("plain")]  # queued there, not running
+
+
+def test_lost_dask_scheduler_is_one_line(tmp_path, monkeypatch):
+    """The scheduler goes away during a batch: the client's calls fail. The batch stops with one line
+    ("lost the Dask scheduler …"), the reports without a result are failed rows, the summary is
+    written, and nothing of distributed's logging reaches stderr. Stand-in client: no cluster."""
+    class Future:
+        def __init__(self, key):
+            self.key, self.status = key, "pending"
+
+    class Completed:
+        def next_batch(self, block):
+            return []
+
+    class Client:
+        status = "running"
+        loop = None
+
+        def __init__(self, address, **kw):
+            pass
+
+        def scheduler_info(self, **kw):
+            return {"workers": {}}
+
+        def submit(self, function, task, *args, key, **kw):
+            return Future(key)
+
+        def get_events(self, topic):
+            self.status = "closed"
+            raise OSError("Timed out trying to connect to tcp://127.0.0.1:1: connection refused\nmore")
+
+        def close(self, timeout=None):
+            pass
+
+    import distributed
+
+    monkeypatch.setattr(distributed, "Client", Client)
+    monkeypatch.setattr(distributed, "as_completed", lambda futures, loop=None: Completed())
+    out = tmp_path / "rep"
+    result = run_batch(["phong:s=8", "lambert:albedo=0.5"], out, profile("quick", preview="none", plots=False),
+                       scheduler="tcp://127.0.0.1:1")
+    assert result.n_failed == 2
+    errors = [r["error"] for r in result.rows]
+    assert all("lost the Dask scheduler tcp://127.0.0.1:1 (OSError: Timed out" in e for e in errors), errors
+    assert all("\n" not in e and "more" not in e for e in errors)
+    assert (out / "summary.csv").exists()
