@@ -25,7 +25,7 @@ from .shrm_kinds import build_kautz_mccool, build_shrm, build_shrm_low_p
 
 __all__ = ["Builder", "REGISTRY", "build_representations"]
 
-#: A builder: the comparison's context → its representations (none, one, or one per parameter value).
+#: The type of a builder, from the comparison's context to its representations (none, one, or one per value).
 Builder = Callable[[BuildContext], Sequence[Representation]]
 
 #: Kind key → builder, in row order. Row keys: the kind key, except ``gaussian`` which gives
