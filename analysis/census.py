@@ -45,6 +45,7 @@ from typing import Any
 import numpy as np
 
 from ..brdf_io.brdf import BRDF
+from ..brdf_io.curet import read_curet_all
 from ..brdf_io.errors import BadInputError, ShrmError
 from ..brdf_io.specs import BRDF_FILE_TYPES, brdf_sources, load_brdf
 from .fit.crossval import DEFAULT_FOLDS
@@ -339,6 +340,30 @@ def _members(source: str) -> list[str]:
         return [source]  # read again by its row, which fails with the reader's message
 
 
+def _curet_members_once(load: Callable[[str], BRDF]) -> Callable[[str], BRDF]:
+    """``load``, except that the members of a CURET ``abrdf.dat`` named by number (``abrdf.dat#7``)
+    come from one parse of the file (``read_curet_all``): reading one sample parses the whole
+    61-sample file (0.24 s), which a census of the 61 would do 61 times. Anything else, and a file
+    ``read_curet_all`` refuses, goes to ``load`` (which then names the problem)."""
+    parsed: dict[str, dict[str, BRDF] | None] = {}
+
+    def load_member(source: str) -> BRDF:
+        base, sep, selector = source.rpartition("#")
+        if sep and Path(base).suffix.lower() == ".dat" and selector.strip().isdigit():
+            if base not in parsed:
+                try:
+                    parsed[base] = {str(int(b.source.rpartition("#")[2])): b for b in read_curet_all(base)}
+                except ShrmError:
+                    parsed[base] = None
+            members = parsed[base]
+            key = str(int(selector))
+            if members is not None and key in members:
+                return members[key]
+        return load(source)
+
+    return load_member
+
+
 def grazing_share(choice: OrderChoice, F: int, P: int) -> float:
     """Share of the energy missed at (F, P) that lies in the view bands beyond the view limit.
 
@@ -437,14 +462,8 @@ def _census_row(
         source=source, name=name, status="ok", kind=kind,
         representation="as given" if choice is None else choice.label(), model="" if choice is None else choice.model,
         fit_ok=None if choice is None else bool(choice.success), fit_worst=worst, reasons=codes, reason_text=text,
-        seconds=time.perf_counter() - t0, representation_record=None if choice is None else _record(choice), **row,
+        seconds=time.perf_counter() - t0, representation_record=None if choice is None else choice.as_dict(), **row,
     )
-
-
-def _record(choice: RepresentationChoice) -> dict[str, Any]:
-    doc = choice.as_dict()
-    doc.pop("spec", None)  # the fitted model's spec: up to 140 × 3 coefficients, not needed in a census
-    return doc
 
 
 #: What makes one row fail instead of the census: the library's own errors, a file system refusal,
@@ -529,6 +548,7 @@ def run_census(
     fit = {"candidates": list(candidates), "folds": int(folds), "seed": int(seed),
            "max_theta_deg": float(max_theta_deg)}
     rows: list[CensusRow] = []
+    load = _curet_members_once(load)
     with single_threaded_blas():
         for i, source in enumerate(sources):
             row = _census_row(str(source), F=int(F), P=int(P), threshold=float(threshold), eps=eps,

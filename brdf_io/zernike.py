@@ -81,6 +81,7 @@ R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering", SIGGRA
 
 from __future__ import annotations
 
+import functools
 from typing import Any
 
 import numpy as np
@@ -269,7 +270,26 @@ def _geometry(L: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.
 
 
 def _radial_table(n_max: int, rho: np.ndarray) -> dict[tuple[int, int], np.ndarray]:
-    return {(n, m): zernike_radial(n, m, rho) for n in range(n_max + 1) for m in range(n % 2, n + 1, 2)}
+    """R_n^m(ρ) for every 0 <= m <= n <= n_max, n − m even, by the three-term recurrence
+
+        R_n^n = ρⁿ,   R_n^m = ρ (R_{n−1}^{|m−1|} + R_{n−1}^{m+1}) − R_{n−2}^m   (R_{n−2}^m = 0 for m > n − 2)
+
+    (Shakibaei & Paramesran 2013, Opt. Lett. 38(14), 2487, doi:10.1364/OL.38.002487: stable on
+    [0, 1]; equal to :func:`zernike_radial` to 1e-13 there for n <= :data:`MAX_ORDER`,
+    tests/brdf_io/test_zernike_model.py). Multiplications only: the whole table costs about what
+    a few of :func:`zernike_radial`'s Jacobi evaluations cost (it was most of ``eval``'s time).
+    Directions below the surface (ρ up to √2) are zeroed by every caller."""
+    out: dict[tuple[int, int], np.ndarray] = {(0, 0): np.ones_like(rho)}
+    for n in range(1, n_max + 1):
+        for m in range(n % 2, n + 1, 2):
+            if m == n:
+                out[(n, m)] = rho * out[(n - 1, m - 1)]
+                continue
+            value = rho * (out[(n - 1, abs(m - 1))] + out[(n - 1, m + 1)])
+            if m <= n - 2:
+                value -= out[(n - 2, m)]
+            out[(n, m)] = value
+    return out
 
 
 def _term_values(
@@ -374,6 +394,18 @@ class ZernikeBRDF(BRDF):
         """(m, n, n') of each coefficient (:func:`basis_terms`)."""
         return basis_terms(self.n_max)
 
+    @functools.cached_property
+    def _pair_matrices(self) -> list[np.ndarray]:
+        """Per azimuthal order m, the symmetric (k_m, k_m, 3) matrix M_m with
+        ρ = Σ_m cos(mΔφ) Σ_jk R_{n_j}^m(ρ_i) M_m[j, k] R_{n_k}^m(ρ_o), n_j = m + 2j: each term
+        c_a s_a [R_n(ρ_i) R_n'(ρ_o) + R_n'(ρ_i) R_n(ρ_o)] puts c_a s_a at (n, n') and (n', n)."""
+        out = [np.zeros(((self.n_max - m) // 2 + 1,) * 2 + (3,)) for m in range(self.n_max + 1)]
+        for c, (m, n, n2) in zip(self.coefficients, self.terms, strict=True):
+            j, k = (n - m) // 2, (n2 - m) // 2
+            out[m][j, k] += _term_scale(m, n, n2) * c
+            out[m][k, j] += _term_scale(m, n, n2) * c
+        return out
+
     def eval(self, L: np.ndarray, V: np.ndarray) -> np.ndarray:
         """RGB ρ(L, V) in 1/sr, shape (..., 3); 0 where either direction is below the surface."""
         L, V = as_directions(L, V)
@@ -383,11 +415,16 @@ class ZernikeBRDF(BRDF):
         for start in range(0, L.shape[0], EVAL_BLOCK):  # bounded memory for big quadrature grids
             block = slice(start, start + EVAL_BLOCK)
             rho_i, rho_o, dphi, above = _geometry(L[block], V[block])
+            ri, ro = _radial_table(self.n_max, rho_i), _radial_table(self.n_max, rho_o)
             acc = np.zeros((rho_i.size, 3))
-            for c, (s, a_i, a_o, b_i, b_o, cm) in zip(
-                self.coefficients, _term_values(self.n_max, rho_i, rho_o, dphi), strict=True
-            ):
-                acc += (s * (a_i * a_o + b_i * b_o) * cm)[:, None] * c[None, :]
+            for m, M in enumerate(self._pair_matrices):
+                ns = range(m, self.n_max + 1, 2)
+                Ri = np.stack([ri[(n, m)] for n in ns], axis=1)  # (N, k_m)
+                Ro = np.stack([ro[(n, m)] for n in ns], axis=1)
+                # Σ_jk R_j(ρ_i) M[j, k, c] R_k(ρ_o); einsum, not BLAS: each row's value does not depend
+                # on the block it is evaluated in (a threaded GEMM's kernels do), and k_m <= 11
+                inner = np.einsum("nj,jkc->nkc", Ri, M)
+                acc += np.einsum("nkc,nk->nc", inner, Ro) * np.cos(m * dphi)[:, None]
             acc[~above] = 0.0
             out[block] = acc
         return out.reshape(*shape, 3)

@@ -15,6 +15,7 @@ up to 2 above the material's, never below.
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from shrmkit import load_brdf
@@ -69,3 +70,28 @@ def test_orders_through_the_chosen_representation(shared_data, spec: str, family
     for eps in (0.1, 0.03):
         got, ref = choose_orders(choice.brdf, eps=eps), choose_orders(model, eps=eps)
         assert 0 <= got.F - ref.F <= dF and 0 <= got.P - ref.P <= dP, (eps, (got.F, got.P), (ref.F, ref.P))
+
+
+def test_fold_fits_start_from_the_whole_sets_seeds(shared_data) -> None:
+    """The chooser's fold fits start from the whole set's optimum and its global-stage seeds
+    (``fit_brdf(start=...)``, one local run): on CURET velvet's folds 1 and 3, whose one-lobe
+    Lafortune optimum is a forward lobe (ψ = π) while the whole set's is retro-reflective (ψ = 0),
+    they reach the training error of the full multi-start search on the fold (the slow path: its
+    own global stage, 4 local runs), not the whole set's basin."""
+    from shrmkit.analysis.fit.crossval import fold_of, subset
+    from shrmkit.analysis.fit.optimize import fit_brdf
+    from shrmkit.analysis.fit.sampling import collect_samples
+
+    velvet = read_curet(shared_data / "brdf" / "curet", 7)
+    samples = collect_samples(velvet, max_theta_deg=80.0)
+    whole = fit_brdf(velvet, "lafortune", samples=samples)
+    assert whole.shape is not None and len(whole.seeds) == 4 and abs(whole.shape[0]) < 1e-6
+    fold = fold_of(len(samples), 5, seed=0)
+    for k in (1, 3):
+        train = subset(samples, fold != k)
+        fast = fit_brdf(velvet, "lafortune", samples=train, start=[whole.shape, *whole.seeds], starts=1)
+        slow = fit_brdf(velvet, "lafortune", samples=train, starts=4)
+        assert fast.errors["rel_rms"] == pytest.approx(slow.errors["rel_rms"], rel=1e-7), k
+        assert fast.shape[0] == pytest.approx(np.pi, abs=1e-3) and fast.options["start"][0] == list(whole.shape)
+    with pytest.raises(BadInputError, match="start must hold rows of 2"):
+        fit_brdf(velvet, "lafortune", samples=samples, start=[1.0, 2.0, 3.0])

@@ -92,6 +92,30 @@ def test_radial_matches_the_factorial_sum() -> None:
         zernike_radial(3, 2, rho)
 
 
+def test_radial_recurrence_and_eval_against_the_jacobi_form() -> None:
+    """The recurrence table behind ``eval`` and ``zernike_basis`` against scipy's Jacobi form
+    (``zernike_radial``) on [0, 1], n <= MAX_ORDER; ``eval`` (per-m pair matrices) against the
+    module docstring's basis sum Σ_a c_a c N N [R_n(ρ_i) R_n'(ρ_o) + R_n'(ρ_i) R_n(ρ_o)]/(1 + δ)
+    cos mΔφ built from the Jacobi form, order 12."""
+    rho = np.linspace(0.0, 1.0, 57)
+    table = zmod._radial_table(zmod.MAX_ORDER, rho)
+    for (n, m), values in table.items():
+        np.testing.assert_allclose(values, zernike_radial(n, m, rho), atol=1e-12, err_msg=f"R_{n}^{m}")
+    rng = np.random.default_rng(3)
+    L, V = _hemisphere(400, rng), _hemisphere(400, rng)
+    model = _random_model(12, 4)
+    ri, ro = disc_radius(L[:, 2]), disc_radius(V[:, 2])
+    dphi = np.arctan2(L[:, 1], L[:, 0]) - np.arctan2(V[:, 1], V[:, 0])
+    expected = np.zeros((400, 3))
+    for c, (m, n, n2) in zip(model.coefficients, basis_terms(12), strict=True):
+        norm = np.sqrt((2.0 if m else 1.0) * (n + 1) / np.pi) * np.sqrt((2.0 if m else 1.0) * (n2 + 1) / np.pi)
+        scale = norm / np.sqrt(4.0 * (2.0 if m else 1.0) * (2.0 if n != n2 else 1.0)) / (2.0 if n == n2 else 1.0)
+        pair = (zernike_radial(n, m, ri) * zernike_radial(n2, m, ro)
+                + zernike_radial(n2, m, ri) * zernike_radial(n, m, ro))
+        expected += (scale * pair * np.cos(m * dphi))[:, None] * c
+    np.testing.assert_allclose(model.eval(L, V), expected, rtol=1e-11, atol=1e-11 * np.abs(expected).max())
+
+
 def test_zernike_orthonormal_on_the_disc() -> None:
     """∫∫ Z_n^m Z_n'^m' ρ dρ dφ = δ by exact quadrature (Gauss–Legendre in ρ², uniform in φ), n <= 10."""
     x, w = roots_legendre(12)  # exact for polynomials of degree <= 23 in u = ρ²
