@@ -111,7 +111,8 @@ def _png(fig, row: tuple[float, float, float, float, float] | None = None) -> by
                             top=1.0 - (0.35 if fig.axes[0].get_title() else 0.15) / height)
     else:
         fig.tight_layout()
-    fig.savefig(buf, format="png", dpi=_DPI, metadata={"Software": None})
+    # zlib level 1: 6 % larger files than the default 6, ~0.03 s less CPU a figure
+    fig.savefig(buf, format="png", dpi=_DPI, metadata={"Software": None}, pil_kwargs={"compress_level": 1})
     return buf.getvalue()
 
 
@@ -324,7 +325,8 @@ def explorer_slice_plot(doc: dict[str, Any]) -> bytes:
     bar.set_label(f"log10 ρ luminance (1/sr), φ_d = {s['phi_d_deg']:g}°", fontsize=7)
     bar.ax.tick_params(labelsize=6)
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=_DPI, metadata={"Software": None})
+    # zlib level 1: 6 % larger files than the default 6, ~0.03 s less CPU a figure
+    fig.savefig(buf, format="png", dpi=_DPI, metadata={"Software": None}, pil_kwargs={"compress_level": 1})
     return buf.getvalue()
 
 
