@@ -31,6 +31,7 @@ libgl1-mesa-dri, libglx-mesa0 (and libosmesa6 for the OSMesa fallback).
 from __future__ import annotations
 
 import hashlib
+import importlib.util
 import json
 import os
 import re
@@ -242,8 +243,6 @@ def _stat_token(path: str) -> str:
 
 def probe_key() -> str:
     """What decides whether an offscreen context works here, hashed (the probe cache's key)."""
-    import importlib.util
-
     spec = importlib.util.find_spec("vtkmodules")
     vtk_origin = str(spec.origin) if spec is not None and spec.origin else "-"
     parts = [sys.executable, sys.version, _stat_token(vtk_origin), _stat_token(__file__)]

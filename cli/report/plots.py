@@ -35,6 +35,7 @@ from matplotlib.cm import ScalarMappable
 from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
 from matplotlib.ticker import LogFormatter, MaxNLocator, NullLocator
+from PIL import Image, ImageDraw, ImageFont
 
 from ...brdf_io.colour import REC709_LUMA
 from .shared_state import MATPLOTLIB_LOCK
@@ -429,8 +430,6 @@ def image_row_plot(images: list[np.ndarray], titles: list[str]) -> bytes:
     """8-bit images (H, W, 3) side by side on white with a title above each (the explorer's lit
     spheres), as PNG bytes. Composed with Pillow (its bundled FreeType font): a matplotlib figure
     cost a quick report ~0.3 s CPU for the same picture."""
-    from PIL import Image, ImageDraw, ImageFont  # Pillow: matplotlib's own image dependency
-
     if not images:
         return b""
     font = ImageFont.load_default(size=12)
