@@ -18,6 +18,7 @@ from ..analysis.shrm import prefilter
 from ..analysis.tolerance import DEFAULT_EPS
 from ..brdf_io.atomic import check_writable
 from ..brdf_io.errors import BadInputError
+from ..brdf_io.limits import check_memory
 from .common import (
     add_env_orientation,
     add_lights_option,
@@ -69,6 +70,8 @@ def run(args: argparse.Namespace) -> int:
         raise BadInputError(out, "the SHRM output must end in .shrm.npz (or .npz)")
     if args.cube_size is not None and not args.cube:
         raise BadInputError(None, "--cube-size needs --cube")
+    if args.size is not None:  # memory plan (data_specs/limits.md): 2.4 GB measured at 6000 rows, 33 B a map pixel
+        check_memory(f"--size {args.size}", 40 * 2 * args.size**2, f"an SHRM map of {args.size} x {2 * args.size}")
     check_writable(out)
     env = load_env_arg(args.env, args)
     source_brdf, brdf, choice = load_analysis_brdf(args.brdf, args, quiet=args.json)

@@ -94,6 +94,7 @@ import numpy as np
 from ...brdf_io.errors import BadInputError
 from ...brdf_io.specs import BRDF_FILE_TYPES, load_brdf
 from ...render.preview import resolve_preview_mode
+from . import worker_boot
 from .collect import collect_report, failed_report, unique_names
 from .options import ReportOptions
 from .threads import configure_worker, threads_per_worker, usable_cores, worker_initializer
@@ -460,7 +461,9 @@ def _processes(tasks: Sequence[ReportTask], workers: int, progress: BatchProgres
         while pending or running:
             while pending and len(running) < workers:
                 parent_conn, child_conn = context.Pipe()
-                process = context.Process(target=_worker_main, name="shrm-report-worker", daemon=True,
+                # the target's module imports nothing heavy: the parent-death signal is set before the
+                # report modules load (a driver killed during a worker's imports: worker_boot.py)
+                process = context.Process(target=worker_boot.boot, name="shrm-report-worker", daemon=True,
                                           args=(child_conn, threads, preview_mode, os.getpid()))
                 worker = _Worker(process, parent_conn)
                 running.append(worker)  # before its start: a SIGTERM during the start still stops it

@@ -1,0 +1,39 @@
+"""The first code a report worker process runs (``shrm report --workers N``): it ties the process
+to its driver *before* the heavy imports.
+
+A worker process is started with the ``spawn`` method; its target's module is imported when the
+process object is unpickled. With :func:`~shrmkit.cli.report.batch._worker_main` as the target,
+that meant importing the report modules (numpy, scipy, matplotlib: 1.5 s of CPU, about 3 s on a
+loaded machine) before the parent-death signal was set, so a driver killed in those seconds left
+its workers running until their imports ended (issue 30). This module imports only the standard
+library: :func:`boot` sets ``PR_SET_PDEATHSIG`` (Linux, ``prctl(2)``) and checks that the driver is
+still there, then imports the batch module and runs the worker loop.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import signal
+import sys
+from typing import Any
+
+__all__ = ["boot"]
+
+_PR_SET_PDEATHSIG = 1  # linux/prctl.h
+
+
+def boot(conn: Any, threads: int, preview_mode: str | None, parent_pid: int) -> None:
+    """A report worker process: end with the driver ``parent_pid`` from here on (SIGKILL on its
+    death), then :func:`~shrmkit.cli.report.batch._worker_main` (which also starts the watch thread
+    of systems without ``prctl``)."""
+    if sys.platform.startswith("linux"):
+        try:
+            ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
+        except (OSError, AttributeError):  # pragma: no cover - a libc without prctl
+            pass
+    if os.getppid() != parent_pid:  # the driver died before the signal was set
+        os._exit(1)
+    from .batch import _worker_main  # the heavy imports, now under the parent-death signal
+
+    _worker_main(conn, threads, preview_mode, parent_pid)
