@@ -250,6 +250,8 @@ class Census:
         with the smallest held-out worst view band (lafortune, cook-torrance, zernike; 5-fold
         cross-validation, seed 0, samples to 80°)"``."""
         f = self.fit
+        if f.get("represent"):
+            return f"scattered data through {f['represent']}"
         return (f"scattered data through the representation with the smallest held-out worst view band "
                 f"({', '.join(f['candidates'])}; {f['folds']}-fold cross-validation, seed {f['seed']}, "
                 f"samples to {f['max_theta_deg']:g}°)")
@@ -425,6 +427,7 @@ def _reasons(row: dict[str, Any], choice: RepresentationChoice | None, threshold
 def _census_row(
     source: str, *, F: int, P: int, threshold: float, eps: float, criterion: str, max_view_deg: float,
     max_F: int, max_P: int, fit: dict[str, Any], load: Callable[[str], BRDF],
+    represent: tuple[str, Callable[[BRDF], BRDF]] | None,
 ) -> CensusRow:
     t0 = time.perf_counter()
     try:
@@ -435,7 +438,9 @@ def _census_row(
     try:
         choice = None
         analysed = brdf
-        if kind == "scattered":
+        if kind == "scattered" and represent is not None:
+            analysed = represent[1](brdf)
+        elif kind == "scattered":
             choice = choose_representation(brdf, candidates=tuple(fit["candidates"]), folds=fit["folds"],
                                            seed=fit["seed"], max_theta_deg=fit["max_theta_deg"])
             analysed = choice.brdf
@@ -460,7 +465,8 @@ def _census_row(
     worst = None if choice is None or choice.chosen.held_out_worst is None else choice.chosen.held_out_worst.as_dict()
     return CensusRow(
         source=source, name=name, status="ok", kind=kind,
-        representation="as given" if choice is None else choice.label(), model="" if choice is None else choice.model,
+        representation=("as given" if kind != "scattered" else represent[0]) if choice is None else choice.label(),
+        model="" if choice is None else choice.model,
         fit_ok=None if choice is None else bool(choice.success), fit_worst=worst, reasons=codes, reason_text=text,
         seconds=time.perf_counter() - t0, representation_record=None if choice is None else choice.as_dict(), **row,
     )
@@ -497,6 +503,7 @@ def run_census(
     max_theta_deg: float = 80.0,
     load: Callable[[str], BRDF] = load_brdf,
     progress: Callable[[int, int, CensusRow], None] | None = None,
+    represent: tuple[str, Callable[[BRDF], BRDF]] | None = None,
 ) -> Census:
     """Tabulate a BRDF library (module docstring): one :class:`CensusRow` per source.
 
@@ -517,6 +524,11 @@ def run_census(
         Reads one source (default ``load_brdf``; the CLI passes its RGL-aware loader).
     progress
         Called as ``progress(done, total, row)`` after each row.
+    represent
+        ``(label, function)``: analyse scattered data through ``function(brdf)`` (a BRDF
+        evaluable everywhere) instead of the representation choice, e.g. CURET's published
+        55-term least-squares Zernike fits (``benchmarks/fig8_curet.py``); those rows then
+        have no fit error or anisotropy, and ``fit`` says ``label``.
 
     Returns
     -------
@@ -546,14 +558,14 @@ def run_census(
     if not (np.isfinite(max_theta_deg) and 0.0 < max_theta_deg <= 90.0):
         raise BadInputError(None, f"max_theta_deg must be in (0, 90], got {max_theta_deg!r}")
     fit = {"candidates": list(candidates), "folds": int(folds), "seed": int(seed),
-           "max_theta_deg": float(max_theta_deg)}
+           "max_theta_deg": float(max_theta_deg), "represent": None if represent is None else str(represent[0])}
     rows: list[CensusRow] = []
     load = _curet_members_once(load)
     with single_threaded_blas():
         for i, source in enumerate(sources):
             row = _census_row(str(source), F=int(F), P=int(P), threshold=float(threshold), eps=eps,
                               criterion=criterion, max_view_deg=max_view_deg, max_F=int(max_F), max_P=int(max_P),
-                              fit=fit, load=load)
+                              fit=fit, load=load, represent=represent)
             rows.append(row)
             if progress is not None:
                 progress(i + 1, len(sources), row)

@@ -1,132 +1,131 @@
-"""RH02 Fig. 8 on CURET: accuracy 1 − ε(F = 30, P), P = 0…5, of the 61 CURET BRDFs.
+"""RH02 Fig. 8 on CURET: accuracy 1 − ε(F = 30, P), P = 0…5, of the 61 CURET BRDFs — a census.
 
-Each CURET sample (``brdf/curet/{abrdf.dat,table.txt}`` of ../shared/data, read with
-``shrmkit.brdf_io.curet.read_curet_all``: 205 grey measurements, negatives clamped to 0) is
-fitted with Koenderink's reciprocal isotropic Zernike expansion
-(``shrmkit.analysis.fit.zernike.fit_zernike``; default 55 coefficients = order 8, plain least
-squares on ρ, CURET's published fit), and the fit is analysed like any BRDF:
-``orders_on_grid_for(fit, F=30, P=5)`` gives, on one quadrature grid sized for (30, 5),
+The work is ``shrmkit.analysis.census.run_census`` (the ``shrm census`` verb's): every CURET
+sample (``brdf/curet/abrdf.dat`` of ../shared/data, 205 grey measurements) is analysed through a
+representation, and on one quadrature grid sized for (F, P) = (30, 5) the census gives RH02's
+1 − ε(30, P) (energy over all views, RH02 §5.1: what Fig. 8 plots) and the worst view band's.
 
-- RH02's unweighted table ε(F, P) (criterion ``"rh02"``, the energy over all views; RH02 §5.1),
-- the default ``"bands"`` table (worst θ_v band inside 80° under a point light).
+Two representations, each a census (``--fits``):
 
-Prints one row per sample (fit error, fraction of direction pairs where the polynomial fit is
-negative, 1 − ε(30, P) for P = 0…5 under both criteria), the count of BRDFs above 90 % per P
-for both criteria, the run time, and as its last line
+- ``chosen`` (default): the one ``shrm census`` and every verb use — the representation with the
+  smallest held-out worst view band among one-lobe Lafortune, Cook–Torrance and a Zernike
+  expansion whose order and ridge are chosen by 5-fold cross-validation (samples to 80°);
+- ``published``: CURET's published kind of fit, as RH02 analysed — Koenderink's Zernike
+  expansion with 55 coefficients (order 8) by plain least squares on ρ over all 205 samples
+  (``fit_zernike(n_coeffs=55, metric="rho", max_theta_deg=90)``; ``--ridge`` damps it).
+
+It prints each census' table (one row per sample), the counts above 90 % per P for both
+criteria, how far from RH02's 56 of 61 each comes and why, and writes each census' files
+(census.csv, census.json, census.png as ``shrm census`` does) under ``--out`` (default
+``<tempdir>/fig8_curet``; never into the repository). Its last line is
 
     CURET: N of 61 BRDFs above 90 % accuracy at F = 30, P = 5 (RH02: 56 of 61)
 
-It plots the accuracies like RH02 Fig. 8 (one curve per P over the BRDFs, sorted by their
-accuracy at P = 5; left RH02's criterion, right the bands criterion) to ``--out`` (default
-``<tempdir>/fig8_curet.png``; never into the repository).
+for the chosen representations.
 
-Options: ``--n-coeffs`` (5, 14, 30, 55, ...; default 55), ``--ridge`` (Tikhonov damping of the
-fit, relative; default 0), ``--metric`` (``rho`` or ``rel``), ``--data``, ``--out``.
-
-Run:  .venv/bin/python benchmarks/fig8_curet.py [--n-coeffs 55] [--ridge 0] [--out /tmp/fig8.png]
+Run:  .venv/bin/python benchmarks/fig8_curet.py [--fits chosen published] [--ridge 0] [--out DIR]
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import tempfile
 import time
 from pathlib import Path
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from shrmkit.analysis.fit.zernike import fit_zernike  # noqa: E402
-from shrmkit.analysis.orders import orders_on_grid_for  # noqa: E402
-from shrmkit.brdf_io.curet import CURET_SAMPLE_NAMES, read_curet_all  # noqa: E402
+from shrmkit.analysis.census import Census, census_sources, run_census
+from shrmkit.analysis.fit.zernike import fit_zernike
+from shrmkit.cli.cmd_census import write_census
 
 __all__ = ["main"]
 
-CURET = Path("/work/shared/data/brdf/curet")
-F = 30
-P_MAX = 5
-THRESHOLD = 0.9
+CURET = Path("/work/shared/data/brdf/curet/abrdf.dat")
+F, P, THRESHOLD = 30, 5, 0.9
 RH02_COUNT = 56
 
 
-def plot(acc: np.ndarray, acc_bands: np.ndarray, out: Path, title: str) -> None:
-    """Accuracy curves per P over the BRDFs sorted by accuracy at P = 5 (RH02 Fig. 8 layout)."""
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), sharey=True)
-    for ax, table, label in ((axes[0], acc, "RH02 criterion (energy over all views)"),
-                             (axes[1], acc_bands, "bands criterion (worst θ_v band ≤ 80°)")):
-        order = np.argsort(-table[:, P_MAX], kind="stable")
-        x = np.arange(1, len(order) + 1)
-        for p in range(P_MAX + 1):
-            ax.plot(x, table[order, p], marker="o", markersize=2.5, linewidth=1, label=f"P = {p}")
-        ax.axhline(THRESHOLD, color="k", linestyle="--", linewidth=0.8)
-        ax.set_xlabel("CURET BRDFs, sorted by accuracy at P = 5")
-        ax.set_title(f"{label}\n{int(np.sum(table[:, P_MAX] > THRESHOLD))} of {len(table)} above 90 % at P = 5",
-                     fontsize=9)
-        ax.set_ylim(0.0, 1.0)
-        ax.grid(alpha=0.3)
-    axes[0].set_ylabel(f"accuracy 1 − ε(F = {F}, P)")
-    axes[0].legend(loc="lower center", ncol=3, fontsize=8)
-    fig.suptitle(title, fontsize=10)
-    fig.tight_layout()
-    fig.savefig(out, dpi=120)
-    plt.close(fig)
+def published_fit(ridge: float):
+    """(label, function) of CURET's published kind of fit for ``run_census(represent=...)``."""
+    label = "Zernike, 55 coefficients, least squares on rho, all samples" + (f", ridge {ridge:g}" if ridge else "")
+    return label, lambda brdf: fit_zernike(brdf, n_coeffs=55, metric="rho", ridge=ridge, max_theta_deg=90.0).brdf
+
+
+def print_census(census: Census, title: str) -> None:
+    print(f"\n{title}")
+    header = " ".join(f"P={p:<4d}" for p in range(P + 1))
+    print(f"{'name':<30} {'analysed as':<28} {'held-out':>8} | RH02: {header} | band P=5 | F, P needed | reasons")
+    for r in census.rows:
+        if not r.ok:
+            print(f"{r.name or r.source:<30} failed: {r.error}")
+            continue
+        held = "" if r.fit_worst is None else f"{r.fit_worst['rel_rms']:.3f}"
+        print(f"{r.name:<30.30} {r.representation:<28.28} {held:>8} |       "
+              + " ".join(f"{v:6.3f}" for v in r.accuracy_rh02)
+              + f" | {r.accuracy('bands'):8.3f} | {r.F_needed:>4}, {r.P_needed:<5} | {', '.join(r.reasons)}")
+    for criterion, name in (("rh02", "RH02's energy over all views"), ("bands", "worst view band to 80°")):
+        counts = ", ".join(f"P={p}: {census.count_above(criterion, p)}" for p in range(P + 1))
+        print(f"above 90 % at F = {F} ({name}): {counts} (of {len(census.rows)})")
+    eps3 = sum(1 for r in census.rows if r.ok and 1.0 - r.accuracy_rh02[3] < 0.05)
+    print(f"ε < 0.05 at P = 3 (RH02: 'most'): {eps3} of {len(census.rows)}")
+    print(f"census: {census.count_line()} ({census.seconds:.1f} s)")
+
+
+def why(census: Census, kind: str) -> str:
+    """How close to RH02's 56 of 61, and why (from the numbers of this run)."""
+    n = census.count_above("rh02")
+    missed = [r for r in census.rows if r.ok and r.accuracy("rh02") <= THRESHOLD]
+    names = ", ".join(f"{r.name} ({r.accuracy('rh02'):.3f}: {', '.join(r.reasons)})" for r in missed)
+    if kind == "chosen":
+        return (f"chosen representations: {n} of 61 against RH02's {RH02_COUNT}. Our fits are chosen by held-out "
+                "error (order and ridge of the Zernike expansion by 5-fold cross-validation, samples to 80°), so "
+                "they do not carry the high-order ringing a 55-term least-squares polynomial puts between and beyond "
+                "the 205 measured geometries (the 'published' census below loses that energy at P <= 5); RH02 "
+                "analysed CURET's published fits and lost the five surfaces their isotropic fits could not "
+                f"represent. Below 90 % here: {names or 'none'}.")
+    return (f"published-style fits: {n} of 61 against RH02's {RH02_COUNT}. A plain least-squares polynomial of "
+            "55 terms at 205 measurements follows their noise and extrapolates beyond 84°, putting energy at "
+            f"orders P > 5; we do not have CURET's own published coefficients, so RH02's exact fits are not "
+            f"reproduced. Below 90 % here: {names or 'none'}.")
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--data", type=Path, default=CURET, help=f"CURET folder (default {CURET})")
-    parser.add_argument("--out", type=Path, default=Path(tempfile.gettempdir()) / "fig8_curet.png",
-                        help="PNG to write (default <tempdir>/fig8_curet.png)")
-    parser.add_argument("--n-coeffs", type=int, default=55, help="Zernike coefficients per fit (default 55 = order 8)")
-    parser.add_argument("--ridge", type=float, default=0.0, help="relative Tikhonov damping of the fit (default 0)")
-    parser.add_argument("--metric", choices=("rho", "rel"), default="rho", help="fit objective (default rho)")
+    parser.add_argument("--data", type=Path, default=CURET, help=f"CURET abrdf.dat (default {CURET})")
+    parser.add_argument("--out", type=Path, default=Path(tempfile.gettempdir()) / "fig8_curet",
+                        help="folder for each census' files (default <tempdir>/fig8_curet)")
+    parser.add_argument("--fits", nargs="+", choices=("chosen", "published"), default=["chosen", "published"],
+                        help="which censuses to run (default both)")
+    parser.add_argument("--ridge", type=float, default=0.0, help="relative damping of the published-style fit")
     args = parser.parse_args(argv)
-    if not args.data.is_dir():
-        print(f"{args.data}: CURET data folder not found (only in the project workspace); nothing to do")
+    if not args.data.exists():
+        print(f"{args.data}: CURET data not found (only in the project workspace); nothing to do")
         return 1
-    t_start = time.perf_counter()
-    brdfs = read_curet_all(args.data)
-    rows = []
-    for brdf in brdfs:
-        sample = int(brdf.source.rsplit("#", 1)[1])
-        fit = fit_zernike(brdf, n_coeffs=args.n_coeffs, ridge=args.ridge, metric=args.metric)
-        choice = orders_on_grid_for(fit.brdf, F, P_MAX, criterion="bands")
-        rows.append((sample, fit, 1.0 - choice.rh02_table[F, : P_MAX + 1], 1.0 - choice.table[F, : P_MAX + 1],
-                     fit.brdf.negative_fraction(), brdf.n_clipped // 3))
-    elapsed = time.perf_counter() - t_start
-    acc = np.array([r[2] for r in rows])
-    acc_bands = np.array([r[3] for r in rows])
-
-    print(f"CURET Zernike fits: {args.n_coeffs} coefficients, metric {args.metric}, ridge {args.ridge:g}; "
-          f"accuracy 1 − ε(F = {F}, P) on a ReparamGrid.for_orders({F}, {P_MAX})")
-    header = " ".join(f"P={p:<4d}" for p in range(P_MAX + 1))
-    print(f"{'#':>2} {'name':<22} {'relRMS':>6} {'neg%':>5} {'clamp':>5} | rh02: {header} | bands: {header}")
-    for sample, fit, a, b, neg, clamped in rows:
-        print(f"{sample:2d} {CURET_SAMPLE_NAMES.get(sample, ''):<22.22} {fit.rel_rms_rho:6.3f} {100 * neg:5.1f} "
-              f"{clamped:5d} |       " + " ".join(f"{v:6.3f}" for v in a) + " |        "
-              + " ".join(f"{v:6.3f}" for v in b))
-    n = len(rows)
-    median_rms = float(np.median([r[1].rel_rms_rho for r in rows]))
-    median_neg = 100 * float(np.median([r[4] for r in rows]))
-    print(f"\nmedian relative RMS of the fits over the measurements: {median_rms:.3f}; "
-          f"median fraction of direction pairs where a fit is negative: {median_neg:.1f} %")
-    for label, table in (("rh02 ", acc), ("bands", acc_bands)):
-        counts = ", ".join(f"P={p}: {int(np.sum(table[:, p] > THRESHOLD))}" for p in range(P_MAX + 1))
-        print(f"{label} criterion, BRDFs above 90 % at F = {F}: {counts} (of {n})")
-    n_bands = int(np.sum(acc_bands[:, P_MAX] > THRESHOLD))
-    print(f"bands criterion: {n_bands} of {n} BRDFs above 90 % accuracy at F = {F}, P = {P_MAX}")
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    damping = f", ridge {args.ridge:g}" if args.ridge else ""
-    plot(acc, acc_bands, args.out, f"CURET, Zernike fits ({args.n_coeffs} coefficients{damping}): RH02 Fig. 8 analog")
-    print(f"plot: {args.out}")
-    print(f"time: {elapsed:.1f} s for {n} fits and tables ({time.perf_counter() - t_start:.1f} s with the plot)")
-    n_rh02 = int(np.sum(acc[:, P_MAX] > THRESHOLD))
-    print(f"CURET: {n_rh02} of {n} BRDFs above 90 % accuracy at F = {F}, P = {P_MAX} (RH02: {RH02_COUNT} of 61)")
-    return 0
+    sources = census_sources([args.data])
+    results = {}
+    for kind in args.fits:
+        t = os.times()
+        t0 = time.perf_counter()
+        census = run_census(sources, F=F, P=P, threshold=THRESHOLD,
+                            represent=published_fit(args.ridge) if kind == "published" else None)
+        cpu = (lambda e: e.user - t.user + e.system - t.system)(os.times())
+        files = write_census(census, args.out / kind)
+        print_census(census, f"CURET census, {kind} representations ({census.fit_settings()})")
+        print(f"time: {time.perf_counter() - t0:.1f} s wall, {cpu:.1f} s CPU for {len(sources)} samples "
+              f"({cpu / max(len(sources), 1):.2f} s CPU per sample); files: {', '.join(map(str, files.values()))}")
+        results[kind] = census
+    print()
+    for kind, census in results.items():
+        print(why(census, kind))
+    if "chosen" in results:
+        census = results["chosen"]
+        n_rh02 = census.count_above("rh02")
+        print(f"CURET: {n_rh02} of {len(census.rows)} BRDFs above 90 % accuracy at F = {F}, P = {P} "
+              f"(RH02: {RH02_COUNT} of 61)")
+    return 0 if all(np.isfinite(c.seconds) for c in results.values()) else 1
 
 
 if __name__ == "__main__":
