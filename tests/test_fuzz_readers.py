@@ -42,7 +42,7 @@ def test_seeded_fuzz_subset_has_no_failures():
     # the two slowest readers per case (MERL writes and reads 35 MB, EXR ~90 ms) get fewer cases: each
     # still draws every one of its <= 7 mutation kinds several times over
     caps = {"merl": per_reader // 3, "exr": per_reader // 2}
-    results = harness.run_fuzz(seed=20261130, per_reader=per_reader, workers=2, timeout=30.0, caps=caps)
+    results = harness.run_fuzz(seed=20261130, per_reader=per_reader, workers=2, timeout=30.0, caps=caps, light=True)
     failures = [r for r in results if r["outcome"] in harness.FAILURES or harness._seed_refused(r)]
     listing = "\n".join(
         f"{r['outcome']} {r['reader']}:{r['index']} [{r['mutation']}] {r['detail']}" for r in failures[:30]
