@@ -126,6 +126,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-plots", action="store_true",
                    help="leave out the matplotlib plots (every number stays in report.json and the tables): "
                    "about 3x faster quick reports, for a census of a large library")
+    p.add_argument("--explorer-plots", action=argparse.BooleanOptionalAction, default=None,
+                   help="draw the BRDF views' plots (fit slices, BRDF Explorer's slice, polar and albedo plots; "
+                   "~1 s CPU a report): on by default, off with --quick")
     add_window_option(p)
     add_lights_option(p)
     add_order_rule(p)
@@ -146,7 +149,8 @@ def options_from_args(args: argparse.Namespace):
                "max_view_deg": args.max_view_deg, "plots": not args.no_plots}
     for key, value in (("tolerances", args.tolerances), ("envs", tuple(args.env) if args.env else None),
                        ("env_height", args.env_height), ("models", args.models), ("n_pairs", args.pairs),
-                       ("max_F", args.max_F), ("fit_samples", args.fit_samples)):
+                       ("max_F", args.max_F), ("fit_samples", args.fit_samples),
+                       ("explorer_plots", args.explorer_plots)):
         if value is not None:
             changes[key] = value
     return profile("quick" if args.quick else "full", **changes)

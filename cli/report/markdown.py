@@ -14,7 +14,7 @@ from collections.abc import Iterator, Sequence
 from typing import Any
 
 from ...analysis.fit.summary import FIT_FAIL_BAND_REL_RMS
-from .plots import PLOT_TITLES
+from .plots import PLOT_TITLES, plots_wanted
 
 __all__ = ["fmt", "md_table", "report_sections", "report_markdown", "LIVE_VIEW_MARK", "live_view_mark"]
 
@@ -82,11 +82,13 @@ def report_sections(doc: dict[str, Any], image_link: Any = None) -> Iterator[tup
     links ``file`` beside the report.
     """
     image = image_link or (lambda key, file, alt: f"![{alt}]({file})")
+    wanted = plots_wanted(doc)
     drawn = doc.get("options", {}).get("plots", True)
+    explorer_drawn = doc.get("options", {}).get("explorer_plots", True)
 
     def link(key: str, file: str, alt: str) -> str:
-        """The image, or nothing for a plot that was not drawn (``plots: false``)."""
-        return image(key, file, alt) if drawn or key not in PLOT_TITLES else ""
+        """The image, or nothing for a plot that was not drawn (``plots``, ``explorer_plots``)."""
+        return image(key, file, alt) if key in wanted or key not in PLOT_TITLES else ""
 
     if doc["status"] != "ok":
         yield "Failed", f"The report of `{doc['source']}` could not be made:\n\n```\n{doc.get('error')}\n```"
@@ -102,7 +104,10 @@ def report_sections(doc: dict[str, Any], image_link: Any = None) -> Iterator[tup
         head.append("Fits (worst view band first): " + "; ".join(fit_lines) + ".")
     head.append(f"Profile `{doc['options']['profile']}`, seed {doc['options']['seed']}, "
                 f"shrmkit {doc['provenance']['shrmkit_version']}; total {fmt(doc.get('total_seconds'))} s."
-                + ("" if drawn else " Plots not drawn (--no-plots): every number is in the tables and report.json."))
+                + ("" if drawn else " Plots not drawn (--no-plots): every number is in the tables and report.json.")
+                + (" The BRDF views' plots (fit slices, BRDF Explorer) were not drawn (quick profile; "
+                   "--explorer-plots draws them): their numbers are in report.json." if drawn and not explorer_drawn
+                   else ""))
     yield "Summary", "\n\n".join(head)
 
     if doc["warnings"]:
@@ -253,6 +258,10 @@ def _live_parts(live: dict[str, Any] | None) -> list[str]:
 def _explorer_body(doc: dict[str, Any], e: dict[str, Any], link: Any) -> str:
     """The BRDF Explorer section (``explorer.py``): slice or samples, polar plots, albedo, lit spheres."""
     parts = [f"The views could not be made: `{e['error']}`"] if e.get("error") else []
+    options = doc.get("options", {})
+    if options.get("plots", True) and not options.get("explorer_plots", True):
+        parts.append("The plots of these views were not drawn (quick profile; `--explorer-plots` draws them): "
+                     "what they show is in report.json's `explorer` block.")
     scattered = e["of"] == "measured samples"
     fits = ", ".join(f["model"] for f in doc["fits"] if not f.get("error")) or "none"
     if e.get("slice"):

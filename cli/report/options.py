@@ -80,6 +80,12 @@ class ReportOptions:
         them out of the folder and the pages — every number stays in ``report.json`` and the
         tables. The plots are most of a quick report's time (1.5–2 s of ~2.3 s on 2 cores), so a
         census of a large library runs ~3× faster without them.
+    explorer_plots
+        Also draw the BRDF views' plots (``plots.EXPLORER_PLOTS``: the fit slices and BRDF
+        Explorer's slice, samples, polar and albedo plots; ~1 s CPU of a quick report): True by
+        default, False in the ``quick`` profile (``--explorer-plots`` draws them there). Their
+        numbers are in ``report.json`` either way; the RH02 plots (energy, ε by P, speed against
+        error) and the fits' band errors are drawn whenever ``plots`` is.
     """
 
     eps: float = DEFAULT_EPS
@@ -111,6 +117,7 @@ class ReportOptions:
     max_view_deg: float = DEFAULT_MAX_VIEW_DEG
     lights: str | int = DEFAULT_LIGHTS
     plots: bool = True
+    explorer_plots: bool = True
     profile: str = field(default="full")
 
     def __post_init__(self) -> None:
@@ -164,14 +171,15 @@ def profile(name: str = "full", **changes: Any) -> ReportOptions:
     """The ``full`` (default options) or ``quick`` profile, with ``changes`` applied.
 
     ``quick`` (tests and ``shrm demo``): environments of 32 rows, 150 (R, V) pairs, fits on
-    4096 samples from one start, orders capped at F <= 96, a 128-pixel preview.
+    4096 samples from one start, orders capped at F <= 96, a 128-pixel preview, and the RH02
+    plots without the BRDF views' plots (``explorer_plots=False``).
     """
     if name == "full":
         return ReportOptions(**changes)
     if name == "quick":
         base: dict[str, Any] = dict(
             env_height=32, n_pairs=150, fit_samples=4096, fit_starts=1, max_F=96, preview_size=128,
-            albedo_nodes=48, profile="quick",
+            albedo_nodes=48, explorer_plots=False, profile="quick",
         )
         base.update(changes)
         return ReportOptions(**base)

@@ -26,6 +26,7 @@ SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
 from __future__ import annotations
 
 import io
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -40,8 +41,8 @@ from PIL import Image, ImageDraw, ImageFont
 from ...brdf_io.colour import REC709_LUMA
 from .shared_state import MATPLOTLIB_LOCK
 
-__all__ = ["PLOT_TITLES", "make_plots", "energy_plot", "accuracy_by_p_plot", "speed_error_plot",
-           "fit_slices_plot", "fit_bands_plot", "explorer_slice_plot", "explorer_samples_plot",
+__all__ = ["PLOT_TITLES", "EXPLORER_PLOTS", "plots_wanted", "make_plots", "energy_plot", "accuracy_by_p_plot",
+           "speed_error_plot", "fit_slices_plot", "fit_bands_plot", "explorer_slice_plot", "explorer_samples_plot",
            "explorer_polar_plot", "explorer_albedo_plot", "image_row_plot", "MISSING_COLOUR", "BELOW_COLOUR"]
 
 PLOT_TITLES = {
@@ -55,6 +56,21 @@ PLOT_TITLES = {
     "explorer_polar": "Polar plots of the plane of incidence (BRDF Explorer)",
     "explorer_albedo": "Directional albedo against θ_v (BRDF Explorer)",
 }
+#: The BRDF views' plots: drawn unless the report's options say ``explorer_plots: false`` (the quick
+#: profile); the others (RH02's energy and ε-by-P plots, speed against error, fit errors by band) are
+#: drawn whenever ``plots`` is.
+EXPLORER_PLOTS = ("fit_slices", "explorer_slice", "explorer_samples", "explorer_polar", "explorer_albedo")
+
+
+def plots_wanted(doc: dict[str, Any]) -> tuple[str, ...]:
+    """The keys of :data:`PLOT_TITLES` the report's options ask for (``plots``, ``explorer_plots``)."""
+    options = doc.get("options", {})
+    if not options.get("plots", True):
+        return ()
+    explorer = options.get("explorer_plots", True)
+    return tuple(k for k in PLOT_TITLES if explorer or k not in EXPLORER_PLOTS)
+
+
 #: Slice cells without a measurement, and cells with L or V below the surface.
 MISSING_COLOUR = (1.0, 0.0, 1.0, 1.0)
 BELOW_COLOUR = (0.62, 0.62, 0.62, 1.0)
@@ -450,25 +466,27 @@ def image_row_plot(images: list[np.ndarray], titles: list[str]) -> bytes:
     return buf.getvalue()
 
 
-def make_plots(doc: dict[str, Any]) -> dict[str, bytes]:
-    """Every plot the document has data for: ``{key: png_bytes}`` (keys of :data:`PLOT_TITLES`)."""
+def make_plots(doc: dict[str, Any], keys: Sequence[str] | None = None) -> dict[str, bytes]:
+    """Every plot the document has data for, of ``keys`` (default: all of :data:`PLOT_TITLES`;
+    a report folder draws :func:`plots_wanted`): ``{key: png_bytes}``."""
     if doc.get("status") != "ok":
         return {}
+    wanted = set(PLOT_TITLES if keys is None else keys)
+    explorer = doc.get("explorer") or {}
+    have = {
+        "energy": True,
+        "accuracy_by_p": True,
+        "speed_error": bool(doc.get("speed_vs_error")),
+        "fit_slices": bool(doc.get("fit_slices", {}).get("views")),
+        "fit_bands": any(f.get("bands") for f in doc.get("fits", [])),
+        "explorer_slice": bool(explorer.get("slice")),
+        "explorer_samples": bool(explorer.get("samples")),
+        "explorer_polar": bool(explorer.get("polar", {}).get("curves")),
+        "explorer_albedo": bool(explorer.get("albedo")),
+    }
+    draw = {"energy": energy_plot, "accuracy_by_p": accuracy_by_p_plot, "speed_error": speed_error_plot,
+            "fit_slices": fit_slices_plot, "fit_bands": fit_bands_plot, "explorer_slice": explorer_slice_plot,
+            "explorer_samples": explorer_samples_plot, "explorer_polar": explorer_polar_plot,
+            "explorer_albedo": explorer_albedo_plot}
     with MATPLOTLIB_LOCK:  # matplotlib's text layout is process-global state (shared_state module)
-        plots = {"energy": energy_plot(doc), "accuracy_by_p": accuracy_by_p_plot(doc)}
-        if doc.get("speed_vs_error"):
-            plots["speed_error"] = speed_error_plot(doc)
-        if doc.get("fit_slices", {}).get("views"):
-            plots["fit_slices"] = fit_slices_plot(doc)
-        if any(f.get("bands") for f in doc.get("fits", [])):
-            plots["fit_bands"] = fit_bands_plot(doc)
-        explorer = doc.get("explorer") or {}
-        if explorer.get("slice"):
-            plots["explorer_slice"] = explorer_slice_plot(doc)
-        if explorer.get("samples"):
-            plots["explorer_samples"] = explorer_samples_plot(doc)
-        if explorer.get("polar", {}).get("curves"):
-            plots["explorer_polar"] = explorer_polar_plot(doc)
-        if explorer.get("albedo"):
-            plots["explorer_albedo"] = explorer_albedo_plot(doc)
-    return plots
+        return {key: draw[key](doc) for key in PLOT_TITLES if key in wanted and have[key]}

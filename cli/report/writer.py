@@ -21,20 +21,20 @@ from ...brdf_io.atomic import atomic_path
 from .explorer import LiveView, ReportImage
 from .html import index_html, report_html
 from .markdown import report_markdown
-from .plots import make_plots
+from .plots import make_plots, plots_wanted
 
 __all__ = ["report_files", "write_folder", "summary_row", "summary_columns", "write_summary"]
 
 
 def report_files(doc: dict[str, Any], previews: Sequence[Any] = ()) -> dict[str, bytes]:
     """Every file of a report folder: ``report.json``, ``report.md``, ``report.html`` and
-    the PNG plots (unless the report's options say ``plots: false``) and previews, as
+    the PNG plots the report's options ask for (``plots``, ``explorer_plots``) and previews, as
     ``{file name: bytes}``.
 
     ``previews`` is what ``collect_report`` returns beside the document: preview images
     (``preview_<key>.png``), ``explorer.ReportImage`` (the lit spheres, under their own file
     name) and ``explorer.LiveView`` (live WebGL2 previews, embedded in ``report.html`` only)."""
-    drawn = make_plots(doc) if doc.get("options", {}).get("plots", True) else {}
+    drawn = make_plots(doc, plots_wanted(doc))  # the plots the options ask for
     pngs = {f"plot_{key}.png": data for key, data in drawn.items()}
     views = []
     for p in previews:

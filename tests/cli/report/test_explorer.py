@@ -188,7 +188,8 @@ def test_views_failing_do_not_lose_the_report() -> None:
 def test_report_holds_the_views_and_their_plots() -> None:
     """A quick report: the ``explorer`` block as documented (data_specs/report_json.md), the
     plots and the lit sphere in the folder and embedded in report.html."""
-    options = profile("quick", preview="none", models=("lafortune",), tolerances=(0.1,), eps=0.1, n_pairs=20)
+    options = profile("quick", preview="none", models=("lafortune",), tolerances=(0.1,), eps=0.1, n_pairs=20,
+                      explorer_plots=True)
     doc, extras = collect_report("cook-torrance:kd=0.2,alpha=0.3,f0=0.5", options)
     e = doc["explorer"]
     assert set(e) == {"of", "error", "luminance", "slice", "samples", "polar", "albedo", "sphere",

@@ -24,3 +24,22 @@ def test_report_without_plots_has_the_same_numbers_and_no_plot_files():
     assert "plot_" not in files["report.html"].decode()
     drawn = report_files(with_plots, previews)
     assert any(name.startswith("plot_energy") for name in drawn)
+
+
+def test_quick_profile_draws_the_rh02_plots_and_leaves_the_brdf_views_to_explorer_plots():
+    from shrmkit.cli.report.plots import EXPLORER_PLOTS, PLOT_TITLES
+
+    base = dict(preview="none", models=("lafortune",), tolerances=(0.1,), eps=0.1, n_pairs=20, fit_samples=1024,
+                albedo_nodes=16)
+    quick, previews = collect_report("phong:s=16", profile("quick", **base))
+    assert quick["options"]["explorer_plots"] is False and profile("full").explorer_plots is True
+    files = report_files(quick, previews)
+    drawn = {name[len("plot_"):-len(".png")] for name in files if name.startswith("plot_")}
+    assert drawn == {"energy", "accuracy_by_p", "speed_error", "fit_bands"}
+    md = files["report.md"].decode()
+    assert "--explorer-plots draws them" in md and not any(f"plot_{k}.png" in md for k in EXPLORER_PLOTS)
+    assert quick["explorer"]["polar"]["curves"]  # the numbers stay in report.json
+    quick["options"]["explorer_plots"] = True  # the same document asking for every plot draws the rest
+    everything = report_files(quick, previews)
+    assert {k for k in PLOT_TITLES if f"plot_{k}.png" in everything} == drawn | {
+        "fit_slices", "explorer_slice", "explorer_polar", "explorer_albedo"}
