@@ -428,3 +428,14 @@ def test_lost_dask_scheduler_is_one_line(tmp_path, monkeypatch):
     assert all("lost the Dask scheduler tcp://127.0.0.1:1 (OSError: Timed out" in e for e in errors), errors
     assert all("\n" not in e and "more" not in e for e in errors)
     assert (out / "summary.csv").exists()
+
+
+def test_worker_target_module_sets_the_parent_death_signal_before_heavy_imports():
+    """A spawned worker imports its target's module first: worker_boot.py must load no numpy, scipy or
+    matplotlib, so that PR_SET_PDEATHSIG is set before the report modules' seconds of imports (a driver
+    killed then left its workers running 3-14 s: benchmarks in the closing note)."""
+    heavy = "('numpy', 'scipy', 'matplotlib', 'shrmkit.cli.report.batch')"
+    code = f"import sys, shrmkit.cli.report.worker_boot; print(sorted(m for m in {heavy} if m in sys.modules))"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert out.returncode == 0 and out.stdout.strip() == "[]", out.stderr[-2000:]
+    assert batch._processes.__code__.co_names.count("worker_boot") >= 1  # the target the driver starts
