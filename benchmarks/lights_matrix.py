@@ -278,7 +278,8 @@ def print_matrix(cells: list[Cell]) -> None:
             head = (f"| {c.env} | {short(c.brdf)} | {c.seconds:.2f} | {c.F}, {c.P} | {c.n_lights} |" if first
                     else "| | | | | |")
             bound_name = "res" if w["bound_key"].endswith("residual") else "whole"
-            print(f"{head} {region} | {sum(r['pairs'] for r in recs)} | {w['theta_v_deg'][0]:g}-{w['theta_v_deg'][1]:g}° "
+            band = f"{w['theta_v_deg'][0]:g}-{w['theta_v_deg'][1]:g}°"
+            print(f"{head} {region} | {sum(r['pairs'] for r in recs)} | {band} "
                   f"| {w['measured']:.3g} ± {w['stderr']:.2g} | {w['predicted']:.3g} / {w['bound']:.3g} ({bound_name}) "
                   f"| {verdict} | {pixel} |")
             first = False
