@@ -126,3 +126,77 @@ def test_stated_stderr_matches_seed_spread_grace(shared_data):
     assert np.all((ratio > 0.5) & (ratio < 2.0)), ratio
     # and the measurement is a measurement: relative spread below 25 % in every band
     assert np.all(m.std(0, ddof=1) / m.mean(0) < 0.25), m.std(0, ddof=1) / m.mean(0)
+
+
+def _density_by_loops(radiance: np.ndarray, scales_deg, uniform: float, neighbours: bool) -> np.ndarray:
+    """The module docstring's q written out pixel by pixel (an independent re-implementation)."""
+    h, w = radiance.shape[:2]
+    omega = row_solid_angles(h, w)
+    mag = np.sqrt((radiance**2).sum(-1))
+    pmf = np.array([[uniform * omega[i] / (4 * np.pi) for _ in range(w)] for i in range(h)])
+    for scale in scales_deg:
+        rows, cols = max(1, round(scale / 180 * h)), max(1, round(scale / 360 * w))
+        nr, nc = -(-h // rows), -(-w // cols)
+
+        def block_mean(bi: int, bj: int, rows: int = rows, cols: int = cols) -> float:
+            cells = [(i, j) for i in range(bi * rows, min(h, (bi + 1) * rows))
+                     for j in range(bj * cols, min(w, (bj + 1) * cols))]
+            return sum(mag[i, j] * omega[i] for i, j in cells) / sum(omega[i] for i, _ in cells)
+
+        comp = np.zeros((h, w))
+        for i in range(h):
+            for j in range(w):
+                if rows * cols == 1:
+                    value = mag[i, j]
+                elif neighbours:
+                    value = max(block_mean(bi, bj % nc) for bi in range(max(0, i // rows - 1), min(nr, i // rows + 2))
+                                for bj in range(j // cols - 1, j // cols + 2))
+                else:
+                    value = block_mean(i // rows, j // cols)
+                comp[i, j] = omega[i] * value**2
+        pmf += (1 - uniform) / len(scales_deg) * comp / comp.sum()
+    return pmf / pmf.sum()
+
+
+@pytest.mark.parametrize("neighbours", [True, False])
+def test_density_matches_its_definition(neighbours):
+    """pixel_density against the definition written with loops (blocks of 2 x 2 and 3 x 3 pixels,
+    the last block of a row smaller, the neighbours wrapping in azimuth): a pixel next to the bright
+    one but across a block edge gets the bright block's mean at every scale (issue 29: with the
+    block's own mean only, GGX pairs 9 deg from Grace's windows had the uniform density alone)."""
+    radiance = _sun_map(12)
+    scales = (0.0, 30.0, 45.0)
+    expected = _density_by_loops(radiance, scales, 0.2, neighbours)
+    np.testing.assert_allclose(pixel_density(radiance, scales_deg=scales, neighbours=neighbours), expected,
+                               rtol=1e-12)
+    # the sun at (4, 5): (4, 6) lies across the 2x2 and 3x3 block edges; with neighbours it is sampled
+    # at least as densely as the farther pixel (4, 4) inside the sun's blocks, without it far less
+    pmf = pixel_density(radiance, scales_deg=scales, neighbours=neighbours)
+    assert (pmf[4, 6] >= 0.99 * pmf[4, 4]) == neighbours, (pmf[4, 6], pmf[4, 4])
+
+
+def test_studentized_stderr_closed_form():
+    """The stated s.e. is the delta-method one times √(ν/(ν − 2)), ν = 2/(2/(n − 1) + κ/n) from the
+    excess kurtosis κ of the linearized terms z = w (a − r² b)/B̄ (Satterthwaite), floored at ν = 3:
+    written out here from the definitions (the importance weights and one pair 50x the others' error
+    give heavy tails)."""
+    s = band_sample(_sun_map(), 40, (0.0, 45.0, 90.0), seed=4)
+    rng = np.random.default_rng(2)
+    ref = 1.0 + rng.random((len(s), 3))
+    value = ref * (1.0 + 0.05 * rng.standard_normal((len(s), 3)))
+    value[5] = ref[5] * 2.5  # band 0: one pair far off
+    plain = band_error(value, ref, s, studentized=False)
+    stated = band_error(value, ref, s)
+    factors = []
+    for k in range(2):
+        sel = s.band == k
+        a = s.weights[sel] * ((value[sel] - ref[sel]) ** 2).sum(1)
+        b = s.weights[sel] * (ref[sel] ** 2).sum(1)
+        z = (a - a.mean() / b.mean() * b) / b.mean()
+        n = z.size
+        kurt = max(n * np.sum((z - z.mean()) ** 4) / np.sum((z - z.mean()) ** 2) ** 2 - 3.0, 0.0)
+        nu = max(2.0 / (2.0 / (n - 1) + kurt / n), 3.0)
+        factors.append(np.sqrt(nu / (nu - 2.0)))
+        assert stated[k]["measured_rel_rms"] == plain[k]["measured_rel_rms"]
+        np.testing.assert_allclose(stated[k]["stderr"], plain[k]["stderr"] * factors[k], rtol=1e-12)
+    assert all(np.sqrt(40 / 38) <= f <= np.sqrt(3.0) for f in factors), factors
