@@ -182,3 +182,12 @@ def test_every_declared_name_resolves_and_is_documented(package: str) -> None:
         if not documented:
             problems.append(f"{name}: a constant without a '#:' comment or docstring where it is assigned")
     assert not problems, f"{package}.__all__:\n" + "\n".join(problems)
+
+
+def test_every_public_package_has_an_api_page() -> None:
+    """The docs' API reference (``docs/api/``, built by Sphinx in CI) shows every declaring package:
+    a ``.. declared-api::`` directive names it (the top-level package has its own page)."""
+    pages = "\n".join(p.read_text(encoding="utf-8") for p in sorted((ROOT / "docs" / "api").glob("*.rst")))
+    shown = {line.split("::", 1)[1].strip() for line in pages.splitlines() if line.startswith(".. declared-api::")}
+    assert ".. automodule:: shrmkit\n" in pages
+    assert set(PACKAGES[1:]) <= shown, sorted(set(PACKAGES[1:]) - shown)
