@@ -57,13 +57,13 @@ def published_fit(ridge: float):
 def print_census(census: Census, title: str) -> None:
     print(f"\n{title}")
     header = " ".join(f"P={p:<4d}" for p in range(P + 1))
-    print(f"{'name':<30} {'analysed as':<28} {'held-out':>8} | RH02: {header} | band P=5 | F, P needed | reasons")
+    print(f"{'name':<30} {'analysed as':<40} {'held-out':>8} | RH02: {header} | band P=5 | F, P needed | reasons")
     for r in census.rows:
         if not r.ok:
             print(f"{r.name or r.source:<30} failed: {r.error}")
             continue
         held = "" if r.fit_worst is None else f"{r.fit_worst['rel_rms']:.3f}"
-        print(f"{r.name:<30.30} {r.representation:<28.28} {held:>8} |       "
+        print(f"{r.name:<30.30} {r.representation:<40.40} {held:>8} |       "
               + " ".join(f"{v:6.3f}" for v in r.accuracy_rh02)
               + f" | {r.accuracy('bands'):8.3f} | {r.F_needed:>4}, {r.P_needed:<5} | {', '.join(r.reasons)}")
     for criterion, name in (("rh02", "RH02's energy over all views"), ("bands", "worst view band to 80°")):
