@@ -655,12 +655,43 @@ def _dask_run(client: Any, dask_completed: Any, function: Callable[..., ReportOu
                              key=f"shrm-report-{task.name}", priority=len(ordered) - i)
                for i, task in enumerate(ordered)]
     running = {future.key: (future, task) for future, task in zip(futures, ordered, strict=True)}
+    by_key = {key: task for key, (_, task) in running.items()}
     if progress is not None:
         for task in ordered:
             progress("start", task.name, "submitted")
     deaths: dict[str, int] = defaultdict(int)
     seen: set[tuple[float, str]] = set()
     disconnected: float | None = None
+
+    def deaths_seen(final: bool = False) -> Iterator[ReportOutcome]:
+        """Count the task deaths of the workers removed since the last look: a first is one retry line
+        (also for a task whose second run has finished meanwhile), a second a failed report."""
+        nonlocal disconnected
+        try:
+            removed = _removed_workers(client, since, seen)
+            disconnected = None
+        except Exception as err:  # noqa: BLE001 - any comm failure: the scheduler is gone or restarting
+            if final:
+                return
+            disconnected = disconnected or time.monotonic()
+            if time.monotonic() - disconnected > DASK_SCHEDULER_LOST_SECONDS or client.status in ("closed", "closing"):
+                raise RuntimeError(f"lost the Dask scheduler {scheduler} ({type(err).__name__}: "
+                                   f"{str(err).splitlines()[0][:120] if str(err) else 'no answer'})") from None
+            return
+        for worker, keys in removed:
+            for key in sorted(keys & set(by_key)):
+                task = by_key[key]
+                deaths[key] += 1
+                if deaths[key] < TASK_TRIES:
+                    if retried is not None:
+                        retried.append(f"the Dask worker of {task.name} died ({worker}); retried on another worker")
+                    if progress is not None:
+                        progress("retry", task.name, f"Dask worker {worker} was lost")
+                elif key in running:
+                    future, _ = running.pop(key)
+                    future.cancel()
+                    yield _failed_outcome(task, f"its Dask worker died {deaths[key]} times (last: {worker})")
+
     completed = dask_completed(futures, loop=client.loop)
     while running:
         batch = completed.next_batch(block=False)
@@ -676,32 +707,11 @@ def _dask_run(client: Any, dask_completed: Any, function: Callable[..., ReportOu
             why = (f"its Dask worker died too often (KilledWorker: {err})" if type(err).__name__ == "KilledWorker"
                    else f"{type(err).__name__}: {err}" if err is not None else f"the Dask task was {future.status}")
             yield _failed_outcome(task, why)
-        if batch or not running:
-            continue
-        try:
-            removed = _removed_workers(client, since, seen)
-            disconnected = None
-        except Exception as err:  # noqa: BLE001 - any comm failure: the scheduler is gone or restarting
-            disconnected = disconnected or time.monotonic()
-            if time.monotonic() - disconnected > DASK_SCHEDULER_LOST_SECONDS or client.status in ("closed", "closing"):
-                raise RuntimeError(f"lost the Dask scheduler {scheduler} ({type(err).__name__}: "
-                                   f"{str(err).splitlines()[0][:120] if str(err) else 'no answer'})") from None
-            removed = []
-        for worker, keys in removed:
-            for key in sorted(keys & set(running)):
-                future, task = running[key]
-                deaths[key] += 1
-                how = f"Dask worker {worker} was lost"
-                if deaths[key] < TASK_TRIES:
-                    if retried is not None:
-                        retried.append(f"the Dask worker of {task.name} died ({worker}); retried on another worker")
-                    if progress is not None:
-                        progress("retry", task.name, how)
-                else:
-                    running.pop(key)
-                    future.cancel()
-                    yield _failed_outcome(task, f"its Dask worker died {deaths[key]} times (last: {worker})")
-        time.sleep(DASK_POLL_SECONDS)
+        if running:
+            yield from deaths_seen()
+            if not batch:
+                time.sleep(DASK_POLL_SECONDS)
+    yield from deaths_seen(final=True)  # deaths of tasks whose retry finished between two looks
 
 
 def run_batch(
