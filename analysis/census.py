@@ -64,6 +64,8 @@ __all__ = [
     "DEFAULT_P",
     "DEFAULT_THRESHOLD",
     "GRAZING_SHARE",
+    "MAX_F_LIMIT",
+    "MAX_P_LIMIT",
     "MISSING_SHARE",
     "REASONS",
     "census_sources",
@@ -74,6 +76,8 @@ __all__ = [
 #: RH02 Fig. 8's orders: lighting order F = 30, view orders P = 0…5.
 DEFAULT_F = 30
 DEFAULT_P = 5
+#: The caps ``choose_orders`` accepts on the orders needed (checked once, before any row).
+MAX_F_LIMIT, MAX_P_LIMIT = 2000, 64
 #: RH02 Fig. 8's mark: 90 % of the energy captured.
 DEFAULT_THRESHOLD = 0.9
 #: A miss is put down to grazing energy when more than this share of the energy missed at (F, P)
@@ -237,6 +241,7 @@ class Census:
 
     @property
     def n_failed(self) -> int:
+        """Rows that could not be read or analysed."""
         return sum(not r.ok for r in self.rows)
 
     def count_above(self, criterion: str = "rh02", p: int | None = None) -> int:
@@ -541,12 +546,16 @@ def run_census(
         checked before any row. A source that cannot be read or analysed is a failed row.
     """
     t0 = time.perf_counter()
-    if not (isinstance(F, int | np.integer) and 0 <= F <= max(DEFAULT_MAX_F, 0)):
+    if not (isinstance(F, int | np.integer) and 0 <= F <= DEFAULT_MAX_F):
         raise BadInputError(None, f"F must be an integer in 0..{DEFAULT_MAX_F}, got {F!r}")
     if not (isinstance(P, int | np.integer) and 0 <= P <= DEFAULT_MAX_P):
         raise BadInputError(None, f"P must be an integer in 0..{DEFAULT_MAX_P}, got {P!r}")
     if not (isinstance(threshold, float | int) and 0.0 < threshold < 1.0):
         raise BadInputError(None, f"threshold must be a number in (0, 1), got {threshold!r}")
+    if not (isinstance(max_F, int | np.integer) and 1 <= max_F <= MAX_F_LIMIT):
+        raise BadInputError(None, f"max_F must be an integer in [1, {MAX_F_LIMIT}], got {max_F!r}")
+    if not (isinstance(max_P, int | np.integer) and 0 <= max_P <= MAX_P_LIMIT):
+        raise BadInputError(None, f"max_P must be an integer in [0, {MAX_P_LIMIT}], got {max_P!r}")
     eps = check_eps(eps)
     criterion = check_criterion(criterion)
     max_view_deg = check_max_view(max_view_deg)

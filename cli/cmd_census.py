@@ -37,6 +37,8 @@ from ..analysis.census import (
     DEFAULT_F,
     DEFAULT_P,
     DEFAULT_THRESHOLD,
+    MAX_F_LIMIT,
+    MAX_P_LIMIT,
     Census,
     CensusRow,
     census_sources,
@@ -93,8 +95,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help=f"accuracy mark counted and explained (default {DEFAULT_THRESHOLD:g}, RH02's 90 %%)")
     parser.add_argument("--eps", type=tolerance, default=DEFAULT_EPS,
                         help=f"tolerance of the orders each material needs (default {DEFAULT_EPS:g})")
-    parser.add_argument("--max-F", type=int, default=DEFAULT_MAX_F, help=f"cap on F needed (default {DEFAULT_MAX_F})")
-    parser.add_argument("--max-P", type=int, default=DEFAULT_MAX_P, help=f"cap on P needed (default {DEFAULT_MAX_P})")
+    parser.add_argument("--max-F", type=number_in(1, MAX_F_LIMIT, integer=True), default=DEFAULT_MAX_F,
+                        help=f"cap on F needed (default {DEFAULT_MAX_F})")
+    parser.add_argument("--max-P", type=number_in(0, MAX_P_LIMIT, integer=True), default=DEFAULT_MAX_P,
+                        help=f"cap on P needed (default {DEFAULT_MAX_P})")
     add_order_rule(parser)
     parser.add_argument("--candidates", type=_candidates, default=CANDIDATES,
                         help=f"representations tried for scattered data (default {','.join(CANDIDATES)})")
@@ -126,10 +130,10 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise BadInputError(out, "is a file, not an output folder")
-    check_writable(out / CSV_NAME)
     sources = census_sources(args.brdfs)
     if not sources:
         raise BadInputError(", ".join(args.brdfs), "no BRDF files found (suffixes " + ", ".join(BRDF_FILE_TYPES) + ")")
+    check_writable(out / CSV_NAME)  # before the long work (creates the folder)
     show = not (args.json or args.quiet)
     columns = (TextColumn("[bold]census"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                TextColumn("{task.fields[last]}"))
