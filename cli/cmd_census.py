@@ -235,14 +235,14 @@ def print_census(census: Census) -> None:
     table = Table(title=f"census: accuracy 1 − ε(F = {census.F}, P), RH02's energy over all views and the worst "
                   f"view band; orders needed at ε = {census.eps:g} ({census.criterion} rule)")
     for key, justify in (("material", "left"), ("analysed as", "left"), ("fit: worst band", "right"),
-                         (f"RH02, P = 0…{P}", "left"), (f"band P={P}", "right"), ("F, P needed", "right"),
+                         (f"RH02 %, P = 0…{P}", "left"), (f"band P={P}", "right"), ("F, P needed", "right"),
                          ("aniso.", "right"), ("reasons", "left")):
         table.add_column(key, justify=justify)
     for r in census.rows:
         if not r.ok:
-            table.add_row(r.name or r.source, "[red]failed[/red]", "", "", "", "", "", ", ".join(r.reasons))
+            table.add_row(r.name or Path(r.source).name, "[red]failed[/red]", "", "", "", "", "", ", ".join(r.reasons))
             continue
-        acc = " ".join(f"{v:.2f}" for v in r.accuracy_rh02)
+        acc = " ".join(f"{100 * v:.0f}" for v in r.accuracy_rh02)
         needed = f"{r.F_needed}, {r.P_needed}" + (" capped" if r.capped else "")
         aniso = "" if r.anisotropy is None else f"{r.anisotropy:.1g}" + (" A" if r.anisotropic else "")
         table.add_row(r.name, _model_cell(r), _fit_cell(r), acc, f"{r.accuracy('bands'):.2f}", needed, aniso,
