@@ -70,6 +70,7 @@ import dataclasses
 import fcntl
 import hashlib
 import json
+import logging
 import math
 import multiprocessing
 import os
@@ -308,6 +309,10 @@ def largest_first(tasks: Sequence[ReportTask]) -> list[ReportTask]:
 #: worker; when that one dies too, the task is a failed report.
 TASK_TRIES = 2
 
+#: The worker loop a report worker process runs after :func:`~.worker_boot.boot` (by name: the
+#: target's module is imported only once the parent-death signal is set).
+WORKER_TARGET = "shrmkit.cli.report.batch:_worker_main"
+
 #: Seconds between two checks of a worker's thread that its driver is still there.
 PARENT_POLL_SECONDS = 0.5
 
@@ -464,7 +469,8 @@ def _processes(tasks: Sequence[ReportTask], workers: int, progress: BatchProgres
                 # the target's module imports nothing heavy: the parent-death signal is set before the
                 # report modules load (a driver killed during a worker's imports: worker_boot.py)
                 process = context.Process(target=worker_boot.boot, name="shrm-report-worker", daemon=True,
-                                          args=(child_conn, threads, preview_mode, os.getpid()))
+                                          args=(WORKER_TARGET, os.getpid(), child_conn, threads, preview_mode,
+                                                os.getpid()))
                 worker = _Worker(process, parent_conn)
                 running.append(worker)  # before its start: a SIGTERM during the start still stops it
                 # multiprocessing's resource tracker, which a spawn starts first, started out of the block:
@@ -559,8 +565,6 @@ _DASK_LOGGERS = ("distributed", "tornado")
 def _quiet_dask_logs() -> Iterator[None]:
     """distributed's own loggers quieted for the batch (their levels restored after): a worker or
     scheduler that dies makes the client and the comms log 30-line tracebacks."""
-    import logging
-
     loggers = [logging.getLogger(name) for name in _DASK_LOGGERS]
     levels = [log.level for log in loggers]
     for log in loggers:

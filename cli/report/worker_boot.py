@@ -7,12 +7,13 @@ that meant importing the report modules (numpy, scipy, matplotlib: 1.5 s of CPU,
 loaded machine) before the parent-death signal was set, so a driver killed in those seconds left
 its workers running until their imports ended (issue 30). This module imports only the standard
 library: :func:`boot` sets ``PR_SET_PDEATHSIG`` (Linux, ``prctl(2)``) and checks that the driver is
-still there, then imports the batch module and runs the worker loop.
+still there, then imports its target by name (the batch module's worker loop) and runs it.
 """
 
 from __future__ import annotations
 
 import ctypes
+import importlib
 import os
 import signal
 import sys
@@ -23,10 +24,14 @@ __all__ = ["boot"]
 _PR_SET_PDEATHSIG = 1  # linux/prctl.h
 
 
-def boot(conn: Any, threads: int, preview_mode: str | None, parent_pid: int) -> None:
-    """A report worker process: end with the driver ``parent_pid`` from here on (SIGKILL on its
-    death), then :func:`~shrmkit.cli.report.batch._worker_main` (which also starts the watch thread
-    of systems without ``prctl``)."""
+def boot(target: str, parent_pid: int, *args: Any) -> None:
+    """A worker process tied to its driver ``parent_pid`` from its first line (SIGKILL on the driver's
+    death; exit at once if it is already gone), then ``target`` (``"module:function"``, imported only
+    now: the heavy imports run under the parent-death signal) called with ``args``.
+
+    ``shrm report --workers N`` starts ``boot("shrmkit.cli.report.batch:_worker_main", pid, conn,
+    threads, preview_mode, pid)``; that loop also starts the watch thread of systems without
+    ``prctl``."""
     if sys.platform.startswith("linux"):
         try:
             ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
@@ -34,6 +39,5 @@ def boot(conn: Any, threads: int, preview_mode: str | None, parent_pid: int) -> 
             pass
     if os.getppid() != parent_pid:  # the driver died before the signal was set
         os._exit(1)
-    from .batch import _worker_main  # the heavy imports, now under the parent-death signal
-
-    _worker_main(conn, threads, preview_mode, parent_pid)
+    module, _, function = target.partition(":")
+    getattr(importlib.import_module(module), function)(*args)
