@@ -565,7 +565,9 @@ _DASK_LOGGERS = ("distributed", "tornado")
 def _quiet_dask_logs() -> Iterator[None]:
     """distributed's own loggers quieted for the batch (their levels restored after): a worker or
     scheduler that dies makes the client and the comms log 30-line tracebacks."""
-    loggers = [logging.getLogger(name) for name in _DASK_LOGGERS]
+    names = [name for name in list(logging.Logger.manager.loggerDict)
+             if name.split(".")[0] in _DASK_LOGGERS]  # distributed's config sets levels per child logger
+    loggers = [logging.getLogger(name) for name in {*_DASK_LOGGERS, *names}]
     levels = [log.level for log in loggers]
     for log in loggers:
         log.setLevel(logging.CRITICAL)
@@ -707,6 +709,8 @@ def _dask_run(client: Any, dask_completed: Any, function: Callable[..., ReportOu
             if future.status == "finished":
                 yield future.result()
                 continue
+            if future.status == "cancelled" and client.status != "running":  # the client gave up reconnecting
+                raise RuntimeError(f"lost the Dask scheduler {scheduler} (the client could not reconnect)")
             err = future.exception() if future.status == "error" else None
             why = (f"its Dask worker died too often (KilledWorker: {err})" if type(err).__name__ == "KilledWorker"
                    else f"{type(err).__name__}: {err}" if err is not None else f"the Dask task was {future.status}")
