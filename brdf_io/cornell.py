@@ -26,7 +26,7 @@ import numpy as np
 from .brdf import BRDF, Kind
 from .colour import WAVELENGTHS_NM, spectral_to_linear_srgb
 from .errors import BadInputError, ScatteredEvalError
-from .limits import check_elements, read_bytes
+from .limits import TEXT_PEAK_PER_BYTE, check_elements, read_bytes
 from .spec_params import MAX_NUMBER_CHARS, NonFiniteNumberError, parse_number
 
 __all__ = ["ScatteredBRDF", "read_cornell", "SCATTERED_EVAL_MESSAGE", "MAX_MEASURED_RHO", "MAX_WAVELENGTHS"]
@@ -140,7 +140,8 @@ def read_cornell(path: str | os.PathLike[str]) -> ScatteredBRDF:
     """
     path = Path(path)
     try:
-        text = read_bytes(path, "Cornell .brdf file").decode("ascii")
+        # memory plan: the text, its lines and the rows (4.0 B per file byte measured on 27 MB)
+        text = read_bytes(path, "Cornell .brdf file", peak_per_byte=TEXT_PEAK_PER_BYTE).decode("ascii")
     except UnicodeDecodeError as err:
         raise BadInputError(path, f"cannot read Cornell .brdf file: not ASCII text (byte {err.start})") from None
     lines = text.splitlines()

@@ -40,7 +40,7 @@ import numpy as np
 
 from .cornell import ScatteredBRDF
 from .errors import BadInputError
-from .limits import read_bytes
+from .limits import TEXT_PEAK_PER_BYTE, read_bytes
 from .spec_params import MAX_NUMBER_CHARS, NonFiniteNumberError, parse_number
 
 __all__ = [
@@ -141,7 +141,7 @@ def _rows(
     a non-finite number after a line's first token is not an error of the file: the line's
     message goes to ``bad[line number]`` and its numbers are NaN there (one bad sample of the
     values file fails alone)."""
-    data = read_bytes(path, what)
+    data = read_bytes(path, what, peak_per_byte=TEXT_PEAK_PER_BYTE)  # the memory plan of a text file
     try:
         text = data.decode("ascii")
     except UnicodeDecodeError as err:

@@ -59,7 +59,7 @@ import numpy as np
 
 from .cornell import ScatteredBRDF
 from .errors import BadInputError
-from .limits import check_elements, read_bytes
+from .limits import TEXT_PEAK_PER_BYTE, check_elements, read_bytes
 from .spec_params import MAX_NUMBER_CHARS, NonFiniteNumberError, parse_number
 
 __all__ = ["GONIO_COLUMNS", "read_gonio_csv", "gonio_wavelengths"]
@@ -112,7 +112,7 @@ def _number(path: Path, line_no: int, key: str, field: str) -> float:
 
 def _table(path: Path) -> tuple[np.ndarray, np.ndarray]:
     """(data (n, 6) in GONIO_COLUMNS order, line numbers (n,))."""
-    raw = read_bytes(path, "gonioreflectometer CSV")
+    raw = read_bytes(path, "gonioreflectometer CSV", peak_per_byte=TEXT_PEAK_PER_BYTE)  # 6.2 measured on 9 MB
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as err:
