@@ -1002,21 +1002,31 @@ def _seed_refused(result: dict) -> bool:
 
 
 def outcome_table(results: list[dict]) -> str:
-    """The table of outcomes per reader (plain text)."""
+    """The table of outcomes per reader (plain text), with each reader's largest peak memory growth
+    of one case (MiB, resident) and its slowest case (s)."""
     by_reader: dict[str, Counter] = {}
+    peak: dict[str, float] = {}
+    slowest: dict[str, float] = {}
     for r in results:
-        by_reader.setdefault(r["reader"], Counter())[r["outcome"]] += 1
+        name = r["reader"]
+        by_reader.setdefault(name, Counter())[r["outcome"]] += 1
+        grown = r.get("peak_mib", float("nan"))
+        if grown == grown:  # not NaN (a case whose worker died has no measure)
+            peak[name] = max(peak.get(name, 0.0), float(grown))
+        slowest[name] = max(slowest.get(name, 0.0), float(r.get("seconds", 0.0)))
     width = max([len(n) for n in by_reader] + [6])
-    head = f"{'reader':<{width}} " + " ".join(f"{o:>7}" for o in OUTCOMES) + f" {'total':>7}"
+    head = (f"{'reader':<{width}} " + " ".join(f"{o:>7}" for o in OUTCOMES) + f" {'total':>7}"
+            + f" {'peak MiB':>9} {'max s':>6}")
     lines = [head, "-" * len(head)]
     total = Counter()
     for name in sorted(by_reader):
         counts = by_reader[name]
         total.update(counts)
         lines.append(f"{name:<{width}} " + " ".join(f"{counts[o]:>7}" for o in OUTCOMES)
-                     + f" {sum(counts.values()):>7}")
+                     + f" {sum(counts.values()):>7} {peak.get(name, 0.0):>9.0f} {slowest[name]:>6.2f}")
     lines.append("-" * len(head))
-    lines.append(f"{'all':<{width}} " + " ".join(f"{total[o]:>7}" for o in OUTCOMES) + f" {sum(total.values()):>7}")
+    lines.append(f"{'all':<{width}} " + " ".join(f"{total[o]:>7}" for o in OUTCOMES) + f" {sum(total.values()):>7}"
+                 + f" {max(peak.values(), default=0.0):>9.0f} {max(slowest.values(), default=0.0):>6.2f}")
     return "\n".join(lines)
 
 
