@@ -367,11 +367,13 @@ def _record(args, name: str, env: EnvironmentMap, scene: SphereScene, runs: np.n
         "size": args.size, "view": list(VIEW),
         "projection": "ortho", "spp": args.spp, "seeds": args.seeds, "envmap_check": check,
         "bands": [{k: r[k] for k in ("theta_v_deg", "pixels", "mitsuba", "noise", "pix_noise") if k in r}
-                  | ({"mitsuba_pixels": runs.mean(axis=0)[
-                      (scene.theta_v_deg >= r["theta_v_deg"][0]) & (scene.theta_v_deg < r["theta_v_deg"][1])
-                  ].round(7).tolist()} if "mitsuba" in r else {}) for r in rows],
+                  | ({"mitsuba_pixels": [[float(f"{v:.6g}") for v in pixel] for pixel in runs.mean(axis=0)[
+                      (scene.theta_v_deg >= r["theta_v_deg"][0]) & (scene.theta_v_deg < r["theta_v_deg"][1])]]}
+                     if "mitsuba" in r else {}) for r in rows],
     }
-    Path(args.record).write_text(json.dumps(record, indent=1) + "\n")
+    head = ",\n".join(f" {json.dumps(key)}: {json.dumps(value)}" for key, value in record.items() if key != "bands")
+    bands = ",\n".join(f"  {json.dumps(band)}" for band in record["bands"])
+    Path(args.record).write_text(f"{{\n{head},\n \"bands\": [\n{bands}\n ]\n}}\n")
     print(f"wrote {args.record}")
 
 
