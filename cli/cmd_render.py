@@ -19,6 +19,7 @@ from ..analysis.notebook import stated_band
 from ..analysis.tolerance import DEFAULT_EPS, check_eps
 from ..brdf_io.atomic import atomic_paths, check_writable
 from ..brdf_io.errors import BadInputError
+from ..brdf_io.limits import check_memory
 from ..render.api import SIZE_RANGE, SceneRender, SequenceRender, render_scene, render_sequence
 from ..render.camera import Camera
 from ..render.error_image import ERROR_IMAGE_HELP, check_error_image_request, error_image, write_error_image_line
@@ -145,6 +146,8 @@ def _validate(args: argparse.Namespace, sequence: bool = False) -> tuple[list[Ca
     lo, hi = SIZE_RANGE
     if not lo <= args.size <= hi:
         raise BadInputError(None, f"--size must be in [{lo}, {hi}], got {args.size}")
+    # memory plan (data_specs/limits.md): 190-260 B a pixel measured at 1024-2048 px (8192 px: ~13 GB)
+    check_memory(f"--size {args.size}", 256 * args.size**2, f"a {args.size} x {args.size} render")
     check_eps(args.eps, "--eps")
     if args.exposure is not None and not np.isfinite(args.exposure):
         raise BadInputError(None, f"--exposure must be finite, got {args.exposure}")

@@ -97,3 +97,18 @@ def test_prefilter_size_is_planned_before_the_map_is_made(tmp_path, monkeypatch,
     err = capsys.readouterr().err.strip()
     assert code == 2 and not out.exists()
     assert err.count("\n") == 0 and "--size 2048: an SHRM map of 2048 x 4096 needs an estimated 320 MiB" in err, err
+
+
+def test_render_size_is_planned_before_rendering(tmp_path, monkeypatch, capsys):
+    """`shrm render --size S` plans 256 B a pixel (190-260 measured at 1024-2048 px; the range's 8192 px
+    would take ~13 GB): under SHRM_MAX_MEMORY_BYTES = 64 MiB, --size 600 (87.9 MiB) is one line naming the
+    option, exit 2, no image (before: rendered)."""
+    from shrmkit.cli.main import main
+
+    monkeypatch.setenv("SHRM_MAX_MEMORY_BYTES", str(64 * 2**20))
+    out = tmp_path / "r.png"
+    code = main(["render", "builtin:sphere", "--env", "builtin:constant,height=16", "--brdf", "phong:s=8",
+                 "--size", "600", "-o", str(out)])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and not out.exists()
+    assert err.count("\n") == 0 and "--size 600: a 600 x 600 render needs an estimated 87.9 MiB" in err, err
