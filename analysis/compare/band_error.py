@@ -36,9 +36,16 @@ the variance of the stratified mean is estimated by successive differences over 
 v = Σ_k (z_{k+1} − z_k)² / (2 n (n − 1)) (the successive-difference estimator of systematic
 sampling: K. M. Wolter, *Introduction to Variance Estimation*, 2nd ed., Springer 2007,
 doi:10.1007/978-0-387-35099-8; conservative when neighbouring strata differ in mean), then
-s.e.(r) = √v / (2r). Measured (``benchmarks/band_error_spread.py``, Grace at 256 rows,
-microfacet σ = 0.05, 8 seeds): spread / stated s.e. 0.79–1.39 in the bands inside 80° with 60
-pairs per band, against 1.25–2.59 for ``band_pairs`` with 30, and a spread 2–5× smaller.
+s.e.(r) = √(v · ν/(ν − 2)) / (2r). The factor ν/(ν − 2) is the variance of Student's t with ν
+degrees of freedom: v is itself estimated from the same n pairs, and near grazing a few pairs hold
+20–45 % of a band's error energy, so seeds that miss them state too little. ν = 2 / (2/(n − 1) + κ/n)
+is the effective degrees of freedom of v (Satterthwaite: 2 E[v]²/Var[v], with Var[s²]/σ⁴ ≈
+2/(n − 1) + κ/n for the excess kurtosis κ ≥ 0 of the z_k), floored at 3: the factor is ≈ 1.04 for
+well-behaved bands of 60 pairs and up to 3 (s.e. × 1.7) for heavy-tailed ones. Measured
+(``benchmarks/band_error_spread.py --estimator grid new``, Grace at 128 rows, 8 seeds, 60 pairs per
+band, one run): spread / stated s.e. per band 0.69–1.25 (microfacet σ 0.05), 0.40–1.57 (GGX α 0.1;
+0.74–1.19 over 24 seeds), 0.67–1.32 (GGX α 0.3), 0.26–0.83 (Phong 512), against 0.65–1.54,
+0.69–1.98, 0.90–2.08 and 0.55–1.25 for the grid-only density with the plain delta-method s.e.
 ``tests/analysis/compare/test_band_error.py`` checks it against closed forms and that spread.
 """
 
