@@ -337,7 +337,7 @@ def extract_lights(env: EnvironmentMap, mode: str | int = DEFAULT_LIGHTS) -> Ext
 #: (R, V) pairs per view band on which :func:`merge_error_by_band` measures the signal (the SHRM part).
 MERGE_PAIRS_PER_BAND = 48
 #: Pairs per view band for the merge error itself (the lights alone: cheap per pair).
-MERGE_ERROR_PAIRS_PER_BAND = 256
+MERGE_ERROR_PAIRS_PER_BAND = 128
 
 
 def merge_error_by_band(
