@@ -497,6 +497,11 @@ def choose_orders_many(
         # grids after the interpolation's kinks (TableBRDF.resolved_order)
         max_F = max(int(table_cap), 1)
         cap_note = "the highest order this table's grid resolves: 2π / its finest measured spacing"
+    if table_cap is not None and table_cap < max_P:
+        # nor a view order beyond it (one measured sample among 216 nodes at max_P = 24: grids grown to
+        # 222 × 216 × 378, 11.6 s and 1.1 GB, and "did not settle"; capped at 21: 1.2 s)
+        max_P = max(int(table_cap), 0)
+        cap_note = "the highest order this table's grid resolves: 2π / its finest measured spacing"
     cache: dict[tuple[int, int, int], _GridData] = {}
 
     def data_for(grid: ReparamGrid) -> _GridData:

@@ -619,8 +619,8 @@ def load_and_check(reader: str, target: str, analyse: bool = False) -> tuple[boo
 
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                # max_P at its default (20): at 24, the table with one measured sample of 216 takes 7.4 s and
-                # 1.1 GB in the quadrature refinement (analysis/orders.py; reported, not fixed here)
+                # max_P at its default (20); at 24 the table with one measured sample of 216 took 7.4 s and
+                # 1.1 GB before choose_orders capped P, like F, at the order the table's grid resolves
                 choice = choose_orders(brdf, eps=0.1, max_F=48, criterion="rh02")
             ok = 0 <= choice.F <= 48 and 0 <= choice.P and np.isfinite(choice.eps) and 0 <= choice.eps <= 1
             return ok, f"{summary}; orders F {choice.F}, P {choice.P}, eps {choice.eps:.3g}"
