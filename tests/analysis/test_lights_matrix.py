@@ -49,7 +49,7 @@ def test_one_pixel_sun_phong_512_away_from_the_sun(matrix):
     average the sun dominates: away from it the error is ~100 %, > 3× the bound in every band."""
     env = matrix.make_env("sun", 64)
     masks = matrix.region_masks(env)
-    lit = matrix.run_cell(env, "sun", "phong:s=512", masks, per_band=40, pixels=0, regions=("away",))
+    lit = matrix.run_cell(env, "sun", "phong:s=512", masks, per_band=30, pixels=0, regions=("away",))
     assert lit.F <= 30 and lit.n_lights == 1 and len(lit.records) == len(DEFAULT_BAND_EDGES_DEG) - 1
     assert all(r["bound_key"] == "bound_rel_rms_residual" for r in lit.records)
     assert not _failures(lit.records), _failures(lit.records)
@@ -64,11 +64,11 @@ def test_three_lamps_ggx_near_the_lamps_and_in_the_dark(matrix):
     env = matrix.make_env("lamps", 64)
     masks = matrix.region_masks(env)
     assert masks["dark"].any() and masks["near"].any()
-    cell = matrix.run_cell(env, "lamps", "cook-torrance:alpha=0.1,dist=ggx", masks, per_band=20, pixels=0,
+    cell = matrix.run_cell(env, "lamps", "cook-torrance:alpha=0.1,dist=ggx", masks, per_band=14, pixels=0,
                            regions=("near", "dark"))
     assert cell.n_lights == 3
     assert {r["region"] for r in cell.records} == {"near", "dark"}
-    assert all(r["pairs"] >= 5 for r in cell.records), [r["pairs"] for r in cell.records]
+    assert all(r["pairs"] >= 3 for r in cell.records), [r["pairs"] for r in cell.records]
     assert not _failures(cell.records), _failures(cell.records)
 
 
@@ -76,7 +76,7 @@ def test_three_lamps_ggx_near_the_lamps_and_in_the_dark(matrix):
 def test_merged_light_error_is_not_understated_in_any_band(lamps_128, spec):
     """Three lamps at 128 rows (the 2.5° lamp merged from 20 pixels into 16 samples): per band inside
     the view limit, the stated merge error (relative to the lights' own reflection), × 1.5 as the
-    bound adds it, is at least the one measured on 2000 pairs a band against the exact per-pixel
+    bound adds it, is at least the one measured on 1500 pairs a band against the exact per-pixel
     samples. Measured on the 48 signal pairs a band (before) it stated 10⁻²¹ at 60–70° for Phong
     s = 512 and 0.3–0.5 × the dense value at 70–80° for GGX α = 0.1."""
     extraction = lamps_128
@@ -89,7 +89,7 @@ def test_merged_light_error_is_not_understated_in_any_band(lamps_128, spec):
 
     stated, _ = merge_error_by_band(extraction, brdf, signal, DEFAULT_BAND_EDGES_DEG)
     centres = np.array([light.direction for light in extraction.lights.lights])
-    R, V, theta_v, w = sample_pairs_focused(2000, DEFAULT_BAND_EDGES_DEG, centre=centres, seed=99)
+    R, V, theta_v, w = sample_pairs_focused(1500, DEFAULT_BAND_EDGES_DEG, centre=centres, seed=99)
     diff = extraction.lights.radiance(brdf, R, V) - exact.radiance(brdf, R, V)
     band = np.searchsorted(np.radians(DEFAULT_BAND_EDGES_DEG), theta_v, side="right") - 1
     num = np.bincount(band, weights=w * (diff**2).sum(axis=1), minlength=len(stated))
