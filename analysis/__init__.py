@@ -33,8 +33,7 @@ module does not load the others.
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from ..brdf_io.lazy import lazy_exports as _lazy_exports
 
 #: Public name → the module that defines it (imported on first use).
 _LAZY = {
@@ -71,11 +70,4 @@ _LAZY = {
 __all__ = list(_LAZY)
 
 
-def __getattr__(name: str) -> Any:
-    if name in _LAZY:
-        return getattr(importlib.import_module(_LAZY[name]), name)
-    raise AttributeError(f"module 'shrmkit.analysis' has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted(__all__)
+__getattr__, __dir__ = _lazy_exports(__name__, _LAZY, __all__)

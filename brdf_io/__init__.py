@@ -30,11 +30,9 @@ Names are imported on first use, so ``import shrmkit.brdf_io`` stays fast.
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
-
 from .brdf import BRDF
 from .errors import BadInputError, ScatteredEvalError, ShrmError
+from .lazy import lazy_exports as _lazy_exports
 from .specs import brdf_from_spec, load_brdf
 
 #: Public name → the module that defines it (imported on first use).
@@ -80,11 +78,4 @@ _LAZY = {
 __all__ = ["BRDF", "BadInputError", "ScatteredEvalError", "ShrmError", "brdf_from_spec", "load_brdf", *_LAZY]
 
 
-def __getattr__(name: str) -> Any:
-    if name in _LAZY:
-        return getattr(importlib.import_module(_LAZY[name]), name)
-    raise AttributeError(f"module 'shrmkit.brdf_io' has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted(__all__)
+__getattr__, __dir__ = _lazy_exports(__name__, _LAZY, __all__)

@@ -32,6 +32,8 @@ _LAZY = {
 __all__ = list(_LAZY)
 
 
+# not brdf_io.lazy.lazy_exports, as the other layers: importing brdf_io loads numpy, and a report
+# worker's boot module (report/worker_boot.py) imports this package before any heavy module
 def __getattr__(name: str) -> Any:
     if name in _LAZY:
         return getattr(importlib.import_module(_LAZY[name]), name)

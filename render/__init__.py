@@ -24,8 +24,7 @@ not load VTK.
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from ..brdf_io.lazy import lazy_exports as _lazy_exports
 
 #: Public name → the module that defines it (imported on first use).
 _LAZY = {
@@ -56,11 +55,4 @@ _LAZY = {
 __all__ = list(_LAZY)
 
 
-def __getattr__(name: str) -> Any:
-    if name in _LAZY:
-        return getattr(importlib.import_module(_LAZY[name]), name)
-    raise AttributeError(f"module 'shrmkit.render' has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted(__all__)
+__getattr__, __dir__ = _lazy_exports(__name__, _LAZY, __all__)
