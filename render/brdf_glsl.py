@@ -33,11 +33,11 @@ sum over the samples: ``shrm_lights(R, V)``, uniforms ``shrmLightCount``, ``shrm
 
 Measured BRDFs (MERL ``.binary``, RGL ``.bsdf``, table ``.npz``, scattered data — every BRDF
 whose ``kind`` is not ``"analytic"``, and analytic models without an entry) are tabulated
-(:func:`tabulate_brdf`) into a float texture: ρ on a grid of Rusinkiewicz's half/difference
-angles, θ_h on MERL's square-root scale, φ_d folded by the mirror symmetry of an isotropic
-BRDF (ρ(φ_d) = ρ(−φ_d)), trilinear in the indices (``brdf_table.glsl``). The default grid
-(:data:`TABLE_GRID`, 91 × 91 × 181) puts texels on MERL's own samples, where a MERL file's
-trilinear interpolation is reproduced exactly; the table's error against the BRDF's own
+(:func:`tabulate_brdf`) into a float texture: ρ cos θ_L cos θ_V on a grid of Rusinkiewicz's
+half/difference angles, θ_h on MERL's square-root scale, φ_d folded by the mirror symmetry of an
+isotropic BRDF (ρ(φ_d) = ρ(−φ_d)), trilinear in the indices and divided by cos θ_V at the lookup
+(``brdf_table.glsl``). The default grid (:data:`TABLE_GRID`, 91 × 91 × 181) puts texels on MERL's
+own samples (a MERL file's values at its nodes); the table's error against the BRDF's own
 ``eval`` is measured on the lights' reflection (:func:`table_error`) and reported.
 
 References: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
@@ -192,10 +192,14 @@ class BrdfTable:
     Attributes
     ----------
     values
-        float32 (NH, ND, NP, 3): ρ (1/sr) at θ_h = (i/(NH−1))² π/2, θ_d = j/(ND−1) π/2 and
-        φ_d = k/(NP−1) π — or, ``periodic``, φ_d = k π/NP. Samples where L or V is below the
-        surface hold the nearest sample above it along θ_d (the shader returns 0 there; this only
-        keeps interpolation near the horizon from blending in zeros).
+        float32 (NH, ND, NP, 3): ρ cos θ_L cos θ_V (1/sr) at θ_h = (i/(NH−1))² π/2,
+        θ_d = j/(ND−1) π/2 and φ_d = k/(NP−1) π — or, ``periodic``, φ_d = k π/NP. Samples where L
+        or V is below the surface hold the nearest sample above it along θ_d (the shader returns 0
+        there; this only keeps interpolation near the horizon from blending in zeros). The cosines
+        make the interpolated quantity bounded: an RGL material's ρ grows like 1/cos θ of one
+        direction toward the horizon, and interpolating ρ itself spread a node's ρ at cos θ_L ≈ 0.001
+        over its cell (lights near the horizon came out up to 24× too bright); a lookup divides by
+        the actual cos θ_V (:func:`table_lookup`, ``brdf_table.glsl``).
     periodic
         φ_d folded into [0, π) by reciprocity, periodic (MERL's convention, ρ(φ_d) = ρ(φ_d + π):
         for MERL files, whose reader folds so); else into [0, π] by the mirror symmetry of an
@@ -306,17 +310,20 @@ def tabulate_brdf(brdf: BRDF, shape: tuple[int, int, int] | None = None, periodi
             bad = ~np.isfinite(rho)
             missing += int(none) + int(np.any(bad, axis=-1).sum())
             rho[bad] = 0.0
+            rho *= (np.maximum(L[..., 2], 0.0) * np.maximum(V[..., 2], 0.0))[..., None]  # ρ cos θ_L cos θ_V
             # below the surface: the nearest sample above it along θ_d (θ_d rises toward the horizon)
             values[i] = _fill_below_surface(rho, above)
             continue
         j, k = np.nonzero(only[i])
         src = _source_rows(above)[j, k]
         pairs, inverse = np.unique(np.stack([src, k], axis=1), axis=0, return_inverse=True)
-        rho, none = brdf.eval_counted(L[pairs[:, 0], pairs[:, 1]], V[pairs[:, 0], pairs[:, 1]])
+        Lp, Vp = L[pairs[:, 0], pairs[:, 1]], V[pairs[:, 0], pairs[:, 1]]
+        rho, none = brdf.eval_counted(Lp, Vp)
         rho = np.asarray(rho, dtype=np.float64).reshape(len(pairs), 3)
         bad = ~np.isfinite(rho)
         missing += int(none) + int(np.any(bad, axis=-1).sum())
         rho[bad] = 0.0
+        rho *= (np.maximum(Lp[:, 2], 0.0) * np.maximum(Vp[:, 2], 0.0))[:, None]
         values[i, j, k] = rho[np.ravel(inverse)]
     return BrdfTable(values, 1.0, missing, time.perf_counter() - t0, periodic)
 
@@ -355,8 +362,9 @@ def _lookup_mask(shape: tuple[int, int, int], periodic: bool, L: np.ndarray, V: 
 
 
 def table_lookup(table: BrdfTable, L: np.ndarray, V: np.ndarray) -> np.ndarray:
-    """ρ̂ = ρ_table · max(L_z, 0) at local directions (..., 3) as ``brdf_table.glsl`` computes it
-    (trilinear in the indices, φ_d folded as the table says; 0 unless L_z > 0 and V_z > 0), float64."""
+    """ρ̂ = ρ cos θ_L at local directions (..., 3) as ``brdf_table.glsl`` computes it: the table's
+    ρ cos θ_L cos θ_V trilinear in the indices (φ_d folded as the table says) over max(V_z,
+    :data:`TABLE_COS_FLOOR`); 0 unless L_z > 0 and V_z > 0; float64."""
     L, V = np.broadcast_arrays(np.asarray(L, np.float64), np.asarray(V, np.float64))
     vals = np.asarray(table.values, np.float64)
     (i0, i1), (j0, j1), (k0, k1), (fu, fv, fw) = _lookup_corners(table.shape, table.periodic, L, V)
@@ -371,7 +379,11 @@ def table_lookup(table: BrdfTable, L: np.ndarray, V: np.ndarray) -> np.ndarray:
     c11 = lerp(vals[i1, j1, k0], vals[i1, j1, k1], fw)
     rho = lerp(lerp(c00, c01, fv), lerp(c10, c11, fv), fu)
     above = (L[..., 2] > 0.0) & (V[..., 2] > 0.0)
-    return np.where(above[..., None], rho * np.maximum(L[..., 2], 0.0)[..., None], 0.0)
+    return np.where(above[..., None], rho / np.maximum(V[..., 2], TABLE_COS_FLOOR)[..., None], 0.0)
+
+
+#: Smallest cos θ_V a table lookup divides by (``brdf_table.glsl`` the same).
+TABLE_COS_FLOOR = 1e-6
 
 
 #: The table's resolution is chosen by its error: the coarsest of the grids :data:`TABLE_FACTORS` ×

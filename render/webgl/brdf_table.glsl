@@ -6,7 +6,8 @@
 // SHRM_TAB_PERIODIC 1, w = NP (phi_d mod pi) / pi, periodic (MERL's reciprocity fold, phi_d ~ phi_d + pi).
 // The table is a 2-D atlas of NH tiles of NP x ND texels (phi_d along x, theta_d along y): tile i
 // (theta_h index) at column (i mod COLS) NP, row (i div COLS) ND; values rho x shrmBrdfScale.
-// rho_hat = rho N.L where N.L > 0 and N.V > 0. #defines SHRM_TAB_NH, SHRM_TAB_ND, SHRM_TAB_NP,
+// The texels hold rho (N.L)(N.V) (bounded where rho grows like 1/cos toward the horizon, as RGL
+// materials do); rho_hat = texel / N.V where N.L > 0 and N.V > 0. #defines SHRM_TAB_NH, SHRM_TAB_ND, SHRM_TAB_NP,
 // SHRM_TAB_COLS, SHRM_TAB_PERIODIC; sampler shrmBrdfTex (declared here unless SHRM_VTK).
 #ifndef SHRM_VTK  // VTK declares the samplers of the textures it binds
 uniform highp sampler2D shrmBrdfTex;
@@ -68,5 +69,6 @@ vec3 shrm_brdf_rho_hat(vec3 N, vec3 L, vec3 V) {
   vec3 c10 = mix(shrm_tab_fetch(i1, j, k), shrm_tab_fetch(i1, j, k1), fw);
   vec3 c11 = mix(shrm_tab_fetch(i1, j1, k), shrm_tab_fetch(i1, j1, k1), fw);
   vec3 rho = mix(mix(c00, c01, fv), mix(c10, c11, fv), fu);
-  return rho * (ci / shrmBrdfScale);
+  // the table holds rho cos(theta_L) cos(theta_V) (bounded near the horizon): rho_hat = that / cos(theta_V)
+  return rho / (max(co, 1e-6) * shrmBrdfScale);
 }
