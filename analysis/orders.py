@@ -492,15 +492,11 @@ def choose_orders_many(
     resolved = getattr(brdf, "resolved_order", None)
     table_cap = resolved() if callable(resolved) else None
     cap_note = None
-    if table_cap is not None and table_cap < max_F:
-        # a table resolves no order beyond its grid's: the search stops there instead of growing
-        # grids after the interpolation's kinks (TableBRDF.resolved_order)
-        max_F = max(int(table_cap), 1)
-        cap_note = "the highest order this table's grid resolves: 2π / its finest measured spacing"
-    if table_cap is not None and table_cap < max_P:
-        # nor a view order beyond it (one measured sample among 216 nodes at max_P = 24: grids grown to
-        # 222 × 216 × 378, 11.6 s and 1.1 GB, and "did not settle"; capped at 21: 1.2 s)
-        max_P = max(int(table_cap), 0)
+    if table_cap is not None and (table_cap < max_F or table_cap < max_P):
+        # a table resolves no order, F or P, beyond its grid's: the search stops there instead of growing
+        # grids after the interpolation's kinks (TableBRDF.resolved_order; one measured sample among 216
+        # nodes at max_P = 24 grew grids to 222 × 216 × 378, 11.6 s and 1.1 GB, and did not settle)
+        max_F, max_P = min(max_F, max(int(table_cap), 1)), min(max_P, int(table_cap))
         cap_note = "the highest order this table's grid resolves: 2π / its finest measured spacing"
     cache: dict[tuple[int, int, int], _GridData] = {}
 

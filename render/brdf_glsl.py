@@ -261,18 +261,10 @@ def table_grid_for(brdf: BRDF) -> tuple[tuple[int, int, int], bool]:
     return TABLE_GRID, False
 
 
-def _fill_below_surface(rho: np.ndarray, above: np.ndarray) -> np.ndarray:
-    """``rho`` (ND, NP, 3) of one θ_h slice with every sample past the last one above the surface
-    along θ_d (per φ_d column of ``above`` (ND, NP)) set to that last one (:class:`BrdfTable`)."""
-    nd, npd = above.shape
-    has = above.any(axis=0)
-    last = nd - 1 - np.argmax(above[::-1], axis=0)
-    fill = has[None, :] & (np.arange(nd)[:, None] > last[None, :])
-    return np.where(fill[..., None], rho[last, np.arange(npd)][None], rho)
-
-
 def _source_rows(above: np.ndarray) -> np.ndarray:
-    """For each sample (j, k) of a slice, the θ_d row whose value it holds (:func:`_fill_below_surface`)."""
+    """For each sample (j, k) of a θ_h slice, the θ_d row whose value it holds (:class:`BrdfTable`):
+    its own, or, past the last sample above the surface along θ_d in its φ_d column of ``above``
+    (ND, NP), that last one."""
     nd, _ = above.shape
     has = above.any(axis=0)
     last = nd - 1 - np.argmax(above[::-1], axis=0)
@@ -312,7 +304,7 @@ def tabulate_brdf(brdf: BRDF, shape: tuple[int, int, int] | None = None, periodi
             rho[bad] = 0.0
             rho *= (np.maximum(L[..., 2], 0.0) * np.maximum(V[..., 2], 0.0))[..., None]  # ρ cos θ_L cos θ_V
             # below the surface: the nearest sample above it along θ_d (θ_d rises toward the horizon)
-            values[i] = _fill_below_surface(rho, above)
+            values[i] = rho[_source_rows(above), np.arange(npd)]
             continue
         j, k = np.nonzero(only[i])
         src = _source_rows(above)[j, k]
