@@ -41,7 +41,6 @@ from typing import Any
 import ducc0
 import nlopt
 import numpy as np
-from scipy.optimize import nnls
 from scipy.special import ive
 
 from ...brdf_io.brdf import BRDF
@@ -233,6 +232,8 @@ def _design(dirs: np.ndarray, x: np.ndarray) -> np.ndarray:
 
 def _solve_weights(A: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, float]:
     """Per-channel NNLS; returns weights (K, 3) and the summed squared residual."""
+    from scipy.optimize import nnls  # imported on use: scipy.optimize costs ~0.5 s CPU in every report's start-up
+
     w = np.zeros((A.shape[1], 3))
     total = 0.0
     for c in range(3):
