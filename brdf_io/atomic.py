@@ -46,6 +46,7 @@ def _write_error(target: Path, err: BaseException, temps: dict[Path, Path] | Non
     """One line naming the target for a failed write (``OSError``, or a library's ``RuntimeError``
     such as OpenEXR's "Failed to write pixel data … No space left on device"); ``temps`` maps
     temporary paths to their targets, so that a library's message names the file the user asked for."""
+    reason: str | None
     if isinstance(err, OSError):
         reason = err.strerror or str(err)
     else:

@@ -32,7 +32,8 @@ def as_directions(L: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     V = np.asarray(V, dtype=np.float64)
     if L.shape[-1:] != (3,) or V.shape[-1:] != (3,):
         raise ValueError(f"directions must have a last axis of 3, got {L.shape} and {V.shape}")
-    return np.broadcast_arrays(L, V)
+    L, V = np.broadcast_arrays(L, V)
+    return L, V
 
 
 class BRDF(abc.ABC):

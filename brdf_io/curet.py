@@ -146,7 +146,7 @@ def _rows(
         text = data.decode("ascii")
     except UnicodeDecodeError as err:
         raise BadInputError(path, f"not an ASCII {what} (byte {err.start})") from None
-    rows = []
+    rows: list[tuple[int, list[float]]] = []
     for line_no, line in enumerate(text.splitlines(), start=1):
         tokens = line.split()
         if not tokens:

@@ -661,6 +661,7 @@ def _load_openexr_envmap(
 ) -> EnvironmentMap:
     """A file with the ``envmap`` attribute: OpenEXR's own convention, honoured automatically."""
     kind = exr.envmap  # its windows were checked by _envmap_shape before the pixels were read
+    assert kind is not None  # the caller takes this path only for files with the attribute
     if flip or probe:
         raise BadInputError(
             path, f"the file declares envmap={kind} (OpenEXR's own orientation, ImfEnvmap); flip and probe do not apply"

@@ -257,7 +257,11 @@ class Conductor:
             a2 = self.alpha**2
             # G2/(ci co) = 2 / (co √(a² + (1−a²) ci²) + ci √(a² + (1−a²) co²)), finite at grazing
             g_over = 2.0 / (co * np.sqrt(a2 + (1.0 - a2) * ci * ci) + ci * np.sqrt(a2 + (1.0 - a2) * co * co))
-        F = np.ones(cos_d.shape + (3,)) if self.eta is None else fresnel_conductor(cos_d, self.eta, self.k)
+        if self.eta is None:
+            F = np.ones(cos_d.shape + (3,))
+        else:
+            assert self.k is not None, "a conductor's eta and k are given together"
+            F = fresnel_conductor(cos_d, self.eta, self.k)
         spec = (D * g_over / 4.0)[..., None] * F * self.scale
         return np.where(above[..., None], spec, 0.0)
 
@@ -336,6 +340,7 @@ def _mix_weight(kd: np.ndarray, ks: np.ndarray) -> float:
 
 def _mitsuba(brdf: BRDF) -> ExportedMaterial:
     kd, ct = _split(brdf, "mitsuba")
+    assert isinstance(brdf, (Lambert, CookTorrance))  # _split refused every other model
     if ct is None:
         return ExportedMaterial("mitsuba", brdf.to_spec(), kd, None, 0.0,
                                 {"type": "diffuse", "reflectance": _triple(kd)}, exact=True)
@@ -360,8 +365,8 @@ def _mitsuba(brdf: BRDF) -> ExportedMaterial:
     lobe = Conductor(ct.distribution, float(ct.alpha), eta, k, scale=scale, shadowing="separable")
     conductor = {"type": "roughconductor", "distribution": ct.distribution, "alpha": float(f"{ct.alpha:.9g}"),
                  "specular_reflectance": _triple(lobe.scale)}
-    conductor |= {"material": "none"} if eta is None else {"eta": _triple(eta), "k": _triple(k)}
-    native = conductor if not has_diffuse else {
+    conductor |= {"material": "none"} if eta is None or k is None else {"eta": _triple(eta), "k": _triple(k)}
+    native = conductor if diffuse is None else {
         "type": "blendbsdf", "weight": float(f"{weight:.9g}"),
         "diffuse": {"type": "diffuse", "reflectance": _triple(diffuse)}, "specular": conductor}
     return ExportedMaterial("mitsuba", brdf.to_spec(), diffuse, lobe, weight, native, exact=exact, note=note)
@@ -369,6 +374,7 @@ def _mitsuba(brdf: BRDF) -> ExportedMaterial:
 
 def _pbrt(brdf: BRDF) -> ExportedMaterial:
     kd, ct = _split(brdf, "pbrt")
+    assert isinstance(brdf, (Lambert, CookTorrance))  # _split refused every other model
     if ct is None:
         return ExportedMaterial("pbrt", brdf.to_spec(), kd, None, 0.0,
                                 {"type": "diffuse", "reflectance": _triple(kd)}, exact=True)
@@ -387,7 +393,7 @@ def _pbrt(brdf: BRDF) -> ExportedMaterial:
         notes.append("pbrt-v4 has no Beckmann distribution: Trowbridge-Reitz (GGX) of the same alpha")
     conductor = {"type": "conductor", "roughness": float(f"{ct.alpha:.9g}"), "remaproughness": False,
                  "eta": _triple(eta), "k": _triple(k)}
-    native = conductor if not has_diffuse else {
+    native = conductor if diffuse is None else {
         "type": "mix", "amount": float(f"{weight:.9g}"),
         "materials": [{"type": "diffuse", "reflectance": _triple(diffuse)}, conductor]}
     return ExportedMaterial("pbrt", brdf.to_spec(), diffuse, lobe, weight,
@@ -401,6 +407,7 @@ _STANDARD_SURFACE_OFF = {"coat": 0.0, "sheen": 0.0, "subsurface": 0.0, "transmis
 
 def _materialx(brdf: BRDF) -> ExportedMaterial:
     kd, ct = _split(brdf, "materialx")
+    assert isinstance(brdf, (Lambert, CookTorrance))  # _split refused every other model
     if ct is None:
         native = {"base": 1.0, "base_color": _triple(kd), "diffuse_roughness": 0.0, "metalness": 0.0,
                   "specular": 0.0, **_STANDARD_SURFACE_OFF}

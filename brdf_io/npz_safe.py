@@ -40,6 +40,7 @@ import zlib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import IO
 
 import numpy as np
 
@@ -103,7 +104,7 @@ class NpzMember:
     peak_bytes_per_element: float = 0.0
 
 
-def _read_exact(fp: io.BufferedIOBase, n: int) -> bytes:
+def _read_exact(fp: IO[bytes], n: int) -> bytes:
     data = b""
     while len(data) < n:
         chunk = fp.read(n - len(data))
@@ -113,7 +114,7 @@ def _read_exact(fp: io.BufferedIOBase, n: int) -> bytes:
     return data
 
 
-def _parse_header(path: Path, key: str, fp: io.BufferedIOBase) -> tuple[tuple[int, ...], bool, np.dtype, int]:
+def _parse_header(path: Path, key: str, fp: IO[bytes]) -> tuple[tuple[int, ...], bool, np.dtype, int]:
     """(shape, fortran_order, dtype, header bytes) of the ``.npy`` member open in ``fp``."""
     magic = _read_exact(fp, 8)
     if len(magic) < 8 or magic[:6] != _MAGIC:
@@ -193,7 +194,8 @@ def _read_member(path: Path, key: str, spec: NpzMember, zf: zipfile.ZipFile, inf
                 f"{info.file_size - header_bytes:,} (truncated or padded)",
             )
         array = np.empty(count, dtype=dtype)
-        buffer = memoryview(array.view(np.uint8) if array.dtype.itemsize else np.empty(0, np.uint8)).cast("B")
+        # numpy's stubs give ndarray __buffer__ only for Python >= 3.12 (we check as 3.10)
+        buffer = memoryview(array.view(np.uint8) if array.dtype.itemsize else np.empty(0, np.uint8)).cast("B")  # type: ignore[arg-type]
         done = 0
         while done < nbytes:
             chunk = fp.read(min(_CHUNK, nbytes - done))

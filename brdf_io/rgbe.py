@@ -170,6 +170,16 @@ class _Header:
     """What the header and resolution line of a Radiance picture say."""
 
     __slots__ = ("xyz", "exposure", "colorcorr", "primaries", "ymajor", "xdecr", "ydecr", "width", "height", "pos")
+    xyz: bool  # pixels are XYZE (FORMAT=32-bit_rle_xyze), not RGBE
+    exposure: float  # product of the EXPOSURE= lines
+    colorcorr: list[float]  # product of the COLORCORR= lines, per channel
+    primaries: tuple[tuple[float, float], ...] | None  # PRIMARIES= (x, y) of R, G, B, white
+    ymajor: bool  # resolution line starts with Y: scanlines run along X
+    xdecr: bool
+    ydecr: bool
+    width: int
+    height: int
+    pos: int  # byte offset of the first scanline
 
     @property
     def scanlines(self) -> int:
@@ -240,9 +250,9 @@ def _parse_header(path: Path, data: bytes) -> _Header:
         stop = start + _RESOLUTION_MAX_BYTES
     match = _RESOLUTION_RE.match(data[start:stop])
     if not match or match.group(2) == match.group(5):
-        line = data[start:stop][:40].decode(errors="replace")
+        text = data[start:stop][:40].decode(errors="replace")
         raise BadInputError(
-            path, f"unsupported Radiance resolution line {line!r} (need e.g. '-Y H +X W' or '+X W -Y H')"
+            path, f"unsupported Radiance resolution line {text!r} (need e.g. '-Y H +X W' or '+X W -Y H')"
         )
     first = (match.group(1), match.group(2), int(match.group(3)))
     second = (match.group(4), match.group(5), int(match.group(6)))

@@ -347,10 +347,11 @@ def read_table(path: str | os.PathLike[str]) -> TableBRDF:
     if metadata.get("units") != "1/sr":
         raise BadInputError(path, f"units {metadata.get('units')!r}; expected '1/sr'")
     name = metadata.get("name")
-    usable = isinstance(name, str) and 0 < len(name) <= _MAX_NAME and name.isprintable()
+    if not (isinstance(name, str) and 0 < len(name) <= _MAX_NAME and name.isprintable()):
+        name = path.stem
     table = TableBRDF(
         arrays["theta_i"], arrays["theta_o"], arrays["phi_d"], arrays["values"],
-        name=name if usable else path.stem,
+        name=name,
         source=str(path),
         metadata=metadata,
     )
