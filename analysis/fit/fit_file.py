@@ -9,7 +9,7 @@ from __future__ import annotations
 import json
 import math
 import os
-from datetime import UTC, datetime
+from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
 
@@ -73,7 +73,7 @@ def fit_document(result: FitResult, source: str | os.PathLike[str] | None = None
             "source": None if source is None else str(source),
             "shrmkit_version": __version__,
             "nlopt_version": f"{nlopt.version_major()}.{nlopt.version_minor()}.{nlopt.version_bugfix()}",
-            "created_utc": datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
+            "created_utc": datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
         },
     }
     return _clean(doc)
