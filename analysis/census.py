@@ -19,7 +19,10 @@ material:
 - **reasons** for every row that misses the threshold or fails (:data:`REASONS`).
 
 A file that cannot be read or analysed is one failed row (its message kept), never an aborted
-census.
+census. ``workers`` > 1 computes the rows in that many spawned processes (one BLAS and one ducc0
+thread each); the rows are the same numbers as a serial census (each row depends only on its
+source and the settings), in the order given; a source whose process dies (killed for memory, a
+crash) is retried alone in a fresh process, and is one failed row if that one dies too.
 
 Public objects: :func:`run_census`, :func:`census_sources`, :class:`Census`, :class:`CensusRow`,
 :data:`REASONS`, :data:`CSV_COLUMNS`, and the defaults :data:`DEFAULT_F`, :data:`DEFAULT_P`,
@@ -36,13 +39,19 @@ real-world surfaces", ACM Trans. Graph. 18(1), 1999, doi:10.1145/300776.300778 (
 
 from __future__ import annotations
 
+import multiprocessing
+import pickle
 import time
 from collections.abc import Callable, Iterable, Sequence
+from concurrent.futures import Future, ProcessPoolExecutor, as_completed
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import ducc0
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from ..brdf_io.brdf import BRDF
 from ..brdf_io.curet import read_curet_all
@@ -66,6 +75,7 @@ __all__ = [
     "GRAZING_SHARE",
     "MAX_F_LIMIT",
     "MAX_P_LIMIT",
+    "MAX_WORKERS",
     "MISSING_SHARE",
     "REASONS",
     "census_sources",
@@ -78,6 +88,8 @@ DEFAULT_F = 30
 DEFAULT_P = 5
 #: The caps ``choose_orders`` accepts on the orders needed (checked once, before any row).
 MAX_F_LIMIT, MAX_P_LIMIT = 2000, 64
+#: Most worker processes ``run_census`` starts.
+MAX_WORKERS = 64
 #: RH02 Fig. 8's mark: 90 % of the energy captured.
 DEFAULT_THRESHOLD = 0.9
 #: A miss is put down to grazing energy when more than this share of the energy missed at (F, P)
@@ -509,6 +521,7 @@ def run_census(
     load: Callable[[str], BRDF] = load_brdf,
     progress: Callable[[int, int, CensusRow], None] | None = None,
     represent: tuple[str, Callable[[BRDF], BRDF]] | None = None,
+    workers: int = 1,
 ) -> Census:
     """Tabulate a BRDF library (module docstring): one :class:`CensusRow` per source.
 
@@ -528,12 +541,18 @@ def run_census(
     load
         Reads one source (default ``load_brdf``; the CLI passes its RGL-aware loader).
     progress
-        Called as ``progress(done, total, row)`` after each row.
+        Called as ``progress(done, total, row)`` after each row (with ``workers`` > 1, in the
+        order the rows finish; ``done`` counts them).
     represent
         ``(label, function)``: analyse scattered data through ``function(brdf)`` (a BRDF
         evaluable everywhere) instead of the representation choice, e.g. CURET's published
         55-term least-squares Zernike fits (``benchmarks/fig8_curet.py``); those rows then
         have no fit error or anisotropy, and ``fit`` says ``label``.
+    workers
+        Processes computing the rows (1..:data:`MAX_WORKERS`; default 1: in this process).
+        With more, ``load`` and ``represent`` must be picklable (module-level functions or
+        ``functools.partial`` of them); the rows are the serial census' numbers, in the order of
+        ``sources`` (module docstring).
 
     Returns
     -------
@@ -542,8 +561,8 @@ def run_census(
     Raises
     ------
     BadInputError
-        Bad settings (orders, threshold, tolerance, criterion, view limit, candidates, folds):
-        checked before any row. A source that cannot be read or analysed is a failed row.
+        Bad settings (orders, threshold, tolerance, criterion, view limit, candidates, folds,
+        workers): checked before any row. A source that cannot be read or analysed is a failed row.
     """
     t0 = time.perf_counter()
     if not (isinstance(F, int | np.integer) and 0 <= F <= DEFAULT_MAX_F):
@@ -568,16 +587,84 @@ def run_census(
         raise BadInputError(None, f"max_theta_deg must be in (0, 90], got {max_theta_deg!r}")
     fit = {"candidates": list(candidates), "folds": int(folds), "seed": int(seed),
            "max_theta_deg": float(max_theta_deg), "represent": None if represent is None else str(represent[0])}
-    rows: list[CensusRow] = []
-    load = _curet_members_once(load)
-    with single_threaded_blas():
-        for i, source in enumerate(sources):
-            row = _census_row(str(source), F=int(F), P=int(P), threshold=float(threshold), eps=eps,
-                              criterion=criterion, max_view_deg=max_view_deg, max_F=int(max_F), max_P=int(max_P),
-                              fit=fit, load=load, represent=represent)
-            rows.append(row)
-            if progress is not None:
-                progress(i + 1, len(sources), row)
+    if not (isinstance(workers, int | np.integer) and 1 <= workers <= MAX_WORKERS):
+        raise BadInputError(None, f"workers must be an integer in [1, {MAX_WORKERS}], got {workers!r}")
+    settings = {"F": int(F), "P": int(P), "threshold": float(threshold), "eps": eps, "criterion": criterion,
+                "max_view_deg": max_view_deg, "max_F": int(max_F), "max_P": int(max_P), "fit": fit,
+                "represent": represent}
+    names = [str(source) for source in sources]
+    if workers > 1 and len(names) > 1:
+        try:
+            pickle.dumps((load, represent))
+        except (pickle.PicklingError, AttributeError, TypeError) as err:
+            raise BadInputError(None, f"workers > 1 need a picklable load and represent ({err})") from None
+        rows = _rows_in_processes(names, settings, load, int(workers), progress)
+    else:
+        rows = []
+        load = _curet_members_once(load)
+        with single_threaded_blas():
+            for i, source in enumerate(names):
+                rows.append(_census_row(source, load=load, **settings))
+                if progress is not None:
+                    progress(i + 1, len(names), rows[-1])
     return Census(rows=tuple(rows), F=int(F), P=int(P), threshold=float(threshold), eps=eps, criterion=criterion,
                   max_view_deg=max_view_deg, max_F=int(max_F), max_P=int(max_P), fit=fit,
                   seconds=time.perf_counter() - t0)
+
+
+#: The loader of a census worker process (``_start_worker``): the census' ``load`` behind
+#: ``_curet_members_once``, so that each process parses a CURET file once. Set once per spawned
+#: worker, never in the parent.
+_WORKER_LOAD: list[Callable[[str], BRDF]] = []
+
+
+def _start_worker(load: Callable[[str], BRDF]) -> None:
+    """Initializer of a census worker: one BLAS thread and one ducc0 thread (the workers share
+    the cores), and the loader."""
+    threadpool_limits(limits=1)  # stays in force for the worker's life
+    ducc0.misc.resize_thread_pool(1)
+    _WORKER_LOAD.append(_curet_members_once(load))
+
+
+def _worker_row(source: str, settings: dict[str, Any]) -> CensusRow:
+    """One row in a worker process (``_start_worker`` ran)."""
+    return _census_row(source, load=_WORKER_LOAD[-1], **settings)
+
+
+def _rows_in_processes(
+    sources: list[str], settings: dict[str, Any], load: Callable[[str], BRDF], workers: int,
+    progress: Callable[[int, int, CensusRow], None] | None,
+) -> list[CensusRow]:
+    """The rows of ``sources`` in ``workers`` spawned processes, in the order of ``sources``.
+
+    A process that dies breaks its pool: the rows it had not finished are computed again, each
+    alone in a fresh one-process pool, and a source whose own process dies is a failed row."""
+    context = multiprocessing.get_context("spawn")  # no fork of a process holding BLAS/ducc0 threads
+    rows: dict[int, CensusRow] = {}
+
+    def finish(i: int, row: CensusRow) -> None:
+        rows[i] = row
+        if progress is not None:
+            progress(len(rows), len(sources), row)
+
+    def run(indexes: list[int], n_workers: int) -> list[int]:
+        """Rows of ``indexes``; returns those lost to a dead process."""
+        lost: list[int] = []
+        with ProcessPoolExecutor(n_workers, mp_context=context, initializer=_start_worker,
+                                 initargs=(load,)) as pool:
+            futures: dict[Future[CensusRow], int] = {pool.submit(_worker_row, sources[i], settings): i
+                                                     for i in indexes}
+            for future in as_completed(futures):
+                try:
+                    finish(futures[future], future.result())
+                except BrokenProcessPool:
+                    lost.append(futures[future])
+        return sorted(lost)
+
+    lost = run(list(range(len(sources))), min(workers, len(sources)))
+    for i in lost:
+        t0 = time.perf_counter()
+        if run([i], 1):
+            finish(i, _failed(sources[i], "", "", BadInputError(
+                sources[i], "the worker process analysing it died (killed for memory, or a crash)"), t0))
+    return [rows[i] for i in range(len(sources))]

@@ -7,7 +7,9 @@ orders needed at ``--eps``, the representation analysed and its held-out worst v
 anisotropy, and the reason for every miss or failure. Written to ``--out``: ``census.csv``,
 ``census.json`` (``data_specs/census_json.md``) and ``census.png`` (accuracy against P per
 material, RH02 Fig. 8's layout; matplotlib, 100 dpi). The last line counts the materials above
-the threshold at (F, P), with the fit settings.
+the threshold at (F, P), with the fit settings. ``--workers N`` computes the rows in N spawned
+processes (the same numbers as one); progress goes to stderr (a live bar on a terminal, else one
+line per row).
 
 Exit status: 0 when every row was analysed, 1 when some could not be (each is a failed row, with
 its error, in the table and the files), 2 for bad usage (unknown options, bad values, a named
@@ -21,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import functools
 import json
 from pathlib import Path
 from typing import Any
@@ -39,6 +42,7 @@ from ..analysis.census import (
     DEFAULT_THRESHOLD,
     MAX_F_LIMIT,
     MAX_P_LIMIT,
+    MAX_WORKERS,
     Census,
     CensusRow,
     census_sources,
@@ -49,6 +53,7 @@ from ..analysis.fit.representation import CANDIDATES
 from ..analysis.orders import DEFAULT_MAX_F, DEFAULT_MAX_P
 from ..analysis.tolerance import DEFAULT_EPS
 from ..brdf_io.atomic import atomic_paths, check_writable
+from ..brdf_io.brdf import BRDF
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.jsonutil import to_jsonable
 from ..brdf_io.specs import BRDF_FILE_TYPES, load_brdf
@@ -66,7 +71,7 @@ from .common import (
     tolerance,
 )
 
-__all__ = ["HELP", "add_arguments", "run", "plot_census", "write_census"]
+__all__ = ["HELP", "add_arguments", "load_census_brdf", "run", "plot_census", "write_census"]
 
 HELP = "census of a BRDF library: accuracy at (F, P) per material (RH02 Fig. 8), orders needed, fit error, reasons"
 
@@ -107,6 +112,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=int, default=0, help="seed of the folds and the fits (default 0)")
     parser.add_argument("--max-theta", type=number_in(0.0, 90.0, lo_open=True, unit=" degrees"), default=80.0,
                         help="measurements with θ_i or θ_o above this are not fitted (default 80)")
+    parser.add_argument("--workers", type=number_in(1, MAX_WORKERS, integer=True), default=1,
+                        help="processes computing the rows (default 1; the numbers do not depend on it)")
     parser.add_argument("--no-plot", action="store_true", help=f"do not draw {PLOT_NAME}")
     parser.add_argument("--json", action="store_true",
                         help="print one JSON object (census.json's, with the files written) instead of the table")
@@ -123,6 +130,12 @@ def _check_sources(sources: list[str]) -> None:
             raise BadInputError(path, "no such BRDF file")
         if not path.suffix and not path.exists() and ":" not in source and ("/" in source or "\\" in source):
             raise BadInputError(path, "no such file or folder")
+
+
+def load_census_brdf(source: str, rgl_incident: str = "camera") -> BRDF:
+    """``load_brdf`` with ``--rgl-incident`` attached to an RGL file that names no incident
+    direction (``rgl_brdf_arg``); module-level, so that census worker processes can receive it."""
+    return load_brdf(rgl_brdf_arg(source, argparse.Namespace(rgl_incident=rgl_incident)))
 
 
 def run(args: argparse.Namespace) -> int:
@@ -142,12 +155,16 @@ def run(args: argparse.Namespace) -> int:
 
         def progress(done: int, total: int, row: CensusRow) -> None:
             bar.update(task, completed=done, last=f"{row.name or row.source}: {row.status}")
+            if show and not stderr.is_terminal:  # a log, not a live bar: one line per row
+                stderr.print(f"census {done}/{total}: {row.name or row.source}: {row.status} ({row.seconds:.1f} s)",
+                             markup=False, highlight=False, soft_wrap=True)
 
         census = run_census(
             sources, F=args.F, P=args.P, threshold=args.threshold, eps=args.eps, criterion=args.criterion,
             max_view_deg=args.max_view_deg, max_F=args.max_F, max_P=args.max_P, candidates=args.candidates,
             folds=args.folds, seed=args.seed, max_theta_deg=args.max_theta,
-            load=lambda source: load_brdf(rgl_brdf_arg(source, args)), progress=progress,
+            load=functools.partial(load_census_brdf, rgl_incident=args.rgl_incident), progress=progress,
+            workers=args.workers,
         )
     files = write_census(census, out, plot=not args.no_plot)
     if args.json:

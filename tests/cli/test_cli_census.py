@@ -117,6 +117,25 @@ def test_census_of_curet_samples_and_a_bad_file(shared_data, tmp_path, capsys) -
     with Image.open(out / "census.png") as png:  # RH02 Fig. 8's two panels at 100 dpi
         assert png.size == (1200, 450)
 
+    # --workers 2: the same rows, number for number, in the order given, the bad file still one
+    # failed row, and one progress line per row on stderr (not a terminal here)
+    out2 = tmp_path / "census2"
+    code2, _, err2 = _shrm(capsys, "census", f"{curet}#3", str(bad), f"{curet}#7", f"{curet}#12", "--candidates",
+                           "zernike", "--eps", "0.1", "--no-plot", "--workers", "2", "--out", str(out2))
+    assert code2 == 1, err2
+    rows2 = json.loads((out2 / "census.json").read_text())["rows"]
+    assert [r["source"] for r in rows2] == [rows[i]["source"] for i in (0, 3, 1, 2)]
+
+    def numbers(row: dict) -> dict:
+        row = {k: v for k, v in row.items() if k != "seconds"}
+        if row["representation_record"] is not None:
+            row["representation_record"] = {k: v for k, v in row["representation_record"].items() if k != "seconds"}
+        return row
+
+    assert [numbers(r) for r in rows2] == [numbers(rows[i]) for i in (0, 3, 1, 2)]
+    assert sorted(line.split(": ")[0] for line in err2.splitlines() if line.startswith("census ")) == [
+        f"census {k}/4" for k in range(1, 5)]
+
 
 def test_census_json_and_usage_errors(tmp_path, capsys) -> None:
     """``--json``: one object with the rows and the files; a model is analysed as given. A file
