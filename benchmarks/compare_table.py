@@ -33,7 +33,7 @@ def main() -> None:
     krylon = fit_brdf(DATA / "brdf" / "cornell" / "krylon_blue.brdf", "lafortune").brdf
     merl = write_merl(out / "ct_ggx.binary",
                       load_brdf("cook-torrance:kd=0.05/0.08/0.12,ks=1,alpha=0.15,f0=0.9/0.6/0.3,dist=ggx"))
-    options = CompareOptions(cabral_reference_height=16)
+    options = CompareOptions(rsibr_reference_height=16)
     for name, brdf in (("microfacet", load_brdf("microfacet:sigma=0.1")), ("krylon_blue_lafortune", krylon),
                        ("merl_cook_torrance", load_brdf(merl))):
         result = write_comparison_strip(compare_representations(brdf, env, options), out / f"strip_{name}.png")

@@ -1,5 +1,5 @@
-"""``shrm compare``: the SHRM against Kautz & McCool 2000, Cabral, Olano, Nemec 1999 (RSIBR)
-and Green, Kautz, Durand 2007 (Gaussian lobes).
+"""``shrm compare``: the SHRM [RH02] against Kautz–McCool [KM00], RSIBR [Cabral99] and Gaussian
+lobes [Green07], the published methods of ``analysis.baselines.methods`` under their keys there.
 
 Prints one table (rich on stdout, or one JSON object with ``--json``): for each
 representation the relative RMS radiance error against the angular reference on sampled
@@ -18,6 +18,7 @@ from pathlib import Path
 from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
+from ..analysis.baselines.methods import GAUSSIAN_ELEVATIONS, RSIBR_REFERENCE_HEIGHT
 from ..analysis.compare import CompareOptions, compare_representations
 from ..analysis.tolerance import DEFAULT_EPS
 from ..brdf_io.atomic import atomic_path, check_writable
@@ -42,11 +43,26 @@ from .common import (
 )
 from .view_bands_table import print_view_bands
 
-HELP = "compare the SHRM with Kautz-McCool, Cabral (12 maps) and Gaussian-lobe representations"
+HELP = "compare the SHRM with Kautz-McCool, RSIBR (12 maps) and Gaussian-lobe representations"
 
 _DEFAULTS = CompareOptions()
-#: The CLI's Cabral reference maps are smaller than the library's (it is the slowest row).
-CLI_CABRAL_REFERENCE_HEIGHT = 16
+#: The CLI's RSIBR reference maps are smaller than the library's (it is the slowest row).
+CLI_RSIBR_REFERENCE_HEIGHT = 16
+CLI_CABRAL_REFERENCE_HEIGHT = CLI_RSIBR_REFERENCE_HEIGHT  # earlier name
+
+
+class _DeprecatedOption(argparse.Action):
+    """An earlier option name: store the value under the new ``dest`` and remember a one-line note."""
+
+    def __init__(self, *args, new: str, **kwargs) -> None:
+        self.new = new
+        super().__init__(*args, **kwargs)
+
+    def __call__(self, parser, namespace, values, option_string=None) -> None:
+        setattr(namespace, self.dest, values)
+        notes = getattr(namespace, "deprecation_notes", None) or []
+        notes.append(f"{option_string} is deprecated: use {self.new}")
+        namespace.deprecation_notes = notes
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -74,12 +90,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--lobes", default=",".join(map(str, d.lobes)),
                         help=f"Gaussian-lobe counts K, comma separated (default {','.join(map(str, d.lobes))}; "
                         "'none' skips)")
-    parser.add_argument("--elevations", type=number_in(2, 64, integer=True), default=d.n_elevations,
-                        help=f"view elevations of the Gaussian-lobe fits (default {d.n_elevations})")
-    parser.add_argument("--cabral-reference-height", type=number_in(0, 256, integer=True),
-                        default=CLI_CABRAL_REFERENCE_HEIGHT,
-                        help=f"rows of Cabral's maps by the angular reference (default {CLI_CABRAL_REFERENCE_HEIGHT}; "
-                        "0 skips)")
+    elev, ref = GAUSSIAN_ELEVATIONS, RSIBR_REFERENCE_HEIGHT
+    parser.add_argument("--elevations", type=number_in(elev.lo, elev.hi, integer=True), default=d.elevations,
+                        help=f"view elevations of the Gaussian-lobe fits, {elev.lo}..{elev.hi} "
+                        f"(default {d.elevations})")
+    parser.add_argument("--rsibr-reference-height", type=number_in(0, ref.hi, integer=True),
+                        default=CLI_RSIBR_REFERENCE_HEIGHT,
+                        help=f"rows of the RSIBR maps by the angular reference, {ref.lo}..{ref.hi} "
+                        f"(default {CLI_RSIBR_REFERENCE_HEIGHT}; 0 skips)")
+    parser.add_argument("--cabral-reference-height", dest="rsibr_reference_height", action=_DeprecatedOption,
+                        new="--rsibr-reference-height", type=number_in(0, ref.hi, integer=True),
+                        help=argparse.SUPPRESS)
     parser.add_argument("--seed", type=int, default=d.seed)
     parser.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
     parser.add_argument("--strip", help="write the image strip to this PNG")
@@ -101,8 +122,8 @@ def _lobes(text: str) -> tuple[int, ...]:
 def _options(args: argparse.Namespace) -> CompareOptions:
     return CompareOptions(
         eps=args.eps, env_height=args.env_height, n_pairs=args.pairs, max_view_deg=args.max_view, seed=args.seed,
-        lower_P=args.lower_p, lobes=_lobes(args.lobes), n_elevations=args.elevations,
-        cabral_reference_height=args.cabral_reference_height or None, window=args.window,
+        lower_P=args.lower_p, lobes=_lobes(args.lobes), elevations=args.elevations,
+        rsibr_reference_height=args.rsibr_reference_height or None, window=args.window,
         criterion=args.criterion, rule_max_view_deg=args.max_view_deg, lights=args.lights,
     )
 
@@ -121,6 +142,8 @@ def _note_dropped_lower_p(args: argparse.Namespace, result: dict) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    for note in getattr(args, "deprecation_notes", None) or []:
+        stderr.print(f"shrm compare: note: {note}", markup=False, highlight=False, soft_wrap=True)
     options = _options(args)
     if args.strip and Path(args.strip).suffix.lower() != ".png":
         raise BadInputError(args.strip, "--strip must name a .png file")

@@ -54,8 +54,10 @@ from .common import (
 
 HELP = "render a mesh shaded by the SHRM of ENV and BRDF to PNG (and linear EXR), offscreen"
 
-#: The modes that use ``--lobes`` and ``--elevations`` (the Gaussian-lobe fit).
-LOBE_OPTION_MODES = ("gaussian-lobes",)
+#: The modes that use ``--lobes`` and ``--elevations``: those whose published method has these
+#: settings (the Gaussian-lobe fit; ``analysis.baselines.methods``).
+LOBE_OPTION_MODES = tuple(m.name for m in RENDER_MODES.values() if m.published is not None
+                          and {s.name for s in m.published.settings} >= {"lobes", "elevations"})
 
 
 def _vector(text: str, option: str) -> np.ndarray:

@@ -1,34 +1,22 @@
 """The render-mode table: one :class:`RenderMode` record per way of shading a mesh.
 
-A record says everything the renderer, :func:`shrmkit.render.api.render_scene` and
-``shrm render --mode`` need to know about a mode:
+Each mode draws one published method of :mod:`shrmkit.analysis.baselines.methods` (``method``,
+its key there), whose builder makes the model with the table's settings and limits; the record
+adds what the renderer needs: ``build(env, brdf, mesh, *, eps, options) -> BuiltModel`` (the
+model, its numbers, the lines ``shrm render`` prints), ``models`` (the types
+:meth:`SHRMRenderer.add_object` accepts), ``shading`` and the per-frame ``update``
+(``render.glsl``), ``self_shadow`` (per-vertex SH visibility [Green07] eq. 7) and ``uses_orders``
+(``RenderOptions(orders=)`` chooses the BRDF's orders once for several environments).
 
-- ``name`` and a one-line ``help`` (the CLI's choices and help come from here);
-- ``build(env, brdf, mesh, *, eps, options) -> BuiltModel``: the model made from the scene
-  (an SHRM, twelve RSIBR maps, Gaussian lobes over a mip stack), with the numbers and the
-  description lines ``shrm render`` prints;
-- ``models``: the model types :meth:`SHRMRenderer.add_object` accepts for the mode;
-- ``shading(model, mesh[, visibility_sh, normalized]) -> Shading``: its texture, shader
-  replacements and vertex attributes (``render.glsl``);
-- ``update(state, view, out)`` or None: the per-frame texture update from the view direction
-  toward the object (distant: Σ B̃_pq Y^r_pq(Ṽ); rsibr: the blended view map);
-- ``self_shadow``: whether per-vertex SH visibility (``visibility_sh``) is supported;
-- ``uses_orders``: whether ``build`` prefilters an SHRM at the BRDF's orders (then
-  ``RenderOptions(orders=)`` lets a caller choose them once for several environments).
+- ``distant`` (method ``shrm``): [RH02] eq. 12, one SHRM map per frame, looked up by R;
+- ``perpixel`` (``shrm``): [RH02] eq. 8, Σ B̃_pq(R) Y_pq(V) in the fragment shader;
+- ``rsibr`` (``rsibr``): [Cabral99], twelve maps from the SHRM, blended per frame;
+- ``kautz-mccool`` (``kautz_mccool``): [KM00], the q = 0 SHRM on the SHRM's (F, P), per pixel;
+- ``gaussian-lobes`` (``gaussian_lobes``): [Green07], Gaussian lobes over an SG mip stack.
 
-The modes (RH02 = Ramamoorthi & Hanrahan 2002, doi:10.1145/566654.566611):
-
-=================  ===========================================================================
-``distant``        RH02 eq. 12: SHRM, one map per frame for the distant viewer (``shader``)
-``perpixel``       RH02 eq. 8: SHRM, Σ B̃_pq(R) Y_pq(V) per pixel (``shader``)
-``rsibr``          Cabral et al. 1999: twelve maps from the SHRM, blended per frame (``shader``)
-``kautz-mccool``   Kautz & McCool 2000: the azimuth-free (q = 0) SHRM drawn per pixel (``shader``)
-``gaussian-lobes`` Green et al. 2007: Gaussian lobes over an SG mip stack, optional self-shadowing
-                   (``gaussian_shader``)
-=================  ===========================================================================
-
-Adding a mode: write its module (a ``shading`` function, its ``update`` if it has one, and
-its ``build``), then add one :class:`RenderMode` entry to :data:`RENDER_MODES` below.
+Adding a mode: its method in the table of methods, its ``shading`` (and ``update``), its
+``build``, and one :class:`RenderMode` entry in :data:`RENDER_MODES` below. Citation keys:
+``data_specs/bibliography.md``.
 """
 
 from __future__ import annotations
@@ -36,18 +24,27 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from numbers import Integral
 from typing import Any
 
 import numpy as np
 
-from ..analysis.baselines.gaussian_lobes import GaussianLobeModel, fit_gaussian_lobes, sg_mip_stack
-from ..analysis.baselines.rsibr import RSIBRMaps, rsibr_from_shrm
+from ..analysis.baselines.gaussian_lobes import GaussianLobeModel
+from ..analysis.baselines.methods import (
+    GAUSSIAN_ELEVATIONS,
+    GAUSSIAN_LOBES,
+    METHODS,
+    Method,
+    gaussian_lobes_model,
+    kautz_mccool_model,
+    rsibr_model,
+    shrm_model,
+)
+from ..analysis.baselines.rsibr import RSIBRMaps
 from ..analysis.baselines.selfshadow import vertex_visibility_sh
 from ..analysis.lights import DEFAULT_LIGHTS, check_lights
 from ..analysis.orders import OrderChoice
 from ..analysis.pixels import pixel_line
-from ..analysis.shrm import DEFAULT_WINDOW, SHRM, check_window, prefilter
+from ..analysis.shrm import DEFAULT_WINDOW, SHRM, check_window
 from ..analysis.view_bands import DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG, check_criterion, check_max_view
 from ..brdf_io.brdf import BRDF
 from ..brdf_io.env_rotation import check_env_rotation
@@ -77,9 +74,10 @@ __all__ = [
     "lights_info",
 ]
 
-#: Gaussian lobes per view elevation and fitted elevations allowed (``fit_gaussian_lobes``).
-LOBES_RANGE = (1, 8)
-ELEVATIONS_RANGE = (1, 90)
+#: Gaussian lobes per view elevation and fitted elevations allowed: the limits of the table of
+#: published methods (``analysis.baselines.methods``), one home.
+LOBES_RANGE = (GAUSSIAN_LOBES.lo, GAUSSIAN_LOBES.hi)
+ELEVATIONS_RANGE = (GAUSSIAN_ELEVATIONS.lo, GAUSSIAN_ELEVATIONS.hi)
 
 
 @dataclass(frozen=True)
@@ -89,9 +87,10 @@ class RenderOptions:
     Attributes
     ----------
     lobes
-        ``gaussian-lobes``: lobes per view elevation K, in [1, 8].
+        ``gaussian-lobes``: lobes per view elevation K, in [1, 8] (``GAUSSIAN_LOBES`` of
+        :mod:`shrmkit.analysis.baselines.methods`).
     elevations
-        ``gaussian-lobes``: fitted view elevations, in [1, 90].
+        ``gaussian-lobes``: fitted view elevations, in [2, 64] (``GAUSSIAN_ELEVATIONS``).
     self_shadow
         Per-vertex SH visibility by ray casting (Green et al. 2007 eq. 7); only for the modes
         whose record has ``self_shadow`` (:func:`self_shadow_modes`).
@@ -124,8 +123,8 @@ class RenderOptions:
         each build chooses them. The other modes ignore it.
     """
 
-    lobes: int = 3
-    elevations: int = 15
+    lobes: int = GAUSSIAN_LOBES.default
+    elevations: int = GAUSSIAN_ELEVATIONS.default
     self_shadow: bool = False
     window: str = DEFAULT_WINDOW
     criterion: str = DEFAULT_CRITERION
@@ -146,10 +145,8 @@ class RenderOptions:
         check_criterion(self.criterion)
         object.__setattr__(self, "lights", check_lights(self.lights))
         object.__setattr__(self, "max_view_deg", check_max_view(self.max_view_deg))
-        for name, (lo, hi) in (("lobes", LOBES_RANGE), ("elevations", ELEVATIONS_RANGE)):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, Integral) or not lo <= value <= hi:
-                raise BadInputError(None, f"{name} must be an integer in [{lo}, {hi}], got {value!r}")
+        for setting in (GAUSSIAN_LOBES, GAUSSIAN_ELEVATIONS):
+            setting.check(getattr(self, setting.name))
 
     def rotations(self) -> np.ndarray | list[np.ndarray] | None:
         """``env_rotation`` as ``render_frames`` takes it: None, one (3, 3) matrix, or a list of them."""
@@ -209,6 +206,13 @@ class RenderMode:
     update: Callable[[Any, np.ndarray, np.ndarray], None] | None = None
     self_shadow: bool = False
     uses_orders: bool = False
+    method: str | None = None
+
+    @property
+    def published(self) -> Method | None:
+        """The published method the mode draws (its row of the table of methods), or None for a
+        mode added outside the table."""
+        return None if self.method is None else METHODS[self.method]
 
     def prepare(
         self, model: Any, mesh: Mesh, visibility_sh: np.ndarray | None = None, normalized_visibility: bool = True
@@ -272,14 +276,20 @@ def lights_info(shrm: SHRM, *, per_pixel: bool = True) -> tuple[dict[str, Any], 
     return info, line + shading.describe()
 
 
+def _shrm_settings(eps: float, options: RenderOptions) -> dict[str, Any]:
+    """The SHRM's settings of the table's builders (``analysis.baselines.methods.shrm_model``)."""
+    return {"eps": eps, "window": options.window, "criterion": options.criterion,
+            "max_view_deg": options.max_view_deg, "lights": options.lights, "pixel_rule": options.pixel_rule,
+            "orders": options.orders}
+
+
 def _prefiltered(
     env: EnvironmentMap, brdf: BRDF, eps: float, options: RenderOptions, *, azimuth_free: bool = False,
     per_pixel_lights: bool = True,
 ) -> BuiltModel:
     t0 = time.perf_counter()
-    shrm = prefilter(env, brdf, eps=eps, azimuth_free=azimuth_free, window=options.window,
-                     criterion=options.criterion, max_view_deg=options.max_view_deg, lights=options.lights,
-                     pixel_rule=options.pixel_rule, orders=options.orders)
+    build = kautz_mccool_model if azimuth_free else shrm_model  # [KM00] on the SHRM's (F, P) and rows
+    shrm = build(env, brdf, **_shrm_settings(eps, options))
     seconds = time.perf_counter() - t0
     light_info, light_line = lights_info(shrm, per_pixel=per_pixel_lights)
     info = {"F": shrm.F, "P": shrm.P, "height": shrm.height, "width": shrm.width, "eps": eps,
@@ -309,14 +319,15 @@ def stated_line(shrm: SHRM, eps: float) -> str:
 
 
 def build_shrm(env: EnvironmentMap, brdf: BRDF, mesh: Mesh, *, eps: float, options: RenderOptions) -> BuiltModel:
-    """The global SHRM of ``env`` and ``brdf`` at tolerance ``eps`` (RH02 §4–5), ``options.window``."""
+    """[RH02] The global SHRM of ``env`` and ``brdf`` at tolerance ``eps`` (``methods.shrm_model``)."""
     return _prefiltered(env, brdf, eps, options)
 
 
 def build_kautz_mccool(
     env: EnvironmentMap, brdf: BRDF, mesh: Mesh, *, eps: float, options: RenderOptions
 ) -> BuiltModel:
-    """The azimuth-free (q = 0) SHRM of Kautz & McCool 2000: ``prefilter(..., azimuth_free=True)``."""
+    """[KM00] The azimuth-free (q = 0) SHRM on the SHRM's (F, P) and map rows
+    (``methods.kautz_mccool_model``; ``prefilter_seconds`` counts the SHRM too)."""
     return _prefiltered(env, brdf, eps, options, azimuth_free=True)
 
 
@@ -325,17 +336,18 @@ def build_rsibr(env: EnvironmentMap, brdf: BRDF, mesh: Mesh, *, eps: float, opti
     explicit lights are reflected into the maps (``rsibr_from_shrm``: the method's maps hold the
     whole radiance, at their own resolution), not shaded per pixel."""
     built = _prefiltered(env, brdf, eps, options, per_pixel_lights=False)
-    maps = rsibr_from_shrm(built.model)
+    maps = rsibr_model(env, brdf, shrm=built.model)
     return BuiltModel(maps, {**built.info, "rsibr_seconds": float(maps.meta["seconds"])}, built.description)
 
 
 def build_gaussian_lobes(
     env: EnvironmentMap, brdf: BRDF, mesh: Mesh, *, eps: float, options: RenderOptions
 ) -> BuiltModel:
-    """Green et al. 2007: K lobes fitted at the view elevations, the SG mip stack of ``env``,
-    and (``options.self_shadow``) the per-vertex SH visibility of ``mesh``. ``eps`` is not used."""
-    lobes = fit_gaussian_lobes(brdf, K=options.lobes, n_elevations=options.elevations)
-    stack = sg_mip_stack(env)
+    """[Green07] K lobes fitted at the view elevations over the SG mip stack of ``env``
+    (``methods.gaussian_lobes_model``), and (``options.self_shadow``) the per-vertex SH visibility
+    of ``mesh``. ``eps`` is not used."""
+    model = gaussian_lobes_model(env, brdf, lobes=options.lobes, elevations=options.elevations)
+    lobes, stack = model.lobes, model.stack
     residual = float(lobes.residual.max())
     info: dict[str, Any] = {
         "K": lobes.K, "elevations": int(lobes.theta_v.size), "max_fit_residual": residual,
@@ -355,7 +367,7 @@ def build_gaussian_lobes(
         info["visibility_seconds"] = time.perf_counter() - t0
         lines.append(f"self-shadowing: order-4 SH visibility of {len(mesh.vertices)} vertices, "
                      f"{info['visibility_seconds']:.3f} s")
-    return BuiltModel(GaussianLobeModel(lobes, stack), info, tuple(lines), visibility)
+    return BuiltModel(model, info, tuple(lines), visibility)
 
 
 # ------------------------------------------------------------------------------------------
@@ -364,15 +376,16 @@ def build_gaussian_lobes(
 
 _MODES = (
     RenderMode("distant", "distant viewer (RH02 eq. 12): one SHRM map per frame, looked up by R",
-               build_shrm, (SHRM,), distant_shading, distant_update, uses_orders=True),
+               build_shrm, (SHRM,), distant_shading, distant_update, uses_orders=True, method="shrm"),
     RenderMode("perpixel", "per-pixel view direction (RH02 eq. 8): the SHRM summed in the fragment shader",
-               build_shrm, (SHRM,), perpixel_shading, uses_orders=True),
+               build_shrm, (SHRM,), perpixel_shading, uses_orders=True, method="shrm"),
     RenderMode("rsibr", "Cabral et al. 1999: 12 maps at the icosahedron's vertices, blended per frame",
-               build_rsibr, (RSIBRMaps, SHRM), rsibr_shading, rsibr_update, uses_orders=True),
-    RenderMode("kautz-mccool", "Kautz & McCool 2000: the azimuth-free (q = 0) SHRM, per pixel",
-               build_kautz_mccool, (SHRM,), perpixel_shading, uses_orders=True),
+               build_rsibr, (RSIBRMaps, SHRM), rsibr_shading, rsibr_update, uses_orders=True, method="rsibr"),
+    RenderMode("kautz-mccool", "Kautz & McCool 2000: the azimuth-free (q = 0) SHRM on the SHRM's (F, P), per pixel",
+               build_kautz_mccool, (SHRM,), perpixel_shading, uses_orders=True, method="kautz_mccool"),
     RenderMode("gaussian-lobes", "Green et al. 2007: K Gaussian lobes per view elevation over an SG mip stack",
-               build_gaussian_lobes, (GaussianLobeModel,), gaussian_shading, self_shadow=True),
+               build_gaussian_lobes, (GaussianLobeModel,), gaussian_shading, self_shadow=True,
+               method="gaussian_lobes"),
 )
 
 #: The render modes by name, in the order the CLI lists them.

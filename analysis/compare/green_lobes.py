@@ -1,10 +1,10 @@
-"""Builder of Green, Kautz, Durand, "Efficient Reflectance and Visibility Approximations for
-Environment Map Rendering", Eurographics 2007: K Gaussian lobes per view elevation.
+"""Builder of the Gaussian-lobe rows [Green07]: K isotropic Gaussian lobes per view elevation
+over a spherical-Gaussian mip stack (``gaussian_lobes_model`` of
+:mod:`shrmkit.analysis.baselines.methods`).
 
-One row ``gaussian_k{K}`` per K in ``options.lobes``; the transfer samples and the
-spherical-Gaussian mip stack are made once and shared by every K
-(:mod:`~shrmkit.analysis.baselines.gaussian_lobes`). The mip stack does not depend on the
-view, so a distant viewer has no per-frame CPU work: ``update_s = 0``.
+One row ``gaussian_lobes_k{K}`` per K in ``options.lobes`` (earlier keys ``gaussian_k{K}``); the
+transfer samples and the mip stack are made once and shared by every K. The mip stack does not
+depend on the view, so a distant viewer has no per-frame CPU work: ``update_s = 0``.
 """
 
 from __future__ import annotations
@@ -15,13 +15,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...brdf_io.latlong import pixel_directions
-from ..baselines.gaussian_lobes import GaussianLobeModel, fit_gaussian_lobes, sg_mip_stack, transfer_samples
+from ..baselines.gaussian_lobes import GaussianLobeModel, sg_mip_stack
+from ..baselines.methods import GAUSSIAN_MAX_VIEW_DEG, gaussian_lobes_model, gaussian_transfer_samples
 from .representation import BuildContext, BuiltRepresentation
 
 __all__ = ["LobeMaps", "build_green_lobes"]
 
-#: Largest view elevation of the fits, degrees (just inside the grazing singularity).
-MAX_FIT_VIEW_DEG = 89.0
+#: Largest view elevation of the fits, degrees: the table's ``GAUSSIAN_MAX_VIEW_DEG`` (earlier name).
+MAX_FIT_VIEW_DEG = GAUSSIAN_MAX_VIEW_DEG
 
 
 @dataclass(frozen=True, eq=False)
@@ -51,19 +52,19 @@ def build_green_lobes(ctx: BuildContext) -> list[BuiltRepresentation]:
         return []
     ctx.stage("Gaussian lobes: sampling")
     t0 = time.perf_counter()
-    samples = transfer_samples(ctx.brdf, np.linspace(0.0, np.radians(MAX_FIT_VIEW_DEG), opts.n_elevations))
+    samples = gaussian_transfer_samples(ctx.brdf, opts.elevations)
     t_samples = time.perf_counter() - t0
     stack = sg_mip_stack(ctx.env)
     reps = []
     for K in opts.lobes:
         ctx.stage(f"Gaussian lobes K={K}")
-        fit = fit_gaussian_lobes(ctx.brdf, K, samples=samples)
-        model = GaussianLobeModel(fit, stack)
+        model = gaussian_lobes_model(ctx.env, ctx.brdf, lobes=K, samples=samples, stack=stack)
+        fit = model.lobes
         fit_s = fit.meta["seconds"] + t_samples
-        params = {"K": K, "elevations": opts.n_elevations, "levels": len(stack.sigmas),
+        params = {"K": K, "elevations": opts.elevations, "levels": len(stack.sigmas),
                   "sigma0": float(stack.sigmas[0]), "fit_residual_max": float(fit.residual.max()),
                   "fit_s": fit_s, "mip_stack_s": stack.seconds}
-        reps.append(ctx.make(f"gaussian_k{K}", f"Gaussian lobes K={K}", f"Green K={K}", LobeMaps(model),
+        reps.append(ctx.make(f"gaussian_lobes_k{K}", f"Gaussian lobes K={K}", f"Lobes K={K}", LobeMaps(model),
                              storage_bytes=model.nbytes, precompute_s=fit_s + stack.seconds, params=params,
                              static=True))
     return reps

@@ -18,7 +18,8 @@ import numpy as np
 
 from ...brdf_io.brdf import BRDF
 from ...brdf_io.envmap import EnvironmentMap
-from ..shrm import SHRM, prefilter
+from ..baselines.methods import shrm_model
+from ..shrm import SHRM
 from .options import CompareOptions
 
 __all__ = ["RadianceModel", "Representation", "BuiltRepresentation", "BuildContext", "time_update"]
@@ -152,13 +153,12 @@ class BuildContext:
         return view / np.linalg.norm(view)
 
     def base_shrm(self) -> tuple[SHRM, float]:
-        """(the SHRM at ``options.eps`` with the options' order rule, its prefilter seconds)."""
+        """(the [RH02] SHRM at ``options.eps`` with the options' order rule, its prefilter seconds):
+        ``analysis.baselines.methods.shrm_model``."""
         if self._base is None:
             self.stage("SHRM")
             t0 = time.perf_counter()
-            shrm = prefilter(self.env, self.brdf, eps=self.options.eps, window=self.options.window,
-                             criterion=self.options.criterion, max_view_deg=self.options.rule_max_view_deg,
-                             lights=self.options.lights)
+            shrm = shrm_model(self.env, self.brdf, **self.options.shrm_settings())
             self._base = (shrm, time.perf_counter() - t0)
         return self._base
 

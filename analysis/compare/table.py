@@ -34,7 +34,7 @@ from .band_error import band_error, band_sample, pairs_per_band
 from .metrics import beside_measured, relative_rms
 from .options import CompareOptions
 from .pairs import sample_pairs
-from .registry import build_representations
+from .registry import build_representations, deprecated_row_key
 from .representation import Representation
 
 __all__ = ["Comparison", "compare", "compare_representations", "table_markdown", "GRAZING_DEG", "FRONTAL_DEG"]
@@ -126,7 +126,7 @@ def compare_representations(
         measured = band_error(rep.radiance(sample.R, sample.V), ref_b, sample)
         bands = beside_measured(measured, rep.params.get("view_bands"))  # an SHRM's statement too
         rows.append({
-            "key": rep.key,
+            "key": rep.key, **deprecated_row_key(rep.key),  # earlier key, one release (compare_json.md)
             "label": rep.label,
             "rel_rms": relative_rms(pred, ref),
             "rel_rms_grazing": relative_rms(pred[grazing], ref[grazing]),
@@ -173,8 +173,8 @@ def compare(brdf: Any, env: Any, *, progress: Callable[[str], None] | None = Non
     **options
         Keyword-only fields of :class:`~.options.CompareOptions`: ``eps`` (default
         ``DEFAULT_EPS``, checked by ``check_eps``), ``env_height``, ``n_pairs``,
-        ``max_view_deg``, ``seed``, ``lower_P``, ``lobes``, ``n_elevations``,
-        ``cabral_reference_height``, ``update_view``, ``window`` (``"auto"``, ``"lanczos"`` or
+        ``max_view_deg``, ``seed``, ``lower_P``, ``lobes``, ``elevations``,
+        ``rsibr_reference_height``, ``update_view``, ``window`` (``"auto"``, ``"lanczos"`` or
         ``"none"``: the SHRMs' window against Gibbs ringing).
 
     The image strip is not written here any more (this layer computes numbers only):

@@ -12,7 +12,7 @@ from shrmkit.analysis.tolerance import DEFAULT_EPS
 from shrmkit.cli.main import main
 
 FAST = ["--env", "builtin:studio,height=16", "--env-height", "16", "--pairs", "100", "--lobes", "1",
-        "--elevations", "3", "--cabral-reference-height", "0"]
+        "--elevations", "3", "--rsibr-reference-height", "0"]
 
 
 def test_compare_json_strip_and_markdown(tmp_path: Path, capsys) -> None:
@@ -22,7 +22,7 @@ def test_compare_json_strip_and_markdown(tmp_path: Path, capsys) -> None:
     assert rc == 0
     doc = json.loads(capsys.readouterr().out)
     labels = [r["label"] for r in doc["rows"]]
-    assert [r["key"] for r in doc["rows"]] == ["shrm", "shrm_low_p", "kautz_mccool", "cabral_shrm", "gaussian_k1"]
+    assert [r["key"] for r in doc["rows"]] == ["shrm", "shrm_low_p", "kautz_mccool", "rsibr", "gaussian_lobes_k1"]
     image = np.asarray(Image.open(strip))
     assert image.shape == (2 * 32, (1 + len(labels)) * 32, 3)
     assert image[:32, :32].max() > 0  # the reference panel is not black
@@ -54,7 +54,7 @@ def test_compare_lower_p_not_below_p_is_explained(capsys) -> None:
     """--lower-p at or above the chosen P gives no lower-order row; stderr says why (one line)
     and which values would give one; the JSON stays as documented."""
     rc = main(["compare", "microfacet:sigma=0.3", *FAST[:-6], "--lobes", "none", "--elevations", "3",
-               "--cabral-reference-height", "0", "--lower-p", "64", "--json"])
+               "--rsibr-reference-height", "0", "--lower-p", "64", "--json"])
     captured = capsys.readouterr()
     doc = json.loads(captured.out)
     keys = [r["key"] for r in doc["rows"]]
@@ -64,7 +64,7 @@ def test_compare_lower_p_not_below_p_is_explained(capsys) -> None:
                             f"P = {P} (chosen for eps {DEFAULT_EPS:g}); use --lower-p {P - 1} or less\n")
     # a valid lower P gives the row, and no note
     rc = main(["compare", "microfacet:sigma=0.3", *FAST[:-6], "--lobes", "none", "--elevations", "3",
-               "--cabral-reference-height", "0", "--lower-p", str(P - 1), "--json"])
+               "--rsibr-reference-height", "0", "--lower-p", str(P - 1), "--json"])
     captured = capsys.readouterr()
     rows = {r["key"]: r for r in json.loads(captured.out)["rows"]}
     assert rows["shrm_low_p"]["params"]["P"] == P - 1 and captured.err == ""

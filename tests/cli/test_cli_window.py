@@ -26,7 +26,7 @@ REPORT_FAST = ["--quick", "--preview", "none", "--models", "lafortune", "--toler
                "--pairs", "30", "--fit-samples", "1024", "--no-progress", "--no-plots", "--env", SUN,
                "--lights", "none"]
 COMPARE_FAST = ["--env", SUN, "--env-height", "16", "--pairs", "100", "--lobes", "none",
-                "--cabral-reference-height", "0", "--lights", "none"]
+                "--rsibr-reference-height", "0", "--lights", "none"]
 
 
 @pytest.mark.parametrize("verb", ["prefilter", "render", "report", "compare"])

@@ -227,23 +227,23 @@ def test_every_mode_renders_a_sphere_through_render_scene(offscreen, mode) -> No
 @pytest.mark.render
 def test_render_scene_model_descriptions_match_independent_builds(offscreen) -> None:
     """SHRM orders and map size equal those of a separate prefilter call; Kautz–McCool is the
-    q = 0 SHRM; RSIBR holds twelve maps on the SHRM's grid; lobes as asked."""
+    q = 0 SHRM on the SHRM's (F, P) and rows (the table of methods); RSIBR holds twelve maps on the
+    SHRM's grid; lobes as asked."""
     env = load_env(ENV)
     shrm = prefilter(env, BRDF, eps=DEFAULT_EPS)
-    ref = prefilter(env, BRDF, eps=DEFAULT_EPS, azimuth_free=True)
+    ref = prefilter(env, BRDF, eps=DEFAULT_EPS, F=shrm.F, P=shrm.P, size=shrm.height, azimuth_free=True)
     kw = {"camera": Camera.looking_at(projection="ortho"), "size": 16, "background": "black", "fps_frames": 0}
     results = {}
     for mode in ("distant", "perpixel", "kautz-mccool", "rsibr"):
         results[mode] = render_scene(SPHERE, env, BRDF, mode=mode, **kw)
         info = results[mode].built.info
-        own = ref if mode == "kautz-mccool" else shrm  # the window's decision is the model's own
-        assert (info["F"], info["P"], info["height"], info["width"]) == (own.F, own.P, own.height, own.width)
+        assert (info["F"], info["P"], info["height"], info["width"]) == (shrm.F, shrm.P, shrm.height, shrm.width)
         assert info["eps"] == DEFAULT_EPS and info["prefilter_seconds"] > 0
         assert info["azimuth_free"] is (mode == "kautz-mccool")
     rsibr = results["rsibr"]
     assert isinstance(rsibr.model, RSIBRMaps) and rsibr.model.maps.shape == (12, shrm.height, shrm.width, 3)
     km = results["kautz-mccool"].model
-    # Kautz–McCool: the model is the azimuth-free SHRM of prefilter(..., azimuth_free=True)
+    # Kautz–McCool: the azimuth-free SHRM of prefilter(..., azimuth_free=True) on the SHRM's grid
     np.testing.assert_allclose(km.coeffs, ref.coeffs, rtol=1e-5, atol=1e-6 * np.abs(ref.coeffs).max())
     # the models differ from the full SHRM by far more than the 1 % the render test allows
     geom = sphere_geometry(Camera.looking_at(view=VIEW, projection="ortho"), 40, 40)

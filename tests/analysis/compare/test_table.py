@@ -30,13 +30,13 @@ from shrmkit.brdf_io.envmap import load_env
 from shrmkit.brdf_io.errors import BadInputError
 from shrmkit.brdf_io.specs import load_brdf
 
-KEYS = ["shrm", "shrm_low_p", "kautz_mccool", "cabral_shrm", "cabral_reference", "gaussian_k1"]
+KEYS = ["shrm", "shrm_low_p", "kautz_mccool", "rsibr", "rsibr_reference", "gaussian_lobes_k1"]
 
 
 @pytest.fixture(scope="module")
 def small():
     env = load_env("builtin:studio,height=16")
-    options = CompareOptions(n_pairs=200, lobes=(1,), n_elevations=4, cabral_reference_height=8)
+    options = CompareOptions(n_pairs=200, lobes=(1,), elevations=4, rsibr_reference_height=8)
     return env, compare_representations("microfacet:sigma=0.3", env, options)
 
 
@@ -74,7 +74,7 @@ def test_table_rows_json_and_independent_numbers(small) -> None:
     assert (p["F"], p["P"]) == (shrm.F, shrm.P)
     assert result["eps"] == DEFAULT_EPS
     assert rows["shrm"]["storage_bytes"] == (shrm.P + 1) ** 2 * shrm.height * shrm.width * 3 * 4
-    assert rows["cabral_reference"]["storage_bytes"] == 12 * 8 * 16 * 3 * 4
+    assert rows["rsibr_reference"]["storage_bytes"] == 12 * 8 * 16 * 3 * 4
     # the SHRM's error recomputed from scratch on the same pairs
     R, V, _ = sample_pairs(200, seed=0, max_view_deg=88.0)
     ref = reference_radiance(env, load_brdf("microfacet:sigma=0.3"), R, V)
@@ -87,7 +87,7 @@ def test_table_rows_json_and_independent_numbers(small) -> None:
     assert result["markdown"].count("\n|") == len(keys) + 2 + 2 + 9
     shrm_bands = rows["shrm"]["view_bands"]
     assert len(shrm_bands) == 9 and all("predicted_rel_rms" in b and "measured_rel_rms" in b for b in shrm_bands)
-    assert all("predicted_rel_rms" not in b for b in rows["gaussian_k1"]["view_bands"])
+    assert all("predicted_rel_rms" not in b for b in rows["gaussian_lobes_k1"]["view_bands"])
     # every band measured on its own importance-sampled pairs
     assert all(b["n_pairs"] == result["band_pairs_per_band"] >= 16 for b in shrm_bands)
     assert all(b["measured_rel_rms"] > 0.0 and b["measured_stderr"] >= 0.0 for b in shrm_bands)
@@ -114,13 +114,13 @@ def test_representations_follow_the_protocol(small) -> None:
         assert (rep.update_s == 0.0) == rep.key.startswith("gaussian")
     shrm = reps[0]
     assert shrm.short_label == f"SHRM P={shrm.params['P']}"
-    assert [rep.short_label for rep in reps[2:]] == [f"KM P={shrm.params['P']}", "Cabral", "Cabral ref", "Green K=1"]
+    assert [rep.short_label for rep in reps[2:]] == [f"KM P={shrm.params['P']}", "RSIBR", "RSIBR ref", "Lobes K=1"]
 
 
 def test_registry_kinds_and_a_new_kind(monkeypatch) -> None:
     """The registry lists one builder per kind, in row order; a new kind is one entry (here a
     constant-radiance representation replacing them all) and shows up as a row."""
-    assert list(REGISTRY) == ["shrm", "shrm_low_p", "kautz_mccool", "cabral_shrm", "cabral_reference", "gaussian"]
+    assert list(REGISTRY) == ["shrm", "shrm_low_p", "kautz_mccool", "rsibr", "rsibr_reference", "gaussian_lobes"]
 
     class Constant:
         def radiance(self, R: np.ndarray, V: np.ndarray) -> np.ndarray:
@@ -145,7 +145,7 @@ def test_options_validation() -> None:
     assert CompareOptions().eps == DEFAULT_EPS
     assert CompareOptions(lobes=[2, 3]).lobes == (2, 3)
     for bad, match in (({"eps": 1.5}, "eps"), ({"n_pairs": 3}, "n_pairs"), ({"lobes": (9,)}, "lobes"),
-                       ({"max_view_deg": 90.0}, "max_view_deg"), ({"n_elevations": 1}, "n_elevations"),
+                       ({"max_view_deg": 90.0}, "max_view_deg"), ({"elevations": 1}, "elevations"),
                        ({"update_view": (0.0, 0.0, 0.0)}, "update_view")):
         with pytest.raises(BadInputError, match=match):
             CompareOptions(**bad)
