@@ -404,15 +404,18 @@ def _warnings(checks: dict[str, Any], orders: list[dict[str, Any]], fits: list[d
 # ------------------------------------------------------------------------------ report
 
 
-def _analysis_brdf(brdf: BRDF, fit_entries: list[dict[str, Any]], fit_results: list[Any]) -> tuple[BRDF, str, str]:
+def _analysis_brdf(brdf: BRDF, fit_entries: list[dict[str, Any]],
+                   fit_results: list[Any]) -> tuple[BRDF, str, str, dict[str, Any] | None]:
     if brdf.kind != "scattered":
-        return brdf, "brdf", ""
+        return brdf, "brdf", "", None
     # the representation with the smallest held-out worst-band error (Lafortune, Cook–Torrance or the
     # cross-validated Zernike expansion; analysis.fit.representation), reusing the report's one-lobe fits
     reuse = {r.model: r for r in fit_results if r is not None and r.options.get("lobes") in (None, 1)
              and r.options.get("metric") == "rel"}
     choice = choose_representation(brdf, fits=reuse)
-    return choice.brdf, f"fit:{choice.model}", f"scattered measurements: orders, SHRMs and previews are {choice.line()}"
+    record = {k: v for k, v in choice.as_dict().items() if k != "seconds"} | {"choice_seconds": choice.seconds}
+    note = f"scattered measurements: orders, SHRMs and previews are {choice.line()}"
+    return choice.brdf, f"fit:{choice.model}", note, record
 
 
 def collect_report(
@@ -461,7 +464,7 @@ def collect_report(
     fit_entries, fit_results = _fits(brdf, options)
     slices = _slices(brdf, fit_results, options.models)
     explorer, explorer_images = explore(brdf, fit_results, options.models, albedo_nodes=options.albedo_nodes)
-    analysed, analysis_of, analysis_note = _analysis_brdf(brdf, fit_entries, fit_results)
+    analysed, analysis_of, analysis_note, representation = _analysis_brdf(brdf, fit_entries, fit_results)
     _stage(progress, "orders")
     order_rows, eps_table, choices = _orders(analysed, options)
     by_tolerance = dict(zip(options.all_tolerances, choices, strict=True))
@@ -497,7 +500,7 @@ def collect_report(
         "status": "ok",
         "name": name or brdf.name,
         "source": str(source),
-        "brdf": {"name": brdf.name, "kind": brdf.kind, "analysis_of": analysis_of},
+        "brdf": {"name": brdf.name, "kind": brdf.kind, "analysis_of": analysis_of, "representation": representation},
         "options": options.as_dict(),
         "orders": order_rows,
         "main": {"tolerance": options.eps, "F": main_choice.F, "P": main_choice.P, "eps": main_choice.eps},

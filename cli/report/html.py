@@ -168,6 +168,9 @@ def report_html(doc: dict[str, Any], pngs: Mapping[str, bytes], views: Sequence[
 
 _LABELS = (  # summary.csv column → header people read (the key stays the header's tooltip)
     (r"^F@(.+)$", r"F at ε \1"), (r"^P@(.+)$", r"P at ε \1"),
+    (r"^representation_worst_band_rel_rms$", "analysed as: held-out worst band rel. RMS"),
+    (r"^representation_worst_band$", "analysed as: worst band (°)"), (r"^representation_ok$", "analysed as: ok"),
+    (r"^representation$", "analysed as"),
     (r"^fit_rel_rms_(.+)$", r"\1 fit: rel. RMS, all"),
     (r"^fit_worst_band_rel_rms_(.+)$", r"\1 fit: worst band rel. RMS"),
     (r"^fit_worst_band_(.+)$", r"\1 fit: worst band (°)"), (r"^fit_ok_(.+)$", r"\1 fit ok"),

@@ -75,6 +75,17 @@ def _params_text(params: Any) -> str:
     return fmt(params, 4)
 
 
+def representation_error(rep: dict[str, Any] | None) -> str:
+    """``": zernike order 6 (30 terms, ridge 1e-06), held-out worst view band rel. RMS **0.2** (70–80°)"``
+    (``FAILED`` above 0.5) for a report's ``brdf.representation``; "" without one."""
+    if not rep:
+        return ""
+    band = rep.get("held_out_worst_band")
+    err = (f"**{fmt(band['rel_rms'])}** ({band['lo_deg']:g}–{band['hi_deg']:g}°)" if band
+           else f"**{fmt(rep['held_out_rel_rms'])}** (all views)")
+    return f": {rep['label']}, held-out worst view band rel. RMS {err}" + ("" if rep["success"] else ", FAILED")
+
+
 def report_sections(doc: dict[str, Any], image_link: Any = None) -> Iterator[tuple[str, str]]:
     """(section title, Markdown body) pairs of a report.
 
@@ -97,7 +108,8 @@ def report_sections(doc: dict[str, Any], image_link: Any = None) -> Iterator[tup
     head = [f"Source: `{doc['source']}` ({b['kind']}); main tolerance ε = {fmt(doc['main']['tolerance'])}: "
             f"**F = {doc['main']['F']}, P = {doc['main']['P']}** (ε(F, P) = {fmt(doc['main']['eps'])})."]
     if b["analysis_of"] != "brdf":
-        head.append(f"Orders, SHRMs and previews use `{b['analysis_of']}` (scattered measurements).")
+        head.append(f"Orders, SHRMs and previews use `{b['analysis_of']}` (scattered measurements)"
+                    + representation_error(b.get("representation")) + ".")
     head += [_scene_headline(doc, e) for e in doc["environments"]]
     fit_lines = [_fit_headline(f) for f in doc["fits"]]
     if fit_lines:

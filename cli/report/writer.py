@@ -91,6 +91,12 @@ def summary_row(doc: dict[str, Any]) -> dict[str, Any]:
     for o in doc["orders"]:
         row[f"F@{o['tolerance']:g}"] = o["F"]
         row[f"P@{o['tolerance']:g}"] = o["P"]
+    rep = doc["brdf"].get("representation")  # what the orders describe, and its held-out worst band
+    band = rep.get("held_out_worst_band") if rep else None
+    row["representation"] = rep["label"] if rep else "as given"
+    row["representation_worst_band_rel_rms"] = band["rel_rms"] if band else None
+    row["representation_worst_band"] = f"{band['lo_deg']:g}-{band['hi_deg']:g}" if band else None
+    row["representation_ok"] = rep["success"] if rep else None
     for f in doc["fits"]:
         row[f"fit_rel_rms_{f['model']}"] = None if f.get("error") else f["errors"].get("rel_rms")
         band = None if f.get("error") else f.get("worst_band")

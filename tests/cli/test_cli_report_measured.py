@@ -60,6 +60,15 @@ def test_report_on_curet_rgl_and_nist(shared_data, tmp_path, capsys):
         rows = {r["name"]: r for r in csv.DictReader(fh)}
     assert rows["abrdf-7"]["fit_ok_lafortune"] == "False"
     assert float(rows["abrdf-7"]["fit_worst_band_rel_rms_lafortune"]) > 0.5
+    # beside the orders: what they describe and its held-out worst band (the representation record's)
+    rep = velvet["brdf"]["representation"]
+    band = rep["held_out_worst_band"]
+    assert rows["abrdf-7"]["representation"] == rep["label"] and rep["label"].startswith("zernike order")
+    assert float(rows["abrdf-7"]["representation_worst_band_rel_rms"]) == pytest.approx(band["rel_rms"], rel=1e-9)
+    assert rows["abrdf-7"]["representation_ok"] == "True" and band["rel_rms"] < 0.5
+    assert f"held-out worst view band rel. RMS **{band['rel_rms']:.3g}** ({band['lo_deg']:g}–{band['hi_deg']:g}°)" in md
+    white = rows["paper_white_rgb"]
+    assert white["representation"] == "as given" and white["representation_ok"] == ""
 
 
 def test_whole_curet_file_expands_to_61_reports(shared_data, monkeypatch, tmp_path):
