@@ -204,7 +204,8 @@ def band_errors(
     has_lights = bool(getattr(shrm, "has_lights", False))
     key = f"{kind}_rel_rms_residual" if has_lights else f"{kind}_rel_rms"
     rel = np.array([b.get(key, b.get(f"{kind}_rel_rms")) for b in bands], dtype=np.float64)
-    rel = np.where(np.isfinite(rel), rel, np.inf)
+    light = np.array([b.get("lights_rel_rms_residual", 0.0) if has_lights else 0.0 for b in bands], dtype=np.float64)
+    rel = np.where(np.isfinite(rel), rel + 1.5 * light if bound else np.hypot(rel, light), np.inf)  # merged lights
     e = rel * signal.rms
     if bound:
         e = e / np.sqrt(level)

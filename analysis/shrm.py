@@ -585,8 +585,12 @@ def prefilter(
             band["lights_rel_rms"] = float(np.sqrt(extra))
             band["predicted_rel_rms"] = float(np.sqrt(band["predicted_rel_rms"] ** 2 + extra))
             band["bound_rel_rms"] = float(band["bound_rel_rms"] + 1.5 * np.sqrt(extra))
-            band["predicted_rel_rms_residual"] = float(np.sqrt(own["predicted_rel_rms"] ** 2 + extra_res))
-            band["bound_rel_rms_residual"] = float(own["bound_rel_rms"] + 1.5 * np.sqrt(extra_res))
+            # the residual statements are the map's alone (what holds away from the lights); the merge
+            # error, relative to the same reflection, is stated beside them (it lives within the merge angle
+            # and the lobe of the merged light: added to them, a dim room's walls made them 10-60x loose)
+            band["lights_rel_rms_residual"] = float(np.sqrt(extra_res))
+            band["predicted_rel_rms_residual"] = float(own["predicted_rel_rms"])
+            band["bound_rel_rms_residual"] = float(own["bound_rel_rms"])
     # what the map's size costs the statement, and whether a cap made a bound say nothing (issue 29)
     map_budget = assess_map(
         statement.bands, raw_bands, state(signal_energy, None).bands, rows=S, P=P_B, budget_bytes=budget_bytes,
