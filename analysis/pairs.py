@@ -80,7 +80,7 @@ def sample_pairs(n: int, *, seed: int = 0, max_view_deg: float = 88.0) -> tuple[
 
 
 def sample_pairs_focused(
-    per_band: int, edges_deg: Sequence[float], *, centre: np.ndarray | None = None,
+    per_band: int, edges_deg: Sequence[float] | np.ndarray, *, centre: np.ndarray | None = None,
     centre_weights: np.ndarray | None = None, caps_deg: Sequence[float] = (2.0, 6.0, 20.0), seed: int = 0,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(R, V) pairs for per-band error measurements, with importance weights, for lighting

@@ -50,7 +50,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from importlib import resources
 from typing import Any
@@ -162,6 +162,7 @@ BRDF_GLSL: dict[type, BrdfShader] = {
                               "shrmCtF0": ("vec3", _rgb(b.f0)), "shrmCtAlpha": ("float", [float(b.alpha)])},
                    lambda b: {"SHRM_CT_GGX": 1 if b.distribution == "ggx" else 0}),
     )
+    if s.model is not None  # every entry here names its class (None is TABLE_SHADER's)
 }
 
 #: Every other BRDF: a table texture (``brdf_table.glsl``; :func:`tabulate_brdf`).
@@ -266,13 +267,13 @@ def _source_rows(above: np.ndarray) -> np.ndarray:
     its own, or, past the last sample above the surface along θ_d in its φ_d column of ``above``
     (ND, NP), that last one."""
     nd, _ = above.shape
-    has = above.any(axis=0)
+    has = np.asarray(above.any(axis=0))
     last = nd - 1 - np.argmax(above[::-1], axis=0)
     rows = np.arange(nd)[:, None]
     return np.where(has[None, :] & (rows > last[None, :]), last[None, :], rows)
 
 
-def tabulate_brdf(brdf: BRDF, shape: tuple[int, int, int] | None = None, periodic: bool | None = None,
+def tabulate_brdf(brdf: BRDF, shape: Sequence[int] | None = None, periodic: bool | None = None,
                   *, only: np.ndarray | None = None) -> BrdfTable:
     """ρ of ``brdf`` (its own ``eval``) on a half/difference grid (:class:`BrdfTable`); ``shape`` and
     ``periodic`` default to :func:`table_grid_for`.
@@ -419,7 +420,7 @@ def choose_table(brdf: BRDF, lights: LightSet, *, max_view_deg: float = 80.0, ma
     again on the whole table as stored.
     """
     base, periodic = table_grid_for(brdf)
-    grids = [tuple(shape)] if shape is not None else list(dict.fromkeys(
+    grids: list[tuple[int, int, int]] = [shape] if shape is not None else list(dict.fromkeys(
         scaled_grid(base, f, periodic) for f in TABLE_FACTORS))
     if max_texels is not None and shape is None:
         fitting = [g for g in grids if atlas_texels(g) <= max_texels]

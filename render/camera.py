@@ -22,6 +22,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 __all__ = ["Camera", "orbit_camera", "orthonormal_frame"]
 
@@ -42,7 +43,7 @@ def orthonormal_frame(view: np.ndarray, up: np.ndarray) -> tuple[np.ndarray, np.
     forward = -v / nv
     u_perp = u - np.dot(u, forward) * forward
     nu = np.linalg.norm(u_perp)
-    if nu < 1e-9 * max(np.linalg.norm(u), 1e-300):
+    if nu < 1e-9 * max(float(np.linalg.norm(u)), 1e-300):
         raise ValueError(f"up {u.tolist()} is parallel to the view direction {v.tolist()}")
     up_o = u_perp / nu
     right = np.cross(forward, up_o)
@@ -79,9 +80,9 @@ class Camera:
     def looking_at(
         cls,
         *,
-        center: np.ndarray = (0.0, 0.0, 0.0),
-        view: np.ndarray = (1.0, 0.0, 0.0),
-        up: np.ndarray = (0.0, 0.0, 1.0),
+        center: ArrayLike = (0.0, 0.0, 0.0),
+        view: ArrayLike = (1.0, 0.0, 0.0),
+        up: ArrayLike = (0.0, 0.0, 1.0),
         radius: float = 1.0,
         projection: str = "perspective",
         distance: float | None = None,

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..brdf_io.env_rotation import check_env_rotation, to_map_frame
 from .camera import Camera
@@ -52,7 +53,7 @@ def _finish(hit: np.ndarray, pos: np.ndarray, normal: np.ndarray, dirs: np.ndarr
 
 
 def sphere_geometry(
-    camera: Camera, width: int, height: int, center: np.ndarray = (0.0, 0.0, 0.0), radius: float = 1.0
+    camera: Camera, width: int, height: int, center: ArrayLike = (0.0, 0.0, 0.0), radius: float = 1.0
 ) -> HitGeometry:
     """Analytic ray–sphere intersection (nearest root), N = (P − c)/r."""
     origins, dirs = camera.rays(width, height)

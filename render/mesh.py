@@ -35,6 +35,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..brdf_io import limits
 from ..brdf_io.errors import BadInputError
@@ -82,7 +83,7 @@ class Mesh:
     def n_triangles(self) -> int:
         return int(self.faces.shape[0])
 
-    def transformed(self, *, scale: float = 1.0, translate: np.ndarray = (0.0, 0.0, 0.0)) -> Mesh:
+    def transformed(self, *, scale: float = 1.0, translate: ArrayLike = (0.0, 0.0, 0.0)) -> Mesh:
         """A copy scaled uniformly about the origin and translated (placing objects in a scene)."""
         t = np.asarray(translate, dtype=np.float64).reshape(3)
         return Mesh(self.vertices * float(scale) + t, self.faces, self.normals, self.name)
@@ -215,8 +216,11 @@ def _icosphere(subdivisions: int) -> tuple[np.ndarray, np.ndarray]:
     return v, np.asarray(ico.faces, dtype=np.int64)
 
 
-def _tube(curve: np.ndarray, tangent: np.ndarray, r: float, sides: int) -> tuple[np.ndarray, np.ndarray]:
-    """A closed tube of radius r around a closed curve (segments, 3) with exact normals."""
+def _tube(
+    curve: np.ndarray, tangent: np.ndarray, r: float, sides: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A closed tube of radius r around a closed curve (segments, 3) with exact normals:
+    (vertices (segments·sides, 3), faces (n, 3), normals (segments·sides, 3))."""
     seg = len(curve)
     t = tangent / np.linalg.norm(tangent, axis=1, keepdims=True)
     # parallel transport of a normal along the closed curve, then the closure twist spread
@@ -405,14 +409,17 @@ def load_mesh(source: str | Path) -> Mesh:
         geoms = [g for g in loaded.dump() if isinstance(g, trimesh.Trimesh) and len(g.faces)]
         if not geoms:
             raise BadInputError(path, "file holds no triangle geometry")
-        parts_v, parts_f, parts_n, offset = [], [], [], 0
+        parts_v, parts_f, offset = [], [], 0
+        parts_n: list[np.ndarray | None] = []
         for g in geoms:  # dump() has already applied each node's transform
             parts_v.append(np.asarray(g.vertices))
             parts_f.append(np.asarray(g.faces) + offset)
             parts_n.append(_file_normals(g))
             offset += len(g.vertices)
         v, f = np.concatenate(parts_v), np.concatenate(parts_f)
-        n = None if any(x is None for x in parts_n) else np.concatenate(parts_n)
+        n: np.ndarray | None = None
+        if all(x is not None for x in parts_n):
+            n = np.concatenate([x for x in parts_n if x is not None])
     elif isinstance(loaded, trimesh.Trimesh):
         v, f, n = np.asarray(loaded.vertices), np.asarray(loaded.faces), _file_normals(loaded)
     elif isinstance(loaded, trimesh.PointCloud):

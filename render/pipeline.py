@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..brdf_io.env_rotation import check_env_rotation, rotation_about_z
 from .camera import Camera, orbit_camera
@@ -57,7 +58,7 @@ class FrameTimings:
         return float(np.mean(later)) if later else float("nan")
 
 
-def turntable_cameras(base: Camera, n_frames: int, center: np.ndarray = (0.0, 0.0, 0.0)) -> list[Camera]:
+def turntable_cameras(base: Camera, n_frames: int, center: ArrayLike = (0.0, 0.0, 0.0)) -> list[Camera]:
     """``n_frames`` cameras orbiting about the world z axis, frame k at angle 2πk/n."""
     if n_frames < 1:
         raise ValueError(f"turntable needs at least 1 frame, got {n_frames}")
@@ -143,6 +144,7 @@ def render_frames(
     for cam, q, res in zip(cameras, rotations, results, strict=True):
         t = time.perf_counter()
         if background == "env":
+            assert env_radiance is not None  # refused above
             bg = environment_background(env_radiance, cam, size, size, env_rotation=q)
             frames.append(Frame(composite(res.radiance, res.alpha, bg), res.alpha, False))
         elif background == "black":

@@ -48,6 +48,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
@@ -113,7 +114,7 @@ def _set_uniforms(actor, uniforms: dict[str, tuple[str, list[float]]]) -> None:
     from vtkmodules.util.vtkConstants import VTK_OBJECT  # lazy: VTK
     from vtkmodules.vtkCommonCore import vtkCommand  # lazy: VTK
 
-    calls = []
+    calls: list[tuple[str, tuple[Any, ...]]] = []
     for name, (kind, values) in uniforms.items():
         values = [float(v) for v in values]
         if kind == "float":
@@ -365,6 +366,7 @@ class SHRMRenderer:
         screen.GetProperty().SetTexture("shrmGbuf", self._gbuffer)
         for name, extra in self._extra_textures(shading).items():
             screen.GetProperty().SetTexture(name, extra)
+        assert shading.deferred is not None  # add_object calls this for modes with a deferred pass only
         self._shader(screen, shading.vertex, shading.deferred, scale, shading.uniforms)
         self._renderer.AddActor(screen)
         gbuffer.SetVisibility(False)
@@ -490,11 +492,14 @@ class SHRMRenderer:
         corners = self._quad_corners(camera, far) if self._deferred_frame else None
         for obj in self._objects:
             cull = self._cull(obj, camera, near)
+            actors: tuple[Any, ...]
             if self._deferred_frame:  # the mesh drawn in pass 1, the quad (never culled) in pass 2
-                obj.deferred.gbuffer.GetProperty().SetBackfaceCulling(cull)
-                obj.deferred.quad_points[...] = corners
-                obj.deferred.screen.GetMapper().GetInput().GetPoints().Modified()
-                actors = (obj.deferred.gbuffer, obj.deferred.screen)
+                deferred = obj.deferred
+                assert deferred is not None  # a deferred frame: every object has its passes (self.deferred)
+                deferred.gbuffer.GetProperty().SetBackfaceCulling(cull)
+                deferred.quad_points[...] = corners
+                deferred.screen.GetMapper().GetInput().GetPoints().Modified()
+                actors = (deferred.gbuffer, deferred.screen)
             else:
                 obj.actor.GetProperty().SetBackfaceCulling(cull)
                 actors = (obj.actor,)
@@ -541,7 +546,7 @@ class SHRMRenderer:
         """Block until the OpenGL commands issued so far have completed (glFinish)."""
         self._window.WaitForCompletion()
 
-    def frames_per_second(self, camera: Camera, n_frames: int = 10, center: np.ndarray = (0.0, 0.0, 0.0)) -> float:
+    def frames_per_second(self, camera: Camera, n_frames: int = 10, center: ArrayLike = (0.0, 0.0, 0.0)) -> float:
         """Frames per second over ``n_frames`` draws while orbiting ``camera`` about z (no readback).
 
         Each frame changes the view, so distant-mode maps are recomputed and re-uploaded.
