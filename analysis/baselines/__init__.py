@@ -1,18 +1,39 @@
-"""The published representations the SHRM is compared against and the renderer can draw.
+"""The published representations the SHRM is compared against and the renderer can draw, and the
+angular-domain methods its speed is measured against.
 
-- :mod:`.rsibr` and :mod:`.icosahedron`: Cabral, Olano & Nemec 1999, *Reflection Space Image
-  Based Rendering* (twelve prefiltered maps at the icosahedron's vertices, spherical
-  barycentric blending).
-- Kautz & McCool 2000: the azimuth-free (q = 0) SHRM, ``prefilter(..., azimuth_free=True)``.
-- :mod:`.gaussian_lobes` and :mod:`.selfshadow`: Green, Kautz & Durand 2007, *Efficient
-  Reflectance and Visibility Approximations for Environment Map Rendering* (K Gaussian
-  lobes per view elevation over a spherical-Gaussian mip stack; per-vertex SH visibility).
+Public API — the table of published methods (:mod:`.methods`, ``data_specs/methods.md``): one
+:class:`Method` per method (key, display name, cite key, settings with limits, a builder that
+returns the plain model) in :data:`METHODS`, looked up by :func:`get_method` / :func:`method_key`;
+the builders :func:`shrm_model` [RH02], :func:`kautz_mccool_model` [KM00], :func:`rsibr_model`
+[Cabral99] and :func:`gaussian_lobes_model` [Green07]. ``shrmkit.render.modes`` and
+``shrmkit.analysis.compare`` build through it.
 
-And the angular-domain methods the SHRM's speed is measured against (``benchmarks/prefilter_speed.py``):
-
-- :mod:`.lobe_truncated`: RH02 Table 4's baseline, the angular sum over only the environment
-  pixels where the BRDF lobe exceeds 1e-3 of its peak (a cone about R per view elevation).
-- :mod:`.split_sum`: the engines' split-sum approximation for GGX materials (Karis 2013;
-  Lagarde & de Rousiers 2014): a GGX-prefiltered map per roughness and the 2-D
-  environment-BRDF table.
+The modules behind it, importable by their paths: :mod:`.rsibr` and :mod:`.icosahedron`
+(twelve maps blended with spherical barycentric weights [Cabral99]); :mod:`.gaussian_lobes` and
+:mod:`.selfshadow` (Gaussian lobes over a spherical-Gaussian mip stack, per-vertex SH visibility
+[Green07]); :mod:`.lobe_truncated` (the angular sum over the lobe's significant pixels, [RH02]
+Table 4) and :mod:`.split_sum` (the engines' split sum for GGX [Karis13], [LdR14]), the speed
+baselines of ``benchmarks/prefilter_speed.py``. Citation keys: ``data_specs/bibliography.md``.
 """
+
+from __future__ import annotations
+
+from ...brdf_io.lazy import lazy_exports as _lazy_exports
+
+#: Public name → the module that defines it (imported on first use).
+_LAZY = {
+    "Method": "shrmkit.analysis.baselines.methods",
+    "Setting": "shrmkit.analysis.baselines.methods",
+    "METHODS": "shrmkit.analysis.baselines.methods",
+    "get_method": "shrmkit.analysis.baselines.methods",
+    "method_key": "shrmkit.analysis.baselines.methods",
+    "shrm_model": "shrmkit.analysis.baselines.methods",
+    "kautz_mccool_model": "shrmkit.analysis.baselines.methods",
+    "rsibr_model": "shrmkit.analysis.baselines.methods",
+    "gaussian_lobes_model": "shrmkit.analysis.baselines.methods",
+}
+
+__all__ = list(_LAZY)
+
+
+__getattr__, __dir__ = _lazy_exports(__name__, _LAZY, __all__)

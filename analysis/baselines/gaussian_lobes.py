@@ -1,7 +1,8 @@
-"""Green, Kautz & Durand 2007: BRDFs as sums of isotropic Gaussian lobes over a mip stack.
+"""[Green07]: BRDFs as sums of isotropic Gaussian lobes over a spherical-Gaussian mip stack.
 
-"Efficient Reflectance and Visibility Approximations for Environment Map Rendering",
-Computer Graphics Forum 26(3) (Eurographics 2007), doi:10.1111/j.1467-8659.2007.01073.x.
+Fits K lobes to the BRDF's transfer function per view elevation, convolves the environment
+with Gaussians of doubling width, and evaluates B(R, V) from both (the ``gaussian_lobes`` method
+of :mod:`.methods` builds its model here). Citation keys: ``data_specs/bibliography.md``.
 
 1. **Fit** (their §3). At N view elevations θ_v (the angle between N and V; our
    reparameterized θ_o' = 2θ_v, DESIGN §3) the transfer function in the reflection frame,

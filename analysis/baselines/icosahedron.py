@@ -1,7 +1,6 @@
 """The regular icosahedron as a set of view directions, and spherical barycentric weights.
 
-Cabral, Olano, Nemec 1999 ("Reflection Space Image Based Rendering", SIGGRAPH 99,
-doi:10.1145/311535.311553, §4) prefilter one radiance environment map per vertex of an
+[Cabral99] §4 prefilter one radiance environment map per vertex of an
 icosahedron (12 views) and blend, for a new view v, the maps of the three vertices of the
 face containing v with *spherical barycentric* weights: the weight of vertex i is the
 spherical excess (area) of the sub-triangle spanned by v and the two other vertices,

@@ -27,9 +27,8 @@ Public objects: :class:`LobeCones`, :func:`lobe_cones`, :class:`LobeTruncatedSum
 
 References
 ----------
-R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering", SIGGRAPH 2002
-(RH02), ACM Trans. Graph. 21(3), doi:10.1145/566654.566611 — §6, Table 3 (costs) and
-Table 4 (the angular-domain baseline that sums only the significant part of the lobe).
+[RH02] §6, Table 3 (costs) and Table 4 (the angular-domain baseline that sums only the
+significant part of the lobe). Citation keys: ``data_specs/bibliography.md``.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
-"""Reflection Space Image Based Rendering (Cabral, Olano, Nemec 1999) as an SHRM comparator.
+"""Reflection Space Image Based Rendering [Cabral99] as an SHRM comparator (the ``rsibr`` method).
 
-Cabral et al. (SIGGRAPH 99, doi:10.1145/311535.311553) prefilter one *radiance environment
+Cabral et al. prefilter one *radiance environment
 map* per sample view v_i — the 12 vertices of an icosahedron — and render a new view v by
 blending the maps of the three vertices of the face containing v with spherical
 barycentric weights (:mod:`.icosahedron`), after warping each map into reflection space.

@@ -1,6 +1,6 @@
 """Self-shadowing for Gaussian-lobe rendering: per-vertex visibility in order-4 SH.
 
-Green, Kautz & Durand 2007, eq. 7 (doi:10.1111/j.1467-8659.2007.01073.x): each lobe k is
+[Green07] eq. 7: each lobe k is
 multiplied by the visibility of its centre direction, B = Σ_k w_k V(d_k) (G_σk * L)(d_k).
 
 1. :func:`vertex_visibility_sh`: V(d) = 0 below the vertex's tangent plane (n·d ≤ 0); above

@@ -1,9 +1,8 @@
 """The engines' split-sum prefiltered environment lighting for GGX materials.
 
-B. Karis, "Real Shading in Unreal Engine 4", SIGGRAPH 2013 course *Physically Based
-Shading in Theory and Practice* (§ Image Based Lighting, "Split Sum Approximation");
-S. Lagarde, C. de Rousiers, "Moving Frostbite to Physically Based Rendering 3.0",
-SIGGRAPH 2014 course (§ 4.9, distant light probes).
+[Karis13] (§ Image Based Lighting, "Split Sum Approximation"); [LdR14] § 4.9 (distant light
+probes). Citation keys: ``data_specs/bibliography.md``. The speed baseline of
+``benchmarks/prefilter_speed.py``.
 
 The reflected radiance of a Cook–Torrance GGX material (``brdf_io.models.CookTorrance``
 with ``dist=ggx``: ρ = kd/π + ks D F G / (4 cos θ_i cos θ_o), GGX D of width α, Schlick F

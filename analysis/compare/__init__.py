@@ -1,5 +1,6 @@
-"""The numbers of a comparison: the SHRM (RH02) against Kautz & McCool 2000, Cabral, Olano,
-Nemec 1999 (RSIBR) and Green, Kautz, Durand 2007 (Gaussian lobes).
+"""The numbers of a comparison: the SHRM [RH02] against Kautz–McCool [KM00], RSIBR [Cabral99] and
+Gaussian lobes [Green07], the published methods of :mod:`shrmkit.analysis.baselines.methods` under
+their keys there (citation keys: ``data_specs/bibliography.md``).
 
 - :func:`compare` / :func:`compare_representations` (:mod:`.table`): every representation
   against the angular reference, one JSON-able table (``data_specs/compare_json.md``); the

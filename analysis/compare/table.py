@@ -2,7 +2,7 @@
 
 For each representation of :mod:`.registry` the table holds the relative RMS radiance error
 (:func:`.metrics.relative_rms`) against the brute-force angular integral
-(:func:`~shrmkit.analysis.reference.reference_radiance`, RH02 eq. 2) on sampled (R, V) pairs
+(:func:`~shrmkit.analysis.reference.reference_radiance`, [RH02] eq. 2) on sampled (R, V) pairs
 (:func:`.pairs.sample_pairs`, grazing views included), over all pairs, grazing views
 (θ_v > 70°) and views below 45°, with storage in bytes, precompute seconds, per-frame update
 seconds (distant viewer) and CPU evaluation cost per (R, V) pair. See
@@ -159,8 +159,8 @@ def compare_representations(
 
 
 def compare(brdf: Any, env: Any, *, progress: Callable[[str], None] | None = None, **options: Any) -> dict[str, Any]:
-    """Compare the SHRM with Kautz & McCool 2000, Cabral, Olano, Nemec 1999 and Green, Kautz,
-    Durand 2007 against the angular reference: the JSON-able table only.
+    """Compare the SHRM [RH02] with Kautz–McCool [KM00], RSIBR [Cabral99] and Gaussian lobes
+    [Green07] against the angular reference: the JSON-able table only.
 
     Parameters
     ----------
