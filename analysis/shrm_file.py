@@ -175,7 +175,8 @@ def save_shrm(path: str | Path, shrm: Any) -> Path:
     _check_arrays(path, header["P"], arrays["coeffs"], arrays.get("cube"))
     with atomic_path(path, suffix=".npz") as tmp:
         with open(tmp, "wb") as handle:
-            np.savez_compressed(handle, header=text, **arrays)
+            # numpy's stubs: **arrays could fill the keyword allow_pickle (bool); its keys are array names
+            np.savez_compressed(handle, header=text, **arrays)  # type: ignore[arg-type]
     return path
 
 
@@ -215,6 +216,12 @@ def read_shrm_fields(path: str | Path) -> dict[str, Any]:
             "meta": header["meta"], "cube": cube, "lights": _read_lights(path, arrays, header["meta"])}
 
 
+def _three(values: Any) -> tuple[float, float, float]:
+    """Three numbers (a light's direction or RGB power); ValueError for another count."""
+    x, y, z = (float(v) for v in values)
+    return x, y, z
+
+
 def _read_lights(path: Path, arrays: dict[str, np.ndarray], meta: dict) -> Any:
     """The file's :class:`~shrmkit.analysis.lights.LightSet`, or None; all three arrays or none,
     matching shapes, finite, non-negative power, a BRDF named to shade them."""
@@ -228,13 +235,15 @@ def _read_lights(path: Path, arrays: dict[str, np.ndarray], meta: dict) -> Any:
         raise BadInputError(path, f"light arrays disagree: directions {d.shape}, power {e.shape}, index {k.shape}")
     if not isinstance(meta.get("lights_brdf"), str) or not meta["lights_brdf"]:
         raise BadInputError(path, "the file has lights but its meta names no BRDF to shade them (lights_brdf)")
-    described = meta.get("lights") if isinstance(meta.get("lights"), list) else []
+    described = meta.get("lights")
+    if not isinstance(described, list):
+        described = []
     lights = []
     for item in described:
         try:
             lights.append(Light(
-                direction=tuple(float(x) for x in item["direction"]), elevation_deg=float(item["elevation_deg"]),
-                azimuth_deg=float(item["azimuth_deg"]), power=tuple(float(x) for x in item["power"]),
+                direction=_three(item["direction"]), elevation_deg=float(item["elevation_deg"]),
+                azimuth_deg=float(item["azimuth_deg"]), power=_three(item["power"]),
                 radius_deg=float(item["radius_deg"]), solid_angle=float(item["solid_angle_sr"]),
                 share=float(item["flux_share"]), pixels=int(item["pixels"]), samples=int(item["samples"]),
                 merge_deg=float(item["merge_deg"]),
