@@ -340,24 +340,29 @@ def _lookup_matrix(dirs: np.ndarray, height: int, width: int) -> sparse.csr_matr
     return sparse.csr_matrix((weights.ravel(), (rows, cols.ravel())), shape=(len(dirs), height * width))
 
 
-def _chunk_lookup(maps: np.ndarray, matrix: sparse.csr_matrix, start: int, stop: int) -> np.ndarray:
-    """Bilinear lookups (N, stop − start, 3) float32 of maps [start, stop) by a :func:`_lookup_matrix`."""
-    h, w = maps.shape[1:3]
-    block = np.ascontiguousarray(np.moveaxis(maps[start:stop], 0, 2)).reshape(h * w, -1)
-    return (matrix @ block).astype(np.float32).reshape(matrix.shape[0], -1, 3)
+def _lookup(maps: np.ndarray, dirs: np.ndarray, chunk: int = 16) -> np.ndarray:
+    """Bilinear lookups (N, n, 3) float32 of (n, h, w, 3) maps at unit vectors (N, 3): one sparse
+    product per chunk of maps laid out (h·w, k·3)."""
+    n, h, w, _ = maps.shape
+    matrix = _lookup_matrix(dirs, h, w)
+    out = np.empty((len(dirs), n, 3), np.float32)
+    for s in range(0, n, chunk):
+        block = np.ascontiguousarray(np.moveaxis(maps[s:s + chunk], 0, 2)).reshape(h * w, -1)
+        out[:, s:s + chunk] = (matrix @ block).reshape(len(dirs), -1, 3)
+    return out
 
 
-def _squared_difference(maps: np.ndarray, coeffs: np.ndarray, dirs: np.ndarray, source: sparse.csr_matrix,
-                        chunk: int = 16) -> float:
-    """Σ over directions, maps and channels of (lookup of ``maps`` − lookup of ``coeffs``)² at ``dirs``
-    (the first ``len(maps)`` maps of ``coeffs``, ``source`` their lookup matrix), a chunk of maps at a
-    time: neither the (N, n, 3) lookups of the whole set nor their difference is held (2 × 71 MB
-    for a P = 18 SHRM at 16,384 directions)."""
+def _squared_difference(maps: np.ndarray, dirs: np.ndarray, given: np.ndarray, chunk: int = 2048) -> float:
+    """Σ over directions, maps and channels of (lookup of ``maps`` at ``dirs`` − ``given``)², a chunk of
+    directions at a time: the (N, n, 3) lookups of the whole set and their difference are not held
+    (2 × 71 MB for a P = 18 SHRM at 16,384 directions)."""
     matrix = _lookup_matrix(dirs, maps.shape[1], maps.shape[2])
+    n = maps.shape[0]
+    flat = np.ascontiguousarray(np.moveaxis(np.asarray(maps, np.float32), 0, 2)).reshape(-1, n * 3)
     total = 0.0
-    for s in range(0, len(maps), chunk):
-        stop = min(s + chunk, len(maps))
-        diff = _chunk_lookup(maps, matrix, s, stop) - _chunk_lookup(coeffs, source, s, stop)
+    for s in range(0, len(dirs), chunk):
+        # float32 lookups, as _lookup stores them
+        diff = (matrix[s:s + chunk] @ flat).astype(np.float32).reshape(-1, n, 3) - given[s:s + chunk]
         total += float(np.einsum("snc,snc->", diff, diff, dtype=np.float64))
     return total
 
@@ -407,12 +412,9 @@ def fit_coefficients(
     if _atlas_fits(P, H, W, max_bytes, max_edge):
         return CoefficientFit(np.asarray(coeffs, np.float32), P, source)
     dirs = _sphere_samples(samples)
-    source = _lookup_matrix(dirs, H, W)
+    given = _lookup(coeffs, dirs)
     weight = 4.0 * np.pi / samples
-    # each map's energy by its lookups, 16 maps at a time (the lookups of all of them are not kept)
-    energy = np.concatenate([
-        weight * np.einsum("snc,snc->n", g, g, dtype=np.float64)
-        for g in (_chunk_lookup(coeffs, source, s, min(s + 16, n)) for s in range(0, n, 16))])
+    energy = weight * np.einsum("snc,snc->n", given, given, dtype=np.float64)
     total = float(energy.sum())
     best: tuple[float, int, np.ndarray] | None = None
     for p in range(P, -1, -1):
@@ -427,7 +429,7 @@ def fit_coefficients(
             maps, err = np.asarray(coeffs[:m], np.float32), dropped
         else:
             maps = _area_resample(coeffs[:m], h, width(h))
-            err = weight * _squared_difference(maps, coeffs, dirs, source) + dropped
+            err = weight * _squared_difference(maps, dirs, given[:, :m]) + dropped
         if best is None or err < best[0]:
             best = (err, p, maps)
         if h >= H:

@@ -470,6 +470,10 @@ def collect_report(
     by_tolerance = dict(zip(options.all_tolerances, choices, strict=True))
     main_choice = by_tolerance[options.eps]
     env_entries, speed_rows, main_shrms = _environments(analysed, options, by_tolerance, progress, nthreads)
+    main_orders = {"tolerance": options.eps, "F": main_choice.F, "P": main_choice.P, "eps": main_choice.eps}
+    # the order searches' quadrature grids (their view profiles, ~70 MB for an RGL file) are not read
+    # after this: let them go before the preview's OpenGL context (~190 MB) is made
+    del choices, by_tolerance, main_choice
     _stage(progress, "checks")
     checks = data_checks(brdf, analysed, seed=options.seed, albedo_nodes=options.albedo_nodes)
     _stage(progress, "preview")
@@ -503,7 +507,7 @@ def collect_report(
         "brdf": {"name": brdf.name, "kind": brdf.kind, "analysis_of": analysis_of, "representation": representation},
         "options": options.as_dict(),
         "orders": order_rows,
-        "main": {"tolerance": options.eps, "F": main_choice.F, "P": main_choice.P, "eps": main_choice.eps},
+        "main": main_orders,
         "eps_table": eps_table,
         "environments": env_entries,
         "speed_vs_error": speed_rows,
