@@ -31,7 +31,8 @@ import numpy as np
 
 from ..brdf_io.brdf import BRDF
 from ..brdf_io.export_material import ExportedMaterial, to_target
-from ..brdf_io.models import CookTorrance, Lafortune, Lambert
+from ..brdf_io.models import AnalyticModel, CookTorrance, Lafortune, Lambert
+from ..brdf_io.zernike import ZernikeBRDF
 from .fit import fit_brdf
 from .fit.metrics import rel_rms
 from .fit.sampling import collect_samples
@@ -66,7 +67,7 @@ class MaterialExport:
     """
 
     source: str
-    model: BRDF
+    model: AnalyticModel | ZernikeBRDF
     model_note: str
     material: ExportedMaterial
     rel_rms: float
@@ -94,7 +95,7 @@ class MaterialExport:
 
 
 def closest_shared_model(brdf: BRDF, *, seed: int = 0, n_samples: int = 8192, starts: int = 2
-                         ) -> tuple[BRDF, str]:
+                         ) -> tuple[AnalyticModel | ZernikeBRDF, str]:
     """(model, note): ``brdf`` itself when it is Lambert or Cook–Torrance (note empty), a
     lobeless Lafortune model's Lambert term, else its closest Cook–Torrance GGX fit
     (``fit_brdf(..., "cook-torrance", distribution="ggx")``) with a note naming why.

@@ -91,10 +91,10 @@ def legendre_f(lmax: int, mmax: int, cos_theta: np.ndarray) -> np.ndarray:
     # complete for those m: the diagonal, the first off-diagonal or an earlier step set them)
     shape = (-1,) + (1,) * x.ndim
     for l in range(2, lmax + 1):
-        m = np.arange(min(l - 2, mmax) + 1, dtype=np.float64)
-        a_l = np.sqrt((4.0 * l * l - 1.0) / (l * l - m * m)).reshape(shape)
-        a_lm1 = np.sqrt((4.0 * (l - 1) ** 2 - 1.0) / ((l - 1) ** 2 - m * m)).reshape(shape)
-        k = m.size
+        ms = np.arange(min(l - 2, mmax) + 1, dtype=np.float64)
+        a_l = np.sqrt((4.0 * l * l - 1.0) / (l * l - ms * ms)).reshape(shape)
+        a_lm1 = np.sqrt((4.0 * (l - 1) ** 2 - 1.0) / ((l - 1) ** 2 - ms * ms)).reshape(shape)
+        k = ms.size
         out[l, :k] = a_l * (x * out[l - 1, :k] - out[l - 2, :k] / a_lm1)
     return out
 

@@ -415,6 +415,7 @@ def choose_window(
     inside = bands_inside(profile, max_view_deg)
 
     def error(F_: int, t: float) -> float:
+        assert band_energy is not None  # the "bands" rule is given the lighting's a_l
         bands = shrm_view_bands(profile, coefficients, band_energy, F_, P, sigma=shape(F_, t), q_max=q_max).bands
         return max(bands[b]["predicted_rel_rms"] ** 2 for b in inside)
 
@@ -525,6 +526,7 @@ def _strength_budget(
     inside = bands_inside(profile, max_view_deg)
 
     def worst(t: float) -> float:
+        assert band_energy is not None  # the "bands" rule is given the lighting's a_l
         bands = shrm_view_bands(profile, coefficients, band_energy, F, P, sigma=shape(F, t), q_max=q_max).bands
         return max(bands[b]["predicted_rel_rms"] ** 2 for b in inside)
 

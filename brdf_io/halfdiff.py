@@ -81,7 +81,7 @@ def directions_to_halfdiff(
 
 
 def halfdiff_to_directions(
-    theta_h: np.ndarray, theta_d: np.ndarray, phi_d: np.ndarray, phi_h: np.ndarray | float = 0.0
+    theta_h: np.ndarray, theta_d: np.ndarray, phi_d: np.ndarray | float, phi_h: np.ndarray | float = 0.0
 ) -> tuple[np.ndarray, np.ndarray]:
     """Directions (L, V) from half/difference angles, the inverse of ``directions_to_halfdiff``.
 

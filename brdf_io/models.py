@@ -153,6 +153,11 @@ class _Analytic(BRDF):
         raise NotImplementedError
 
 
+#: The type every model of this module shares (a BRDF that writes itself back with ``to_spec()``),
+#: for annotations.
+AnalyticModel = _Analytic
+
+
 @dataclass(frozen=True, eq=False, repr=False)
 class _DefinedByRhoHat(_Analytic):
     """A model that defines ρ̂ = ρ cos θ_i directly (RH02's Phong and simplified microfacet)."""

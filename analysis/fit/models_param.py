@@ -35,8 +35,7 @@ from typing import Any
 
 import numpy as np
 
-from ...brdf_io.brdf import BRDF
-from ...brdf_io.models import CookTorrance, Lafortune, LafortuneLobe, SimplifiedMicrofacet, rgb
+from ...brdf_io.models import AnalyticModel, CookTorrance, Lafortune, LafortuneLobe, SimplifiedMicrofacet, rgb
 from .sampling import FitSamples
 
 __all__ = [
@@ -113,7 +112,7 @@ class ModelParam:
         """A canonical representative of x (e.g. lobes sorted), same model."""
         return x
 
-    def build(self, x: np.ndarray, c: np.ndarray) -> tuple[BRDF, dict[str, Any]]:
+    def build(self, x: np.ndarray, c: np.ndarray) -> tuple[AnalyticModel, dict[str, Any]]:
         """The fitted model object and its parameters from x and true weights c (m, 3)."""
         raise NotImplementedError
 
@@ -230,7 +229,7 @@ class LafortuneParam(ModelParam):
         pairs = x.reshape(self.lobes, 2)
         return pairs[np.argsort(-pairs[:, 1], kind="stable")].ravel()
 
-    def build(self, x: np.ndarray, c: np.ndarray) -> tuple[BRDF, dict[str, Any]]:
+    def build(self, x: np.ndarray, c: np.ndarray) -> tuple[AnalyticModel, dict[str, Any]]:
         kd = c[0]
         lobes, described = [], []
         for k in range(self.lobes):
@@ -290,7 +289,7 @@ class CookTorranceParam(ModelParam):
     def starts(self) -> np.ndarray:
         return np.log([[0.005], [0.02], [0.05], [0.1], [0.2], [0.35], [0.6]])
 
-    def build(self, x: np.ndarray, c: np.ndarray) -> tuple[BRDF, dict[str, Any]]:
+    def build(self, x: np.ndarray, c: np.ndarray) -> tuple[AnalyticModel, dict[str, Any]]:
         kd, a, b = c
         ks = a + b
         f0 = np.where(ks > 0, a / np.where(ks > 0, ks, 1.0), 0.04)
@@ -331,7 +330,7 @@ class MicrofacetParam(ModelParam):
     def starts(self) -> np.ndarray:
         return np.log([[0.01], [0.03], [0.08], [0.2], [0.5], [1.0]])
 
-    def build(self, x: np.ndarray, c: np.ndarray) -> tuple[BRDF, dict[str, Any]]:
+    def build(self, x: np.ndarray, c: np.ndarray) -> tuple[AnalyticModel, dict[str, Any]]:
         sigma = float(np.exp(x[0]))
         model = SimplifiedMicrofacet(sigma=sigma, ks=rgb(c[0]))
         return model, {"sigma": sigma, "ks": c[0].tolist()}

@@ -35,7 +35,9 @@ import numpy as np
 
 from ...brdf_io.brdf import BRDF
 from ...brdf_io.errors import BadInputError
+from ...brdf_io.models import AnalyticModel
 from ...brdf_io.specs import load_brdf
+from ...brdf_io.zernike import ZernikeBRDF
 from .metrics import METRICS, error_metrics
 from .models_param import MODELS, ModelParam, make_param
 from .objective import ProjectedObjective
@@ -110,7 +112,7 @@ class FitResult:
 
     model: str
     params: dict[str, Any]
-    brdf: BRDF
+    brdf: AnalyticModel | ZernikeBRDF
     errors: dict[str, float]
     bands: tuple[BandError, ...]
     status: str

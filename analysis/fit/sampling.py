@@ -45,6 +45,7 @@ SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
@@ -53,6 +54,9 @@ from ...brdf_io.errors import BadInputError
 from ...brdf_io.halfdiff import halfdiff_to_directions
 from ...brdf_io.masked_grid import eval_with_mask
 from ...brdf_io.merl import MERL_DIMS, merl_index_coordinates, merl_sample_angles
+
+if TYPE_CHECKING:
+    from ...brdf_io.cornell import ScatteredBRDF
 
 __all__ = ["FitSamples", "sample_halfdiff", "collect_samples"]
 
@@ -190,9 +194,10 @@ def collect_samples(
     """
     name = getattr(brdf, "name", type(brdf).__name__)
     if getattr(brdf, "kind", None) == "scattered":
-        L = np.asarray(brdf.L, dtype=np.float64)
-        V = np.asarray(brdf.V, dtype=np.float64)
-        rho = np.asarray(brdf.rgb, dtype=np.float64)
+        scattered = cast("ScatteredBRDF", brdf)  # the BRDFs of kind "scattered" (duck-typed by kind)
+        L = np.asarray(scattered.L, dtype=np.float64)
+        V = np.asarray(scattered.V, dtype=np.float64)
+        rho = np.asarray(scattered.rgb, dtype=np.float64)
         cos_max = np.cos(np.radians(max_theta_deg))
         inside = (L[:, 2] >= cos_max - 1e-9) & (V[:, 2] >= cos_max - 1e-9) & (L[:, 2] > 0) & (V[:, 2] > 0)
         finite = np.all(np.isfinite(rho), axis=1)

@@ -192,7 +192,8 @@ def fit_zernike(
     t0 = time.perf_counter()
     if n_max is not None and n_coeffs is not None:
         raise BadInputError(None, "give the Zernike order n_max or the coefficient count n_coeffs, not both")
-    n_max = 8 if n_max is None and n_coeffs is None else (order_for_count(n_coeffs) if n_max is None else n_max)
+    if n_max is None:
+        n_max = 8 if n_coeffs is None else order_for_count(n_coeffs)
     n_max = check_order(n_max)
     if metric not in ZERNIKE_METRICS:
         raise BadInputError(None, f"unknown Zernike fit metric {metric!r}; choose one of {', '.join(ZERNIKE_METRICS)}")
