@@ -65,6 +65,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def _load(path: Path):
     spec = importlib.util.spec_from_file_location(f"shrm_bench_{path.stem}", path)
+    assert spec is not None and spec.loader is not None  # a .py file always has a spec and a loader
     module = importlib.util.module_from_spec(spec)
     # registered before it runs, as an import would be: dataclasses (and pickling) look the
     # module up in sys.modules while its classes are being defined
@@ -105,7 +106,8 @@ class _Tee(io.TextIOBase):
 
     def __init__(self, echo: Any) -> None:
         super().__init__()
-        self.echo, self.parts = echo, []
+        self.echo = echo
+        self.parts: list[str] = []
 
     def write(self, text: str) -> int:
         self.parts.append(text)

@@ -97,9 +97,11 @@ def run(args: argparse.Namespace) -> int:
         table.add_column(key, justify="right")
     t = shrm.meta["timings"]
     n_lights = len(shrm.meta["lights"])
+    assert not n_lights or shrm.lights is not None  # the meta describes the SHRM's own lights
+    light_samples = 0 if shrm.lights is None else len(shrm.lights)
     table.add_row(
         str(shrm.F), str(shrm.P), f"{shrm.height}x{shrm.width}",
-        f"{n_lights} ({len(shrm.lights)} samples)" if n_lights else "0", f"{shrm.eps['brdf']:.3g}",
+        f"{n_lights} ({light_samples} samples)" if n_lights else "0", f"{shrm.eps['brdf']:.3g}",
         f"{shrm.eps['reflected']:.3g}", f"{shrm.eps['bound']:.3g}", f"{t['total']:.3f}",
         f"{out.stat().st_size / 1e6:.2f}",
     )

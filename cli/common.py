@@ -394,10 +394,10 @@ def env_sources_arg(tokens: str | list[str]) -> tuple[list[str], bool]:
             sources += [str(p) for p in found]
             sequence = True
         elif _GLOB_CHARS & set(token) and not path.exists():
-            found = sorted(p for p in glob.glob(token) if Path(p).is_file())
-            if not found:
+            matches = sorted(p for p in glob.glob(token) if Path(p).is_file())
+            if not matches:
                 raise BadInputError(token, "the pattern matches no file")
-            sources += found
+            sources += matches
             sequence = True
         else:
             sources.append(token)  # a cube-map folder, or a missing file that load_env names

@@ -166,7 +166,8 @@ def main(argv: list[str] | None = None) -> int:
     args, extra = parser.parse_known_args(argv)
     if extra:  # reported by the verb's parser, which knows the verb's options ("did you mean")
         verbs = next((a.choices for a in parser._actions if isinstance(a, argparse._SubParsersAction)), {})
-        (verbs.get(getattr(args, "verb", None)) or parser).error(f"unrecognized arguments: {' '.join(extra)}")
+        verb = getattr(args, "verb", None)
+        ((verbs.get(verb) if verb is not None else None) or parser).error(f"unrecognized arguments: {' '.join(extra)}")
     if getattr(args, "verb", None):
         _one_line_warnings(args.verb)
     if not getattr(args, "_run", None):
