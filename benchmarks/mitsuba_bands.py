@@ -67,6 +67,7 @@ from pathlib import Path
 
 import numpy as np
 
+from shrmkit.analysis.compare.band_error import band_signal_energy, pixels_statement
 from shrmkit.analysis.reference import reference_radiance
 from shrmkit.analysis.view_bands import DEFAULT_BAND_EDGES_DEG
 from shrmkit.brdf_io.envmap import EnvironmentMap, load_env
@@ -76,7 +77,7 @@ from shrmkit.render.camera import Camera
 from shrmkit.render.cpu_reference import HitGeometry, shade, sphere_geometry
 
 __all__ = ["MI_TO_WORLD", "VIEW", "SphereScene", "sphere_scene", "scene_env", "mitsuba_bitmap", "check_envmap",
-           "mitsuba_render", "band_means", "compare_bands", "reference_render", "main"]
+           "mitsuba_render", "band_means", "compare_bands", "reference_render", "shrm_pixels_statement", "main"]
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 ENV = DATA / "env" / "ict_small" / "grace.hdr"
@@ -260,22 +261,39 @@ def _stated(shrm, edges=EDGES) -> list[tuple[float, float] | None]:
     return out
 
 
-def _print_table(title: str, rows: list[dict], stated: list | None) -> None:
+def _print_table(title: str, rows: list[dict], stated: list | None, pixels: list[dict] | None = None) -> list[dict]:
+    """Print one table; returns its rows with ``pass_stated`` (diff ≤ noise + the band's stated bound)
+    and, with ``pixels`` (:func:`~shrmkit.analysis.compare.band_error.pixels_statement`), ``pass``
+    (diff ≤ noise + the bound carried to the band's pixels, and rms ≤ pix.noise + that bound)."""
     print(f"\n{title}")
+    extra = f" {'pixels pred/bound':>17} {'xE':>6} {'pass':>4}" if pixels else ""
     print(f"{'band':>7} {'pix':>4} {'Mitsuba':>8} {'ours':>8} {'diff':>7} {'noise':>7} {'stated pred/bound':>17} "
-          f"{'pass':>4} {'rms':>7} {'pix.noise':>9} {'excess':>7}")
+          f"{'pass':>4} {'rms':>7} {'pix.noise':>9} {'excess':>7}{extra}")
+    out = []
     for k, r in enumerate(rows):
         lo, hi = r["theta_v_deg"]
         if "mitsuba" not in r:
             print(f"{lo:>3g}-{hi:<3g} {0:>4} (no pixel)")
+            out.append(r)
             continue
         pred, bound = (0.0, 0.0) if stated is None or stated[k] is None else stated[k]
         ok = r["diff"] <= r["noise"] + bound
         s = "0 (exact)" if stated is None else f"{pred:.4f}/{bound:.4f}"
         excess = np.sqrt(max(r["rms"] ** 2 - r["pix_noise"] ** 2, 0.0))
-        print(f"{lo:>3g}-{hi:<3g} {r['pixels']:>4} {np.mean(r['mitsuba']):8.5f} {np.mean(r['ours']):8.5f} "
-              f"{r['diff']:7.4f} {r['noise']:7.4f} {s:>17} {'yes' if ok else 'NO':>4} {r['rms']:7.4f} "
-              f"{r['pix_noise']:9.4f} {excess:7.4f}")
+        line = (f"{lo:>3g}-{hi:<3g} {r['pixels']:>4} {np.mean(r['mitsuba']):8.5f} {np.mean(r['ours']):8.5f} "
+                f"{r['diff']:7.4f} {r['noise']:7.4f} {s:>17} {'yes' if ok else 'NO':>4} {r['rms']:7.4f} "
+                f"{r['pix_noise']:9.4f} {excess:7.4f}")
+        record = {**r, "stated": [pred, bound], "pass_stated": bool(ok)}
+        if pixels:
+            p = pixels[k]
+            ok_pix = r["diff"] <= r["noise"] + p["bound_rel_rms"] and r["rms"] <= r["pix_noise"] + p["bound_rel_rms"]
+            line += (f" {p['predicted_rel_rms']:.4f}/{p['bound_rel_rms']:.4f} {p['energy_ratio']:6.1f} "
+                     f"{'yes' if ok_pix else 'NO':>4}")
+            record.update(pixels_statement=[p["predicted_rel_rms"], p["bound_rel_rms"]],
+                          energy_ratio=p["energy_ratio"], **{"pass": bool(ok_pix)})
+        print(line)
+        out.append(record)
+    return out
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -290,39 +308,64 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--seeds", type=int, default=4, help="independent Mitsuba renders (their spread is the noise)")
     parser.add_argument("--eps", type=float, default=0.03, help="SHRM tolerance")
     parser.add_argument("--no-shrm", action="store_true", help="Mitsuba and the brute-force reference only")
+    parser.add_argument("--no-reference", action="store_true", help="Mitsuba and the SHRM only (the brute-force "
+                        "reference costs ~1 us per map pixel and ray: ~1000 s a material at 512 rows)")
     parser.add_argument("--record", help="write the JSON of Mitsuba's band values (one material)")
+    parser.add_argument("--json", help="write every table's rows to this JSON file")
     args = parser.parse_args(argv)
     args.argv = list(sys.argv[1:] if argv is None else argv)
     import mitsuba as mi
 
+    t0 = time.process_time()
     env = scene_env(args.env_rows)
     scene = sphere_scene(args.size)
     check = check_envmap(env.radiance, args.upsample)
     print(f"Mitsuba {mi.__version__} scalar_rgb; {ENV.name} {env.height}x{env.width} (bitmap x{args.upsample}): "
           f"envmap eval equal on {check['equal_fraction']:.0%} of directions, median rel {check['median_rel']:.1e}; "
-          f"{args.size}^2 orthographic sphere from {VIEW}, {len(scene.origins)} rays, {args.spp} spp x {args.seeds}")
+          f"{args.size}^2 orthographic sphere from {VIEW}, {len(scene.origins)} rays, {args.spp} spp x {args.seeds}; "
+          f"set-up CPU {time.process_time() - t0:.0f} s")
+    tables: dict = {"argv": args.argv, "mitsuba_version": mi.__version__, "env_rows": env.height, "materials": {}}
     for name in args.material or MATERIALS:
         path = RGL / f"{name}.bsdf"
+        own = tables["materials"][name] = {}
         t0 = time.process_time()
         runs = np.stack([mitsuba_render(path, env.radiance, scene, spp=args.spp, seed=1000 * s + 1,
                                         upsample=args.upsample) for s in range(args.seeds)])
-        t_mi = time.process_time() - t0
-        t0 = time.process_time()
-        ref = reference_render(path, env, scene, upsample=args.ref_upsample)
-        light = reference_render(path, env, scene, table_direction="light", upsample=args.ref_upsample)
-        t_ref = time.process_time() - t0
-        ref_rows = compare_bands(runs, ref, scene.theta_v_deg)
-        _print_table(f"{name}: brute-force reference (camera convention; CPU {t_ref / 2:.0f} s; Mitsuba CPU "
-                     f"{t_mi:.0f} s)", ref_rows, None)
-        _print_table(f"{name}: brute-force reference, light convention (#light)",
-                     compare_bands(runs, light, scene.theta_v_deg), None)
+        own["mitsuba_cpu_s"] = t_mi = time.process_time() - t0
+        if args.no_reference:
+            ref_rows = compare_bands(runs, runs.mean(axis=0), scene.theta_v_deg)  # Mitsuba's own band values
+            print(f"\n{name}: Mitsuba CPU {t_mi:.0f} s (no brute-force reference)")
+        else:
+            t0 = time.process_time()
+            ref = reference_render(path, env, scene, upsample=args.ref_upsample)
+            light = reference_render(path, env, scene, table_direction="light", upsample=args.ref_upsample)
+            own["reference_cpu_s"] = t_ref = (time.process_time() - t0) / 2
+            ref_rows = compare_bands(runs, ref, scene.theta_v_deg)
+            own["reference"] = _print_table(f"{name}: brute-force reference (camera convention; CPU {t_ref:.0f} s; "
+                                            f"Mitsuba CPU {t_mi:.0f} s)", ref_rows, None)
+            own["reference_light"] = _print_table(f"{name}: brute-force reference, light convention (#light)",
+                                                  compare_bands(runs, light, scene.theta_v_deg), None)
         if not args.no_shrm:
-            _shrm_tables(args, name, path, env, scene, runs)
+            own.update(_shrm_tables(args, name, path, env, scene, runs))
         if args.record:
             _record(args, name, env, scene, runs, ref_rows, check)
+    if args.json:
+        Path(args.json).write_text(json.dumps(tables, indent=1) + "\n")
+        print(f"wrote {args.json}")
 
 
-def _shrm_tables(args, name: str, path: Path, env: EnvironmentMap, scene: SphereScene, runs: np.ndarray) -> None:
+def shrm_pixels_statement(shrm, env: EnvironmentMap, values: np.ndarray, theta_v_deg: np.ndarray, *,
+                          per_band: int = 1000, seed: int = 0) -> list[dict]:
+    """The SHRM's per-band statement carried to the rendered pixels (``values`` (n, 3) at ``theta_v_deg``
+    (n,)): :func:`~shrmkit.analysis.compare.band_error.pixels_statement`, the bands' signal energy
+    measured on the SHRM itself over ``per_band`` pairs a band (:func:`band_signal_energy`)."""
+    bands = shrm.meta["view_bands"]
+    edges = [bands[0]["theta_v_deg"][0]] + [b["theta_v_deg"][1] for b in bands]
+    energy = band_signal_energy(shrm.radiance, env.radiance, edges, per_band=per_band, seed=seed)
+    return pixels_statement(bands, energy, values, theta_v_deg)
+
+
+def _shrm_tables(args, name: str, path: Path, env: EnvironmentMap, scene: SphereScene, runs: np.ndarray) -> dict:
     from shrmkit.render.api import render_scene
 
     t0 = time.process_time()
@@ -342,15 +385,25 @@ def _shrm_tables(args, name: str, path: Path, env: EnvironmentMap, scene: Sphere
     worst = max((s for s, b in zip(stated, EDGES[:-1], strict=True) if s is not None and b < 80.0),
                 key=lambda s: s[1], default=(float("nan"), float("nan")))
     cpu = shade(scene.geometry, shrm.radiance)[scene.geometry.hit]
-    _print_table(f"{name}: SHRM (F {shrm.F}, P {shrm.P}, eps {args.eps:g}; worst band inside 80 deg: predicted "
-                 f"{worst[0]:.4f}, bound {worst[1]:.4f}; build CPU {seconds:.0f} s), SHRM.radiance on the analytic "
-                 "sphere", compare_bands(runs, cpu, scene.theta_v_deg), stated)
+    t0 = time.process_time()
+    pixels = shrm_pixels_statement(shrm, env, cpu, scene.theta_v_deg)
+    t_pix = time.process_time() - t0
+    out = {"F": shrm.F, "P": shrm.P, "rows": shrm.height, "build_cpu_s": seconds, "statement_cpu_s": t_pix,
+           "view_bands": shrm.meta["view_bands"]}
+    out["shrm"] = _print_table(
+        f"{name}: SHRM (F {shrm.F}, P {shrm.P}, {shrm.height} rows, eps {args.eps:g}; worst band inside 80 deg: "
+        f"predicted {worst[0]:.4f}, bound {worst[1]:.4f}; build CPU {seconds:.0f} s, statement for the pixels "
+        f"{t_pix:.1f} s), SHRM.radiance on the analytic sphere", compare_bands(runs, cpu, scene.theta_v_deg), stated,
+        pixels)
     if frame is not None:
         full = (np.asarray(frame.alpha) >= 0.999) & scene.geometry.hit
         keep = full[scene.geometry.hit]
         gl = np.asarray(frame.linear, dtype=np.float64)[scene.geometry.hit]
-        _print_table(f"{name}: shrm render (OpenGL frame, triangulated sphere, {keep.sum()} fully covered pixels)",
-                     compare_bands(runs[:, keep], gl[keep], scene.theta_v_deg[keep]), stated)
+        out["gl"] = _print_table(
+            f"{name}: shrm render (OpenGL frame, triangulated sphere, {keep.sum()} fully covered pixels)",
+            compare_bands(runs[:, keep], gl[keep], scene.theta_v_deg[keep]), stated,
+            shrm_pixels_statement(shrm, env, cpu[keep], scene.theta_v_deg[keep]))
+    return out
 
 
 def _record(args, name: str, env: EnvironmentMap, scene: SphereScene, runs: np.ndarray, rows: list[dict],

@@ -84,6 +84,50 @@ def test_reference_render_matches_recorded_mitsuba_bands(recorded):
     assert len(fails["light"]) >= 3, fails["light"]
 
 
+def test_shrm_render_matches_recorded_mitsuba_bands(recorded, shared_data: Path):
+    """The SHRM ``shrm render`` builds (ε 0.03, lights auto; here at the record's 32 map rows) against
+    Mitsuba's recorded render, evaluated on the record's pixels: per band the mean within Mitsuba's
+    noise plus the SHRM's statement carried to the band's pixels, and the per-pixel relative RMS
+    within Mitsuba's per-pixel noise plus the same (``pixels_statement``: the band's stated
+    relative RMS × max(1, √(band energy / pixel energy)); the stated band values alone miss at
+    70–85°, where this sphere's pixels reflect 120–280× less than the band's average and the SHRM's
+    pixels are 67–110 % off). The same SHRM of the light convention misses in at least 3 bands
+    (0–60°: 3.7–21 % off in the mean, against 0.6–1.8 % for the camera convention)."""
+    from shrmkit.analysis.shrm import prefilter
+    from shrmkit.brdf_io.rgl import RGLGamutWarning
+    from shrmkit.brdf_io.specs import load_brdf
+
+    record, bench, scene, env, path = recorded
+    theirs = _recorded_pixels(record)
+    order = _order(bench, scene, record)
+    g = scene.geometry
+    fails = {}
+    for suffix in ("", "#light"):
+        with pytest.warns(RGLGamutWarning):  # as shrm render loads it: 746 small negative values clamped
+            brdf = load_brdf(f"{path}{suffix}")
+        shrm = prefilter(env, brdf, eps=0.03)
+        ours = shrm.radiance(g.R[g.hit], g.V[g.hit])
+        stated = bench.shrm_pixels_statement(shrm, env, ours, scene.theta_v_deg, per_band=300)
+        ours = ours[order]
+        fails[suffix] = []
+        start = 0
+        for band, mine in zip(record["bands"], stated, strict=True):
+            n = band["pixels"]
+            assert mine["pixels"] == n and mine["factor"] >= 1.0
+            if not n:
+                continue
+            o, t = ours[start:start + n], theirs[start:start + n]
+            start += n
+            m = np.asarray(band["mitsuba"])
+            diff = np.linalg.norm(o.mean(axis=0) - m) / np.linalg.norm(m)
+            rms = np.sqrt(np.sum((o - t) ** 2) / np.sum(t**2))
+            bound = mine["bound_rel_rms"]
+            if not (diff <= band["noise"] + bound and rms <= band["pix_noise"] + bound):
+                fails[suffix].append((band["theta_v_deg"], round(diff, 4), round(rms, 4), round(bound, 4)))
+    assert not fails[""], fails[""]
+    assert len(fails["#light"]) >= 3, fails["#light"]
+
+
 @pytest.mark.slow
 def test_mitsuba_render_now_matches_record_and_reference(recorded):
     """Mitsuba rendered now (skipped without ``mitsuba``), 4 seeds of 256 spp: the envmap's
