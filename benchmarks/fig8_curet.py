@@ -121,7 +121,7 @@ def why(census: Census, kind: str, published: int | None = None) -> str:
         return (f"chosen representations: {n} of 61 above 90 % against RH02's {RH02_COUNT} ({n - RH02_COUNT:+d}). "
                 f"Why not 56: (1) not the same fits — RH02 analysed Koenderink's published CURET fits, whose "
                 f"coefficients we do not have; ours are the representation with the smallest held-out worst view "
-                f"band ({fit_settings(census).removeprefix(SETTINGS_PREFIX)}), which carries none of the ringing "
+                f"band {fit_settings(census).removeprefix(SETTINGS_PREFIX)}, which carries none of the ringing "
                 f"a plain 55-term least-squares polynomial puts between and beyond the 205 measured geometries"
                 + ("" if published is None else f" (such fits, the 'published' census: {published} of 61)")
                 + f". (2) The accuracy is the isotropic representation's: the "
