@@ -5,8 +5,6 @@ files from other tools"; issue: real-world files and a fuzz harness)."""
 from __future__ import annotations
 
 import os
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -15,18 +13,14 @@ import pytest
 from shrmkit.brdf_io.hdr_codecs import write_exr, write_hdr
 
 
-def run_cli(*args: str, timeout: float = 120.0) -> subprocess.CompletedProcess:
-    return subprocess.run(
-        [sys.executable, "-m", "shrmkit.cli.main", *args], capture_output=True, text=True, timeout=timeout
-    )
-
-
-def _assert_one_line(proc: subprocess.CompletedProcess, names: str) -> None:
-    assert proc.returncode == 2, (proc.returncode, proc.stderr[-2000:])
-    lines = proc.stderr.strip().splitlines()
-    assert len(lines) == 1, proc.stderr[-2000:]
+def _assert_one_line(done: tuple[int, str], names: str) -> None:
+    """(exit code, stderr) of one command: exit 2, one line starting "shrm " and naming ``names``."""
+    code, stderr = done
+    assert code == 2, (code, stderr[-2000:])
+    lines = stderr.strip().splitlines()
+    assert len(lines) == 1, stderr[-2000:]
     assert lines[0].startswith("shrm ") and names in lines[0], lines[0]
-    assert "Traceback" not in proc.stderr
+    assert "Traceback" not in stderr
 
 
 def _special_files(folder: Path, suffix: str) -> list[Path]:
@@ -37,16 +31,23 @@ def _special_files(folder: Path, suffix: str) -> list[Path]:
     return [fifo, zero]
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("suffix", [".binary", ".npz", ".brdf", ".json"])
-def test_special_brdf_files_are_refused_at_once(tmp_path, suffix):
-    """A FIFO would block a reader forever and /dev/zero would read until memory runs out."""
-    for path in _special_files(tmp_path, suffix):
-        _assert_one_line(run_cli("orders", str(path), timeout=60.0), path.name)
+# The commands of each test run one after the other in one fresh interpreter (the run_each fixture
+# of tests/cli/conftest.py: main(argv) per command, each with its own stderr): a reader that blocks
+# on a FIFO or reads /dev/zero until memory runs out fails the test by the time limit or the exit
+# status, as a process per command did, for one interpreter start instead of 18.
 
 
 @pytest.mark.slow
-def test_hostile_environment_files_leave_no_output(tmp_path):
+def test_special_brdf_files_are_refused_at_once(tmp_path, run_each):
+    """A FIFO would block a reader forever and /dev/zero would read until memory runs out (.binary,
+    .npz, .brdf and .json readers)."""
+    paths = [path for suffix in (".binary", ".npz", ".brdf", ".json") for path in _special_files(tmp_path, suffix)]
+    for path, done in zip(paths, run_each([["orders", str(path)] for path in paths], timeout=240.0), strict=True):
+        _assert_one_line(done, path.name)
+
+
+@pytest.mark.slow
+def test_hostile_environment_files_leave_no_output(tmp_path, run_each):
     out = tmp_path / "out"
     out.mkdir()
     image = np.full((8, 16, 3), 0.5, np.float32)
@@ -58,29 +59,28 @@ def test_hostile_environment_files_leave_no_output(tmp_path):
     bomb = tmp_path / "bomb.hdr"  # a header declaring 32767 × 1024 pixels over a few bytes of data
     bomb.write_bytes(b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 32767 +X 1024\n" + bytes((2, 2, 4, 0)) * 64)
     hostile = [truncated, bomb, *_special_files(tmp_path, ".exr")]
-    for env in hostile:
-        target = out / "m.shrm.npz"
-        proc = run_cli("prefilter", "--env", str(env), "--brdf", "phong:s=8", "-o", str(target), timeout=60.0)
-        _assert_one_line(proc, env.name)
-        assert not list(out.iterdir()), list(out.iterdir())
-    png = out / "r.png"
-    proc = run_cli("render", "builtin:sphere", "--env", str(bomb), "--size", "32", "-o", str(png), timeout=60.0)
-    _assert_one_line(proc, bomb.name)
+    # one output name per command: a partial output left by any of them is in out/ under its name
+    cases = [["prefilter", "--env", str(env), "--brdf", "phong:s=8", "-o", str(out / f"m{k}.shrm.npz")]
+             for k, env in enumerate(hostile)]
+    cases.append(["render", "builtin:sphere", "--env", str(bomb), "--size", "32", "-o", str(out / "r.png")])
+    for name, done in zip([env.name for env in hostile] + [bomb.name], run_each(cases, timeout=240.0), strict=True):
+        _assert_one_line(done, name)
     assert not list(out.iterdir())
 
 
 @pytest.mark.slow
-def test_hostile_mesh_and_shrm_files_leave_no_output(tmp_path):
+def test_hostile_mesh_and_shrm_files_leave_no_output(tmp_path, run_each):
     out = tmp_path / "out"
     out.mkdir()
     bad_shrm = tmp_path / "bad.shrm.npz"
     bad_shrm.write_bytes(b"PK\x03\x04" + bytes(60))
-    for mesh in [*_special_files(tmp_path, ".ply"), tmp_path / "missing.obj"]:
-        proc = run_cli("render", str(mesh), "--env", "builtin:sky,height=16", "--size", "32",
-                       "-o", str(out / "r.png"), timeout=60.0)
-        _assert_one_line(proc, mesh.name)
-    proc = run_cli("compare", str(bad_shrm), timeout=60.0)
-    assert proc.returncode == 2 and "Traceback" not in proc.stderr, proc.stderr[-2000:]
+    meshes = [*_special_files(tmp_path, ".ply"), tmp_path / "missing.obj"]
+    cases = [["render", str(mesh), "--env", "builtin:sky,height=16", "--size", "32", "-o", str(out / f"r{k}.png")]
+             for k, mesh in enumerate(meshes)]
+    *rendered, (code, stderr) = run_each([*cases, ["compare", str(bad_shrm)]], timeout=240.0)
+    for mesh, done in zip(meshes, rendered, strict=True):
+        _assert_one_line(done, mesh.name)
+    assert code == 2 and "Traceback" not in stderr, stderr[-2000:]
     assert not list(out.iterdir())
 
 
