@@ -67,7 +67,7 @@ from pathlib import Path
 
 import numpy as np
 
-from shrmkit.analysis.compare.band_error import band_signal_energy, pixels_statement
+from shrmkit.analysis.compare.band_error import pixels_statement
 from shrmkit.analysis.reference import reference_radiance
 from shrmkit.analysis.view_bands import DEFAULT_BAND_EDGES_DEG
 from shrmkit.brdf_io.envmap import EnvironmentMap, load_env
@@ -77,7 +77,7 @@ from shrmkit.render.camera import Camera
 from shrmkit.render.cpu_reference import HitGeometry, shade, sphere_geometry
 
 __all__ = ["MI_TO_WORLD", "VIEW", "SphereScene", "sphere_scene", "scene_env", "mitsuba_bitmap", "check_envmap",
-           "mitsuba_render", "band_means", "compare_bands", "reference_render", "shrm_pixels_statement", "main"]
+           "mitsuba_render", "band_means", "compare_bands", "reference_render", "main"]
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 ENV = DATA / "env" / "ict_small" / "grace.hdr"
@@ -266,7 +266,7 @@ def _print_table(title: str, rows: list[dict], stated: list | None, pixels: list
     and, with ``pixels`` (:func:`~shrmkit.analysis.compare.band_error.pixels_statement`), ``pass``
     (diff ≤ noise + the bound carried to the band's pixels, and rms ≤ pix.noise + that bound)."""
     print(f"\n{title}")
-    extra = f" {'pixels pred/bound':>17} {'xE':>6} {'pass':>4}" if pixels else ""
+    extra = f" {'pixels pred/bound':>17} {'factor':>6} {'pass':>4}" if pixels else ""
     print(f"{'band':>7} {'pix':>4} {'Mitsuba':>8} {'ours':>8} {'diff':>7} {'noise':>7} {'stated pred/bound':>17} "
           f"{'pass':>4} {'rms':>7} {'pix.noise':>9} {'excess':>7}{extra}")
     out = []
@@ -287,10 +287,10 @@ def _print_table(title: str, rows: list[dict], stated: list | None, pixels: list
         if pixels:
             p = pixels[k]
             ok_pix = r["diff"] <= r["noise"] + p["bound_rel_rms"] and r["rms"] <= r["pix_noise"] + p["bound_rel_rms"]
-            line += (f" {p['predicted_rel_rms']:.4f}/{p['bound_rel_rms']:.4f} {p['energy_ratio']:6.1f} "
+            line += (f" {p['predicted_rel_rms']:.4f}/{p['bound_rel_rms']:.4f} {p['factor']:6.2f} "
                      f"{'yes' if ok_pix else 'NO':>4}")
             record.update(pixels_statement=[p["predicted_rel_rms"], p["bound_rel_rms"]],
-                          energy_ratio=p["energy_ratio"], **{"pass": bool(ok_pix)})
+                          factor=p["factor"], **{"pass": bool(ok_pix)})
         print(line)
         out.append(record)
     return out
@@ -354,17 +354,6 @@ def main(argv: list[str] | None = None) -> None:
         print(f"wrote {args.json}")
 
 
-def shrm_pixels_statement(shrm, env: EnvironmentMap, values: np.ndarray, theta_v_deg: np.ndarray, *,
-                          per_band: int = 1000, seed: int = 0) -> list[dict]:
-    """The SHRM's per-band statement carried to the rendered pixels (``values`` (n, 3) at ``theta_v_deg``
-    (n,)): :func:`~shrmkit.analysis.compare.band_error.pixels_statement`, the bands' signal energy
-    measured on the SHRM itself over ``per_band`` pairs a band (:func:`band_signal_energy`)."""
-    bands = shrm.meta["view_bands"]
-    edges = [bands[0]["theta_v_deg"][0]] + [b["theta_v_deg"][1] for b in bands]
-    energy = band_signal_energy(shrm.radiance, env.radiance, edges, per_band=per_band, seed=seed)
-    return pixels_statement(bands, energy, values, theta_v_deg)
-
-
 def _shrm_tables(args, name: str, path: Path, env: EnvironmentMap, scene: SphereScene, runs: np.ndarray) -> dict:
     from shrmkit.render.api import render_scene
 
@@ -386,7 +375,7 @@ def _shrm_tables(args, name: str, path: Path, env: EnvironmentMap, scene: Sphere
                 key=lambda s: s[1], default=(float("nan"), float("nan")))
     cpu = shade(scene.geometry, shrm.radiance)[scene.geometry.hit]
     t0 = time.process_time()
-    pixels = shrm_pixels_statement(shrm, env, cpu, scene.theta_v_deg)
+    pixels = pixels_statement(shrm, cpu, scene.theta_v_deg)
     t_pix = time.process_time() - t0
     out = {"F": shrm.F, "P": shrm.P, "rows": shrm.height, "build_cpu_s": seconds, "statement_cpu_s": t_pix,
            "view_bands": shrm.meta["view_bands"]}
@@ -402,7 +391,7 @@ def _shrm_tables(args, name: str, path: Path, env: EnvironmentMap, scene: Sphere
         out["gl"] = _print_table(
             f"{name}: shrm render (OpenGL frame, triangulated sphere, {keep.sum()} fully covered pixels)",
             compare_bands(runs[:, keep], gl[keep], scene.theta_v_deg[keep]), stated,
-            shrm_pixels_statement(shrm, env, cpu[keep], scene.theta_v_deg[keep]))
+            pixels_statement(shrm, cpu[keep], scene.theta_v_deg[keep]))
     return out
 
 

@@ -57,9 +57,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...brdf_io.latlong import pixel_index, row_edges_cos, row_solid_angles
+from ..error_image import band_errors, channel_norm
 
 __all__ = ["BandSample", "band_sample", "band_error", "pixel_density", "pairs_per_band", "MIN_PAIRS_PER_BAND",
-           "DEFAULT_SCALES_DEG", "DEFAULT_UNIFORM", "band_signal_energy", "pixels_statement"]
+           "DEFAULT_SCALES_DEG", "DEFAULT_UNIFORM", "pixels_statement"]
 
 #: Fewest pairs per band of the report's and ``shrm compare``'s measurement (issue 29: 60 pairs
 #: give a spread of 8 seeds within 1.5x the stated s.e. on Grace with a sharp lobe; 16-33 did not).
@@ -326,93 +327,70 @@ def band_error(value: np.ndarray, reference: np.ndarray, sample: BandSample, *, 
     return out
 
 
-def band_signal_energy(model, radiance: np.ndarray, edges_deg: Sequence[float], *, per_band: int = 1000,
-                       seed: int = 0) -> np.ndarray:
-    """E[|B(R, V)|²] per view band under the law of the per-band statement (module docstring: R
-    uniform on the sphere, θ_v uniform in the band, V at 2θ_v from R with uniform azimuth), |·|²
-    summed over RGB: the denominator of ``SHRM.meta["view_bands"]``' relative RMS, estimated on
-    ``per_band`` pairs of :func:`band_sample` (importance weights; the stratified estimate's
-    relative error is a few % at 1000 pairs).
 
-    Parameters
-    ----------
-    model
-        Callable (R, V) → (n, 3) radiance, e.g. ``SHRM.radiance`` (any units).
-    radiance
-        (H, W, 3) lat-long map the sampler's density is built from (the map the model reflects).
-    edges_deg, per_band, seed
-        As in :func:`band_sample`.
-
-    Returns
-    -------
-    (n_bands,) float64, in the model's units squared.
-    """
-    sample = band_sample(radiance, per_band, edges_deg, seed=seed)
-    energy = sample.weights * np.sum(np.asarray(model(sample.R, sample.V), dtype=np.float64) ** 2, axis=1)
-    return np.bincount(sample.band, weights=energy, minlength=len(sample.edges_deg) - 1) / per_band
-
-
-def pixels_statement(bands: Sequence[dict], band_energy: np.ndarray, values: np.ndarray, theta_v_deg: np.ndarray
-                     ) -> list[dict]:
+def pixels_statement(shrm, values: np.ndarray, theta_v_deg: np.ndarray, *, signal=None) -> list[dict]:
     """The per-band statement of an SHRM carried to the pixels of one render (issue 29).
 
     ``SHRM.meta["view_bands"]`` states r = √(E[|e|²] / E[|B|²]) per band, both expectations over
-    *all* reflection directions (module docstring). A render's band shows only the R its pixels
-    reflect, whose signal energy E_pix = mean |B|² over the band's pixels may be far below the
-    band's E[|B|²] (a sphere's ring of R that misses a map's bright windows), and truncation
-    error does not follow the signal into the dark: it rings around the bright features over the
-    whole sphere. Two limiting models: the error is proportional to the signal (r holds on any
-    subset of R), or its energy is spread evenly over R (the absolute error r² E[|B|²] holds on
-    any subset, relative r √(E[|B|²]/E_pix)). The statement for the pixels takes the larger:
+    *all* reflection directions R (module docstring). A render's band shows only the R its pixels
+    reflect, whose signal may be far below the band's average (a sphere's ring of R that misses a
+    map's bright windows), and truncation error does not follow the signal into the dark: it rings
+    around the bright features over the whole sphere. Two limiting models: the error is
+    proportional to the signal (r holds on any subset of R), or its energy is spread evenly over R
+    (the band's absolute RMS e_b of :func:`shrmkit.analysis.error_image.band_errors` holds on any
+    subset: relative e_b / RMS_pix(B), RMS_pix over the band's pixels — the error image's model,
+    data_specs/view_bands.md, "Per pixel"). The statement for the band's pixels takes the larger:
 
-        r_pix = r · max(1, √(E[|B|²] / E_pix)),
+        r_pix = max(r, e_b / RMS_pix(B)),
 
-    for the predicted and the bound alike. Measured (``benchmarks/mitsuba_bands.py``, RGL
-    cc_ibiza_sunset under Grace at 64 rows, 48² sphere, F 29, P 9): on the 60–70° ring E_pix is
-    1/30 of the band's E[|B|²] while the absolute error is 0.7× the band average; r 0.65 % →
-    r_pix 3.5 % predicted against 3.6 % measured per pixel (brute force). In the grazing bands the
-    rings carry 0.05–0.1× the average error energy, so r_pix is 3–4× loose there; in bright rings
-    (30–45°, E_pix 3.5× the band's) r itself holds.
+    for the predicted (``predicted_*``) and the bound (``bound_*`` with ``level=1``: an RMS over the
+    band's pixels, no Chebyshev factor) alike. Measured (``benchmarks/mitsuba_bands.py``, RGL
+    cc_ibiza_sunset under Grace at 64 rows, 48² sphere, F 29, P 9): the 60–70° ring reflects 1/30
+    of the band's average energy while its absolute error is 0.7× the band's; r 0.65 % →
+    r_pix ≈ 3.5 % predicted against 3.6 % measured per pixel (brute force). In the grazing bands the
+    rings carry 0.05–0.1× the band's error energy, so r_pix is 3–4× loose there; in a bright ring
+    (30–45°, 3.5× the band's energy) r itself holds.
 
     Parameters
     ----------
-    bands
-        ``SHRM.meta["view_bands"]``: dicts with ``theta_v_deg``, ``predicted_rel_rms``,
-        ``bound_rel_rms``.
-    band_energy
-        (len(bands),) E[|B|²] per band, the model's units squared (:func:`band_signal_energy`).
+    shrm
+        An :class:`~shrmkit.analysis.shrm.SHRM` with ``meta["view_bands"]``.
     values
-        (n, 3) the model's radiance at the render's pixels.
+        (n, 3) ``shrm.radiance`` at the render's pixels (lights included).
     theta_v_deg
-        (n,) each pixel's view elevation (degrees; data_specs/view_bands.md).
+        (n,) each pixel's view elevation in degrees (data_specs/view_bands.md).
+    signal
+        :func:`~shrmkit.analysis.error_image.band_signal` of ``shrm`` (default: its cached default sample).
 
     Returns
     -------
-    list of dict, one per band: ``theta_v_deg``, ``pixels``, ``energy_ratio`` (E[|B|²] / E_pix;
-    NaN without pixels or signal), ``factor``, ``predicted_rel_rms`` and ``bound_rel_rms`` for the
-    pixels, ``stated_predicted_rel_rms`` and ``stated_bound_rel_rms`` (the band's own).
+    list of dict, one per band: ``theta_v_deg``, ``pixels``, ``factor`` (r_pix / r of the
+    prediction, ≥ 1), ``predicted_rel_rms`` and ``bound_rel_rms`` for the pixels,
+    ``stated_predicted_rel_rms`` and ``stated_bound_rel_rms`` (the band's own r).
 
     Raises
     ------
     ValueError
-        ``band_energy`` not one value per band, or ``values``/``theta_v_deg`` shapes that differ.
+        ``values``/``theta_v_deg`` shapes that differ; an SHRM without per-band statements.
     """
     values = np.asarray(values, dtype=np.float64)
     theta = np.asarray(theta_v_deg, dtype=np.float64)
-    energy = np.asarray(band_energy, dtype=np.float64)
-    if energy.shape != (len(bands),) or values.ndim != 2 or values.shape != (theta.size, 3):
-        raise ValueError(f"need one energy per band ({len(bands)}) and values (n, 3) for theta_v (n,), got "
-                         f"{energy.shape}, {values.shape}, {theta.shape}")
+    if values.ndim != 2 or values.shape != (theta.size, 3):
+        raise ValueError(f"need values (n, 3) for theta_v (n,), got {values.shape}, {theta.shape}")
+    absolute = {kind: band_errors(shrm, bound=kind == "bound", level=1.0, signal=signal)
+                for kind in ("predicted", "bound")}
     out = []
-    for band, e_band in zip(bands, energy, strict=True):
+    for k, band in enumerate(shrm.meta["view_bands"]):
         lo, hi = band["theta_v_deg"]
         sel = (theta >= lo) & (theta < hi)
-        e_pix = float(np.mean(np.sum(values[sel] ** 2, axis=1))) if sel.any() else 0.0
-        ratio = float(e_band / e_pix) if e_pix > 0.0 else float("nan")
-        factor = max(1.0, float(np.sqrt(ratio))) if np.isfinite(ratio) else 1.0
-        out.append({"theta_v_deg": [float(lo), float(hi)], "pixels": int(sel.sum()), "energy_ratio": ratio,
-                    "factor": factor, "predicted_rel_rms": float(band["predicted_rel_rms"]) * factor,
-                    "bound_rel_rms": float(band["bound_rel_rms"]) * factor,
-                    "stated_predicted_rel_rms": float(band["predicted_rel_rms"]),
-                    "stated_bound_rel_rms": float(band["bound_rel_rms"])})
+        rms_pix = float(np.sqrt(np.mean(channel_norm(values[sel]) ** 2))) if sel.any() else 0.0
+        record = {"theta_v_deg": [float(lo), float(hi)], "pixels": int(sel.sum())}
+        for kind in ("predicted", "bound"):
+            r = float(band[f"{kind}_rel_rms"])
+            spread = float(absolute[kind][k]) / rms_pix if rms_pix > 0.0 else float("inf")
+            record[f"{kind}_rel_rms"] = max(r, spread) if sel.any() else r
+            record[f"stated_{kind}_rel_rms"] = r
+        record["factor"] = (record["predicted_rel_rms"] / record["stated_predicted_rel_rms"]
+                            if record["stated_predicted_rel_rms"] > 0.0 else 1.0)
+        out.append(record)
     return out
