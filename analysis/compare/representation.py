@@ -54,7 +54,7 @@ class Representation(RadianceModel, Protocol):
     ----------
     key
         Machine name, the row key of the comparison table (``shrm``, ``kautz_mccool``,
-        ``gaussian_k2`` …); unique within one comparison.
+        ``gaussian_lobes_k2`` …); unique within one comparison.
     label
         Human label for tables (``SHRM F=12 P=4``).
     short_label
