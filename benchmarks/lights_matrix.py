@@ -25,9 +25,12 @@ the region (pairs whose R falls outside the region count as zeros: the estimate 
 relative RMS, r² = E[|B − B_ref|² 1_region] / E[|B_ref|² 1_region]). It is compared with the
 statement of that band (``SHRM.meta["view_bands"]``): ``bound_rel_rms`` (relative to the whole
 map's reflection) for ``all`` and ``near``, ``bound_rel_rms_residual`` (relative to the reflection
-of the map without its lights, the one that is meant to hold away from them) for ``away`` and
-``dark``, and, inside the view limit, the README's promise 2√ε + 1 %. **PASS** when measured −
-2 s.e. is at most both; else **FLAG**.
+of the map without its lights, the one that is meant to hold away from them) for ``away``, and,
+inside the view limit, the README's promise 2√ε + 1 %. ``dark`` is held to the region's own
+statement (``analysis.pixels.region_bounds`` of the dark mask: ``spread_bound_rel_rms``; the band
+bound, an energy average, is printed beside it and was exceeded in 18 of 32 dark cells), and its
+guaranteed ``bound_rel_rms`` is checked and summarised too. **PASS** when measured − 2 s.e. is at
+most both; else **FLAG**.
 
 Per cell also: the per-pixel statement ``meta["pixel_errors"]`` (estimated median / 90th
 percentile) beside the brute-force per-pixel relative error of the luminance on ``--pixels``
@@ -41,11 +44,13 @@ Run from the repository root (CPU seconds of this process, one core; brute force
     .venv/bin/python benchmarks/lights_matrix.py                       # 40 cells, 128 rows
     .venv/bin/python benchmarks/lights_matrix.py --maps sun lamps --brdfs phong:s=512
     .venv/bin/python benchmarks/lights_matrix.py --no-lights --maps sky venice grace   # with / without lights
+    .venv/bin/python benchmarks/lights_matrix.py --maps sky venice grace lamps --regions dark --pixels 0
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -300,6 +305,22 @@ def print_matrix(cells: list[Cell]) -> None:
             print(f"  FLAG {c.env} {short(c.brdf)} {r['region']} {r['theta_v_deg'][0]:g}-{r['theta_v_deg'][1]:g}°"
                   f"{' (inside)' if r['inside'] else ''}: measured {r['measured']:.3g} ± {r['stderr']:.2g}, "
                   f"predicted {r['predicted']:.3g}, {r['bound_key']} {r['bound']:.3g}, pairs {r['pairs']}")
+    dark = [r for c in cells for r in c.records if r["region"] == "dark" and np.isfinite(r["measured"])]
+    if dark:
+        d_cells = [c for c in cells if any(r["region"] == "dark" for r in c.records)]
+        was = sum(any(r["measured"] - 2 * r["stderr"] > r["band_bound"] for r in c.records if r["region"] == "dark")
+                  for c in d_cells)
+        now = sum(any(not r["ok"] for r in c.records if r["region"] == "dark") for c in d_cells)
+        hard = sum(any(r["measured"] - 2 * r["stderr"] > r["region_bound"] for r in c.records if r["region"] == "dark")
+                   for c in d_cells)
+        finite = np.array([r["region_bound"] for r in dark])
+        spread = np.array([r["bound"] for r in dark])
+        measured = np.array([r["measured"] for r in dark])
+        print(f"dark regions, {len(d_cells)} cells, {len(dark)} bands: flagged against the band's bound {was}, against "
+              f"the region's spread bound {now}, against its guaranteed bound {hard} (cells); spread bound / measured "
+              f"median {np.median(spread / measured):.2f} (min {np.min(spread / measured):.2f}); guaranteed bound "
+              f"informative (< 1) in {int(np.sum(finite < 1))} of {len(dark)} bands, finite in "
+              f"{int(np.sum(np.isfinite(finite)))}, / measured median {np.median(finite / measured):.2f}")
     stated = np.array([c.pixel_stated[1] for c in cells])
     measured = np.array([c.pixel_measured[1] for c in cells])
     ok = np.isfinite(stated) & np.isfinite(measured) & (stated > 0)
@@ -334,6 +355,7 @@ def main() -> None:
                                                                 "table; measured on the 'all' region)")
     ap.add_argument("--regions", nargs="+", default=list(REGIONS), choices=REGIONS)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--json", metavar="PATH", help="also write every cell's records (JSON)")
     args = ap.parse_args()
     cells, pairs = [], []
     start = time.process_time()
@@ -360,6 +382,9 @@ def main() -> None:
     print(f"\nmaps at {args.height} rows, ε {EPS:g}, {args.per_band} pairs per band and region, seed {args.seed}; "
           f"s: prefilter CPU seconds, one core; total {time.process_time() - start:.0f} s CPU")
     print_matrix(cells)
+    if args.json:
+        Path(args.json).write_text(json.dumps([{"env": c.env, "brdf": c.brdf, "F": c.F, "P": c.P, "records": c.records}
+                                               for c in cells], default=float, indent=1))
     if pairs:
         print_with_without(pairs)
 

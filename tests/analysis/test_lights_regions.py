@@ -57,10 +57,11 @@ def test_region_bounds_closed_form_on_a_constant_map() -> None:
 
 
 def test_dark_region_of_the_sky_against_brute_force(matrix) -> None:
-    """``builtin:sky`` (128 rows; the sun taken out as a light) under Phong s = 32, R in the dark fifth of
-    the map (the ground, half the sphere at this size): the band's residual bound, an energy average, is exceeded there by more than
-    2 s.e. (issue 23's 18 of 32 dark cells); the region's statements are not — the spread bound (the
-    band's error spread evenly over R) and the guaranteed one (all of it in the region), per band."""
+    """``builtin:sky`` (128 rows; the sun taken out as a light) under Phong s = 32, R in the dark part of
+    the map (the ground, half the sphere at this size): the band's residual bound, an energy average, is
+    exceeded there by more than 2 s.e. (as in 20 of issue 23's 32 dark cells); the region's statements
+    are not — the spread bound (the band's error spread evenly over R) and the guaranteed one (all of it
+    in the region), per band."""
     env = matrix.make_env("sky", 128)
     masks = matrix.region_masks(env)
     assert masks["dark"].any()
