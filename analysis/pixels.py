@@ -37,6 +37,12 @@ above the estimate in 9 of 32 cells (Grace: σ = 0.1 2.05 ×, σ = 0.3 1.59 ×, 
 Venice Phong s = 512 1.21 ×), and above √ε itself in two (Grace σ = 0.3 0.247, RGL 0.231). Under the
 one-pixel sun the residual is a constant sky: the estimate is 4·10⁻⁵–6·10⁻⁴ while brute force
 measures up to 0.012 (the view orders' error, which the sample does not see).
+
+Per region. :func:`region_bounds` reads an SHRM's per-band statement over a region of reflection
+directions (a dark part of the map, where the band bound, an energy average, is exceeded 1.3–35× in
+20 of the matrix's 32 dark cells): a bound guaranteed wherever the band's bound holds, and a tighter
+reading with the error spread evenly over R that brute force did not exceed in any band of those
+cells (``data_specs/lights.md``).
 """
 
 from __future__ import annotations
