@@ -26,6 +26,8 @@ from ..render.error_image import ERROR_IMAGE_HELP, check_error_image_request, er
 from ..render.mesh import load_mesh
 from ..render.modes import (
     DEFAULT_MODE,
+    ELEVATIONS_RANGE,
+    LOBES_RANGE,
     RENDER_MODES,
     RenderOptions,
     mode_names,
@@ -101,9 +103,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     lobe_modes = " or ".join(LOBE_OPTION_MODES)
     # _StoreGiven: given with another mode they are refused, not silently ignored
     p.add_argument("--lobes", type=int, default=defaults.lobes, action=_StoreGiven,
-                   help=f"{lobe_modes} only: lobes per elevation K (default {defaults.lobes})")
+                   help=f"{lobe_modes} only: lobes per elevation K, {LOBES_RANGE[0]}..{LOBES_RANGE[1]} "
+                   f"(default {defaults.lobes})")
     p.add_argument("--elevations", type=int, default=defaults.elevations, action=_StoreGiven,
-                   help=f"{lobe_modes} only: fitted view elevations (default {defaults.elevations})")
+                   help=f"{lobe_modes} only: fitted view elevations, {ELEVATIONS_RANGE[0]}..{ELEVATIONS_RANGE[1]} "
+                   f"(default {defaults.elevations})")
     p.add_argument("--self-shadow", action="store_true",
                    help=f"{shadow}: per-vertex self-shadowing by ray casting (Green et al. 2007 eq. 7)")
     add_window_option(p)
