@@ -53,6 +53,29 @@ def sphere():
     return load_mesh("builtin:sphere:subdivisions=3")
 
 
+#: the view of test_shrm_part_plus_lights_in_every_mode
+SKY_CAMERA = Camera.looking_at(view=(0.8, -0.3, 0.6))
+
+
+@pytest.fixture(scope="module")
+def sphere_geometry(sphere):
+    """``sphere_geometry(k)``: the ray caster's hits on the sphere at SIZE² for CAMERAS[k] (k = 0, 1)
+    or SKY_CAMERA (k = "sky"), cast once per module (the brute-force Möller–Trumbore reference is
+    ~0.4 s CPU a frame; the model tests ask for the same two frames seven times) and read-only."""
+    cast: dict = {}
+
+    def get(k):
+        if k not in cast:
+            geom = mesh_geometry(SKY_CAMERA if k == "sky" else CAMERAS[k], SIZE, SIZE, sphere)
+            for value in vars(geom).values():
+                if isinstance(value, np.ndarray):
+                    value.setflags(write=False)
+            cast[k] = geom
+        return cast[k]
+
+    return get
+
+
 def compare(image, alpha, reference, hit, cos_v, max_view_deg: float = 89.0) -> tuple[float, float, float]:
     """(relative RMS, largest error over the peak, share of pixels within 1e-3 of the peak) on the
     pixels both cover with θ_v ≤ max_view_deg."""
@@ -68,7 +91,8 @@ CAMERAS = [Camera.looking_at(view=(1.0, 0.3, 0.4)), Camera.looking_at(view=(-0.2
 
 
 @pytest.mark.parametrize("spec", MODELS)
-def test_each_model_glsl_against_its_numpy_model(offscreen, sphere, lights_only, n_dots, spec) -> None:
+def test_each_model_glsl_against_its_numpy_model(offscreen, sphere, sphere_geometry, lights_only, n_dots,
+                                                 spec) -> None:
     """A sphere lit only by the lights, for each model of the table: the GLSL ρ̂ against the model's
     own ρ̂ (``light_radiance``) per pixel, perspective and ortho, grazing views (θ_v to 89°, where
     the lights at the horizon graze the surface) included; perpixel and distant (the lights do not
@@ -83,8 +107,8 @@ def test_each_model_glsl_against_its_numpy_model(offscreen, sphere, lights_only,
             r.add_object(sphere, shrm, mode=mode)
             assert r.deferred == deferred  # distant with lights has a deferred pass too
             frames[mode, deferred] = [r.render(cam) for cam in CAMERAS]
-    for c, cam in enumerate(CAMERAS):
-        geom = mesh_geometry(cam, SIZE, SIZE, sphere)
+    for c in range(len(CAMERAS)):
+        geom = sphere_geometry(c)
         ref = shade(geom, shrm.radiance)
         cos_v = np.sum(geom.N * geom.V, axis=-1)
         assert ref.max() > 0.0
@@ -132,13 +156,13 @@ def sky_shrm():
 
 
 @pytest.mark.parametrize("mode", ["distant", "perpixel", "kautz-mccool"])
-def test_shrm_part_plus_lights_in_every_mode(offscreen, sphere, sky_shrm, mode) -> None:
+def test_shrm_part_plus_lights_in_every_mode(offscreen, sphere, sphere_geometry, sky_shrm, mode) -> None:
     """The sky's SHRM plus its sun: perpixel = SHRM.radiance (RH02 eq. 8 + lights); distant = the
     frame's map looked up by R (RH02 eq. 12) + the lights at the pixel's own V; kautz-mccool = the
     perpixel sum of the same SHRM's maps + lights. Without the lights the image is far off."""
     shrm = sky_shrm
-    cam = Camera.looking_at(view=(0.8, -0.3, 0.6))
-    geom = mesh_geometry(cam, SIZE, SIZE, sphere)
+    cam = SKY_CAMERA
+    geom = sphere_geometry("sky")
     cos_v = np.sum(geom.N * geom.V, axis=-1)
     if mode == "distant":
         view_map = shrm.view_map(cam.view_direction(np.zeros(3)))
@@ -157,7 +181,7 @@ def test_shrm_part_plus_lights_in_every_mode(offscreen, sphere, sky_shrm, mode) 
     assert compare(no_lights, res.alpha, ref, geom.hit, cos_v)[0] > 10 * rel + 0.02
 
 
-def test_measured_table_against_the_brdf_eval(offscreen, sphere, lights_only) -> None:
+def test_measured_table_against_the_brdf_eval(offscreen, sphere, sphere_geometry, lights_only) -> None:
     """A tabulated BRDF (our table format, kind "tabulated": a Cook–Torrance sampled on a
     (θ_i, θ_o, φ_d) grid and interpolated by its reader) goes to the GPU as a half/difference table
     texture; the GLSL equals the numpy lookup of that table, and both the BRDF's own eval within
@@ -172,7 +196,7 @@ def test_measured_table_against_the_brdf_eval(offscreen, sphere, lights_only) ->
     error = lights.table_error
     assert error is not None and error["rel_rms"] <= error["worst_band_rel_rms"] <= error["target"]
     cam = CAMERAS[0]
-    geom = mesh_geometry(cam, SIZE, SIZE, sphere)
+    geom = sphere_geometry(0)
     cos_v = np.sum(geom.N * geom.V, axis=-1)
     ref = shade(geom, shrm.radiance)
 
