@@ -283,7 +283,12 @@ class _GridData:
 
     @cached_property
     def profile(self) -> ViewProfile:
-        return view_profile(self.brdf, self.grid, self.F0, self.P0)
+        # every order the grid resolves, also above max_F, which caps the table (F0: the columns are those
+        # of a profile cut there, ``band_eps_column``'s F0) and so the choice: with the profile itself cut
+        # at max_F, the energy the grid resolves above the cap counted as unresolved in the resolution
+        # check (``resolution_tail``), which then failed and sampled a 1.5× finer grid for every tolerance
+        # (the quick report's max_F = 96: 7 grids instead of 5 for microfacet σ = 0.1)
+        return view_profile(self.brdf, self.grid, self.grid.n_theta_i - 1, self.P0)
 
     @cached_property
     def reparam(self) -> ReparamBRDF:
@@ -322,7 +327,7 @@ class _GridData:
             if self.criterion == "rh02":
                 self._columns[p] = self.rh02_table[:, p]
             else:
-                self._columns[p] = band_eps_column(self.profile, p, self.max_view_deg)
+                self._columns[p] = band_eps_column(self.profile, p, self.max_view_deg, self.F0)
         return self._columns[p]
 
     def table(self) -> np.ndarray:

@@ -471,16 +471,19 @@ def _profile_shaped(profile: ViewProfile) -> BRDFCoefficients:
     return BRDFCoefficients(coeffs=np.zeros(shape), energy=profile.energy(), name=profile.name)
 
 
-def band_eps_column(profile: ViewProfile, P: int, max_view_deg: float) -> np.ndarray:
+def band_eps_column(profile: ViewProfile, P: int, max_view_deg: float, F0: int | None = None) -> np.ndarray:
     """One column of :func:`band_eps_table` from the profile alone: ε(F, P) for F = 0..F0 of the
     worst band inside ``max_view_deg`` (worst channel), with the view fit at order ``P``
-    (equal to ``_band_eps_all`` of :func:`fit_view_coefficients`; the fit's own residual is used)."""
-    _, low = _view_fit(profile, P, max_view_deg, profile.F0)
-    T = profile.T[:, :, : P + 1, :]
+    (equal to ``_band_eps_all`` of :func:`fit_view_coefficients`; the fit's own residual is used).
+    ``F0`` (default the profile's): the highest order kept; the profile's orders above it count as
+    error, and the view fit is made for l <= F0 (the column of a profile cut at F0)."""
+    F0 = profile.F0 if F0 is None else min(int(F0), profile.F0)
+    _, low = _view_fit(profile, P, max_view_deg, F0)
+    T = profile.T[: F0 + 1, :, : P + 1, :]
     fitted_orders = np.tensordot(T * T, _mult(P + 1), axes=(2, 0)) / (2.0 * np.pi)  # (F0+1, K, 3), q <= P
-    residual = low + np.moveaxis(profile.full() - fitted_orders, 1, 0)  # q > P: all of it is error
+    residual = low + np.moveaxis(profile.full()[: F0 + 1] - fitted_orders, 1, 0)  # q > P: all of it is error
     inside = bands_inside(profile, max_view_deg)
-    return _eps_from_residual(profile, profile.F0, residual)[inside].max(axis=0)
+    return _eps_from_residual(profile, F0, residual)[inside].max(axis=0)
 
 
 def resolution_tail(profile: ViewProfile, F: int, P: int, max_view_deg: float, n_phi: int) -> float:
