@@ -204,7 +204,8 @@ class OrderChoice:
             return self.coefficients
         P = int(P)
         if P not in self._fitted:
-            self._fitted[P] = fit_view_coefficients(self.profile, None, P, self.max_view_deg)
+            # the fit the choice's column was made with (l <= F0, which a cap on F may hold below the profile's)
+            self._fitted[P] = fit_view_coefficients(self.profile, None, P, self.max_view_deg, self.F0)
         return self._fitted[P]
 
     def view_bands(self, F: int | None = None, P: int | None = None) -> list[dict]:

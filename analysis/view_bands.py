@@ -354,7 +354,8 @@ FIT_PASSES = 8
 
 
 def fit_view_coefficients(
-    profile: ViewProfile, coefficients: BRDFCoefficients | None, P: int, max_view_deg: float
+    profile: ViewProfile, coefficients: BRDFCoefficients | None, P: int, max_view_deg: float,
+    F0: int | None = None,
 ) -> BRDFCoefficients:
     """ρ̂_lpq (p <= P) fitted to T_lq over the views that matter, instead of projected.
 
@@ -369,10 +370,11 @@ def fit_view_coefficients(
     inside with the largest error. The l-expansion is still the projection (exact in l).
     Same shape as ``coefficients`` (entries p > P zero); the energy is the BRDF's. With
     ``coefficients`` None (the fit needs only the profile), the shape is (F0+1, P0+1, P0+1, 3)
-    of the profile and the energy its :meth:`ViewProfile.energy`.
+    of the profile (``F0``: at most that order, default the profile's: the fit of
+    :func:`band_eps_column` with that F0) and the energy its :meth:`ViewProfile.energy`.
     """
     if coefficients is None:
-        coefficients = _profile_shaped(profile)
+        coefficients = _profile_shaped(profile, F0)
     F0 = min(profile.F0, coefficients.F0)
     fit, _ = _view_fit(profile, P, max_view_deg, F0)
     out = np.zeros_like(coefficients.coeffs)
@@ -464,10 +466,11 @@ class _EpsAtF0:
         return np.clip(eps, 0.0, None).max(axis=-1)
 
 
-def _profile_shaped(profile: ViewProfile) -> BRDFCoefficients:
-    """Zero ρ̂_lpq of the profile's orders (F0+1, P0+1, P0+1, 3) carrying its energy: the shape a
-    view fit fills when no projected coefficients are at hand."""
-    shape = (profile.F0 + 1, profile.P0 + 1, profile.P0 + 1, 3)
+def _profile_shaped(profile: ViewProfile, F0: int | None = None) -> BRDFCoefficients:
+    """Zero ρ̂_lpq of the profile's orders (F0+1, P0+1, P0+1, 3) (``F0`` default the profile's)
+    carrying its energy: the shape a view fit fills when no projected coefficients are at hand."""
+    F0 = profile.F0 if F0 is None else min(int(F0), profile.F0)
+    shape = (F0 + 1, profile.P0 + 1, profile.P0 + 1, 3)
     return BRDFCoefficients(coeffs=np.zeros(shape), energy=profile.energy(), name=profile.name)
 
 

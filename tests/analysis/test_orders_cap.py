@@ -4,6 +4,7 @@ not change with it (analysis/orders.py, ``_GridData.profile``; view_bands.band_e
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from shrmkit.analysis.orders import choose_orders_many
 from shrmkit.analysis.view_bands import band_eps_column, view_profile
@@ -38,3 +39,14 @@ def test_cap_above_the_choice_changes_nothing():
         # the view fits differ (made for l <= 96 or for every order of the grid): the same error to 1 % of eps
         assert max(a.eps, b.eps) <= a.tolerance and abs(a.eps - b.eps) <= 0.01 * a.tolerance
         assert a.F0 <= 96
+
+
+def test_capped_choice_states_the_error_of_its_coefficients():
+    # the coefficients a prefilter takes (coefficients_for) are the fit the chosen column was made with:
+    # its worst band inside the view limit at (F, P) is the choice's eps, also when max_F cuts the table
+    # below the profile's orders
+    choice = choose_orders_many(load_brdf("microfacet:sigma=0.1"), (0.03,), max_F=60)[0]
+    assert choice.F <= 60 < choice.profile.F0
+    assert choice.coefficients_for(choice.P).F0 == choice.F0 == 60
+    worst = max(b["eps"] for b in choice.view_bands() if b["inside"])
+    assert worst == pytest.approx(choice.eps, rel=1e-9)
