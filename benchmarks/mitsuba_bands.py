@@ -57,8 +57,9 @@ Shared data are read from ``../shared/data`` (never copied into the repository).
 ``pip install mitsuba==3.9.1`` (not a project dependency).
 
 Run:  .venv/bin/python benchmarks/mitsuba_bands.py [--size 64] [--env-rows 64] [--spp 256] [--seeds 4] [--json FILE]
-      .venv/bin/python benchmarks/mitsuba_bands.py --size 48 --env-rows 512 --upsample 2 --no-reference --spp 512 --seeds 8
-      .venv/bin/python benchmarks/mitsuba_bands.py --size 16 --env-rows 16 --spp 1024 --seeds 8 \\
+      .venv/bin/python benchmarks/mitsuba_bands.py --size 48 --env-rows 512 --upsample 2 --no-reference \\
+          --spp 512 --seeds 8
+      .venv/bin/python benchmarks/mitsuba_bands.py --size 16 --env-rows 32 --ref-upsample 2 --spp 2048 --seeds 8 \\
           --material cc_ibiza_sunset_rgb --no-shrm --record tests/resources/mitsuba_bands_grace16.json
 """
 
