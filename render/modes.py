@@ -90,7 +90,7 @@ class RenderOptions:
         ``gaussian-lobes``: lobes per view elevation K, in [1, 8] (``GAUSSIAN_LOBES`` of
         :mod:`shrmkit.analysis.baselines.methods`).
     elevations
-        ``gaussian-lobes``: fitted view elevations, in [2, 64] (``GAUSSIAN_ELEVATIONS``).
+        ``gaussian-lobes``: fitted view elevations, in [1, 64] (``GAUSSIAN_ELEVATIONS``).
     self_shadow
         Per-vertex SH visibility by ray casting (Green et al. 2007 eq. 7); only for the modes
         whose record has ``self_shadow`` (:func:`self_shadow_modes`).

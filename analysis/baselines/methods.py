@@ -22,9 +22,9 @@ Keys are Python identifiers (the JSON and API spelling); the CLI spells them wit
 Where render and compare used to differ, one setting was chosen by measured error and cost
 (``data_specs/methods.md``): Kautz–McCool is built on the SHRM's own (F, P) and map rows (its
 own order choice let the pixel rule raise F to 63 on Grace without lowering the error), and the
-Gaussian-lobe fits take 2 to 64 view elevations (one elevation is a view-independent model, 1.7×
-the error of two over all views; the error stops falling at about 8 while the fit's cost grows
-linearly: 64 elevations cost 87 s CPU for K = 3).
+Gaussian-lobe fits take 1 to 64 view elevations (1 and 2 are both poor, neither worse in every
+case; the error stops falling at about 8 while the fit's cost grows linearly: 64 elevations cost
+87 s CPU for K = 3, 90 cost 116 s for the same error).
 
 Citation keys: ``data_specs/bibliography.md``.
 """
@@ -232,7 +232,7 @@ def rsibr_model(
 
 #: The Gaussian-lobe fit's settings (their limits: ``data_specs/methods.md``).
 GAUSSIAN_LOBES = Setting("lobes", 3, 1, 8, "lobes per view elevation K")
-GAUSSIAN_ELEVATIONS = Setting("elevations", 15, 2, 64, f"fitted view elevations, evenly on [0, "
+GAUSSIAN_ELEVATIONS = Setting("elevations", 15, 1, 64, f"fitted view elevations, evenly on [0, "
                               f"{GAUSSIAN_MAX_VIEW_DEG:g}] deg")
 
 

@@ -54,7 +54,7 @@ class CompareOptions:
         Values of K for the [Green07] Gaussian-lobe rows, each within the method's ``lobes``
         limits ([1, 8]); empty skips them.
     elevations
-        View elevations of the Gaussian-lobe fits, within the method's limits ([2, 64]).
+        View elevations of the Gaussian-lobe fits, within the method's limits ([1, 64]).
     rsibr_reference_height
         Rows of the [Cabral99] maps computed by the angular reference (the original method's
         cost), within the method's ``reference_height`` limits ([2, 512]); None or 0 skips that row.
