@@ -47,6 +47,12 @@ band, one run): spread / stated s.e. per band 0.69–1.25 (microfacet σ 0.05), 
 0.74–1.19 over 24 seeds), 0.67–1.32 (GGX α 0.3), 0.26–0.83 (Phong 512), against 0.65–1.54,
 0.69–1.98, 0.90–2.08 and 0.55–1.25 for the grid-only density with the plain delta-method s.e.
 ``tests/analysis/compare/test_band_error.py`` checks it against closed forms and that spread.
+
+**A render's band** (:func:`pixels_statement`). The statement of an SHRM, like this measurement, is
+over all reflection directions; a render's band shows only the R its pixels reflect.
+:func:`pixels_statement` carries the band's statement to those pixels (the larger of the relative
+statement and the band's absolute error over the pixels' own RMS), which is what a comparison with
+another renderer per band of one image can be held to (``benchmarks/mitsuba_bands.py``).
 """
 
 from __future__ import annotations
