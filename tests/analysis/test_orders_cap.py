@@ -8,8 +8,8 @@ import pytest
 
 from shrmkit.analysis.orders import choose_orders_many
 from shrmkit.analysis.view_bands import band_eps_column, view_profile
-from shrmkit.brdf_io.specs import load_brdf
 from shrmkit.brdf_io.reparam import ReparamGrid
+from shrmkit.brdf_io.specs import load_brdf
 
 
 def test_column_of_a_profile_cut_at_F0():
