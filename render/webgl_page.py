@@ -355,7 +355,7 @@ def _lookup(maps: np.ndarray, dirs: np.ndarray, chunk: int = 16) -> np.ndarray:
 def _squared_difference(maps: np.ndarray, dirs: np.ndarray, given: np.ndarray, chunk: int = 2048) -> float:
     """Σ over directions, maps and channels of (lookup of ``maps`` at ``dirs`` − ``given``)², a chunk of
     directions at a time: the (N, n, 3) lookups of the whole set and their difference are not held
-    (2 × 71 MB for a P = 18 SHRM at 16,384 directions)."""
+    (2 × 18 MB for a P = 18 SHRM at 4096 directions)."""
     matrix = _lookup_matrix(dirs, maps.shape[1], maps.shape[2])
     n = maps.shape[0]
     flat = np.ascontiguousarray(np.moveaxis(np.asarray(maps, np.float32), 0, 2)).reshape(-1, n * 3)
@@ -373,7 +373,7 @@ def _atlas_fits(P: int, h: int, w: int, max_bytes: int, max_edge: int) -> bool:
 
 
 def fit_coefficients(
-    coeffs: np.ndarray, P: int, max_bytes: int, *, max_edge: int = 2048, min_rows: int = 8, samples: int = 16384
+    coeffs: np.ndarray, P: int, max_bytes: int, *, max_edge: int = 2048, min_rows: int = 8, samples: int = 4096
 ) -> CoefficientFit:
     """The SHRM's coefficient maps at the (rows, P) of least estimated error within ``max_bytes``.
 
