@@ -371,7 +371,11 @@ def _curet_members_once(load: Callable[[str], BRDF]) -> Callable[[str], BRDF]:
         if sep and Path(base).suffix.lower() == ".dat" and selector.strip().isdigit():
             if base not in parsed:
                 try:
-                    parsed[base] = {str(int(b.source.rpartition("#")[2])): b for b in read_curet_all(base)}
+                    members_read: dict[str, BRDF] = {}
+                    for b in read_curet_all(base):
+                        assert b.source is not None  # read_curet_all names each member FILE#N
+                        members_read[str(int(b.source.rpartition("#")[2]))] = b
+                    parsed[base] = members_read
                 except ShrmError:
                     parsed[base] = None
             members = parsed[base]
@@ -405,6 +409,7 @@ def _table_missing_share(choice: OrderChoice) -> float:
     """Share of the 3-D reparameterized grid's samples (``n_theta_i · n_theta_o · n_phi``) that had
     no measurement to interpolate (``ReparamBRDF.n_without_data``)."""
     g = choice.grid
+    assert choice.source is not None  # choose_orders keeps its grid data
     reparam = choice.source.reparam  # read by the RH02 table already
     return reparam.n_without_data / max(int(g.n_theta_i * g.n_theta_o * g.n_phi), 1)
 
@@ -419,6 +424,7 @@ def _reasons(row: dict[str, Any], choice: RepresentationChoice | None, threshold
         return (), ""
     codes, text = [], []
     if fit_failed:
+        assert choice is not None  # fit_failed
         codes.append("fit")
         text.append(f"fit error: {choice.label()} has held-out worst view band {choice.chosen.band_text()}, above "
                     f"{FIT_FAIL_BAND_REL_RMS:g}")
@@ -426,6 +432,7 @@ def _reasons(row: dict[str, Any], choice: RepresentationChoice | None, threshold
         codes.append("missing")
         text.append(f"missing data: {row['missing_share']:.1%} of the samples had no measurement")
     if row["anisotropic"]:
+        assert choice is not None and choice.isotropy is not None  # row["anisotropic"] comes from the choice's isotropy
         codes.append("anisotropy")
         text.append(f"anisotropy: {choice.isotropy.line()}")
     if missed:
@@ -470,7 +477,7 @@ def _census_row(
         # says how well; a table: the reparameterized samples that had no measurement to interpolate
         missing = None if choice is not None else _table_missing_share(grid)
         iso = None if choice is None else choice.isotropy
-        row = {
+        row: dict[str, Any] = {
             "accuracy_rh02": acc_r, "accuracy_bands": acc_b, "F_needed": int(needed.F), "P_needed": int(needed.P),
             "eps_needed": float(needed.eps), "capped": bool(needed.capped), "grazing_share": grazing_share(grid, F, P),
             "missing_share": missing, "anisotropy": None if iso is None else float(iso.anisotropy),
@@ -480,9 +487,16 @@ def _census_row(
         return _failed(source, name, kind, err, t0)
     codes, text = _reasons(row, choice, threshold, max_view_deg)
     worst = None if choice is None or choice.chosen.held_out_worst is None else choice.chosen.held_out_worst.as_dict()
+    if choice is not None:
+        representation = choice.label()
+    elif kind != "scattered":
+        representation = "as given"
+    else:
+        assert represent is not None  # scattered data without a choice went through represent
+        representation = represent[0]
     return CensusRow(
         source=source, name=name, status="ok", kind=kind,
-        representation=("as given" if kind != "scattered" else represent[0]) if choice is None else choice.label(),
+        representation=representation,
         model="" if choice is None else choice.model,
         fit_ok=None if choice is None else bool(choice.success), fit_worst=worst, reasons=codes, reason_text=text,
         seconds=time.perf_counter() - t0, representation_record=None if choice is None else choice.as_dict(), **row,
@@ -589,9 +603,9 @@ def run_census(
            "max_theta_deg": float(max_theta_deg), "represent": None if represent is None else str(represent[0])}
     if not (isinstance(workers, int | np.integer) and 1 <= workers <= MAX_WORKERS):
         raise BadInputError(None, f"workers must be an integer in [1, {MAX_WORKERS}], got {workers!r}")
-    settings = {"F": int(F), "P": int(P), "threshold": float(threshold), "eps": eps, "criterion": criterion,
-                "max_view_deg": max_view_deg, "max_F": int(max_F), "max_P": int(max_P), "fit": fit,
-                "represent": represent}
+    settings: dict[str, Any] = {
+        "F": int(F), "P": int(P), "threshold": float(threshold), "eps": eps, "criterion": criterion,
+        "max_view_deg": max_view_deg, "max_F": int(max_F), "max_P": int(max_P), "fit": fit, "represent": represent}
     names = [str(source) for source in sources]
     if workers > 1 and len(names) > 1:
         try:

@@ -269,7 +269,8 @@ def extract_lights(env: EnvironmentMap, mode: str | int = DEFAULT_LIGHTS) -> Ext
         [tuple(np.unravel_index(idx, labels.shape)) for idx in _label_indices(labels, n)]
     flux = np.array([float(Y[r, c].astype(np.float64) @ row_omega[r]) for r, c in regions])
     cos_max = np.cos(np.radians(MAX_LIGHT_RADIUS_DEG))
-    kept, skipped = [], 0
+    kept: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
+    skipped = 0
     for j in np.argsort(flux)[::-1]:
         rows, cols = regions[j]
         d = _directions(rows, cols, height, width)
@@ -317,9 +318,10 @@ def extract_lights(env: EnvironmentMap, mode: str | int = DEFAULT_LIGHTS) -> Ext
         el = float(np.degrees(np.arcsin(np.clip(centre[2], -1.0, 1.0))))
         az = float(np.degrees(np.arctan2(centre[1], centre[0])) % 360.0) % 360.0
         radius = float(np.degrees(np.arccos(np.clip((pix_dirs @ centre).min(), -1.0, 1.0))))
+        flux_rgb = excess.sum(axis=0)  # (3,) RGB
         lights.append(Light(
-            direction=tuple(float(x) for x in centre), elevation_deg=el, azimuth_deg=az,
-            power=tuple(float(x) for x in excess.sum(axis=0)), radius_deg=radius,
+            direction=(float(centre[0]), float(centre[1]), float(centre[2])), elevation_deg=el, azimuth_deg=az,
+            power=(float(flux_rgb[0]), float(flux_rgb[1]), float(flux_rgb[2])), radius_deg=radius,
             solid_angle=float(row_omega[rows].sum()), share=float(lum.sum() / total_flux) if total_flux > 0 else 0.0,
             pixels=int(rows.size), samples=len(d), merge_deg=merge,
         ))
@@ -361,6 +363,7 @@ def merge_error_by_band(
     if not extraction.merged:
         return np.zeros(n_bands), np.zeros(n_bands)
     merged, exact = extraction.lights, extraction.exact
+    assert exact is not None  # extraction.merged: the one-sample-per-pixel lights are kept
     which = [k for k, light in enumerate(merged.lights) if light.merge_deg > 0.0]
     edges = np.radians(np.asarray(edges_deg, dtype=np.float64))
 

@@ -153,16 +153,21 @@ class OrderChoice:
         return self.searched_table.shape[1] - 1
 
     @property
+    def _data(self) -> _GridData:
+        assert self.source is not None, "an OrderChoice of choose_orders holds its grid data"
+        return self.source
+
+    @property
     def coefficients(self) -> BRDFCoefficients:
-        return self.source.coefficients
+        return self._data.coefficients
 
     @property
     def profile(self) -> ViewProfile:
-        return self.source.profile
+        return self._data.profile
 
     @property
     def rh02_table(self) -> np.ndarray:
-        return self.source.rh02_table
+        return self._data.rh02_table
 
     @cached_property
     def table(self) -> np.ndarray:
@@ -171,13 +176,13 @@ class OrderChoice:
             return self.searched_table
         out = np.empty_like(self.searched_table)
         for p in range(self.P0 + 1):
-            out[:, p] = self.source.column(p)
+            out[:, p] = self._data.column(p)
         return out
 
     def eps_at(self, F: int, P: int) -> float:
         """ε[F, P] of the rule's table (F <= F0, P <= P0), without filling the whole table."""
         value = self.searched_table[F, P]
-        return float(self.source.column(P)[F] if np.isnan(value) else value)
+        return float(self._data.column(P)[F] if np.isnan(value) else value)
 
     @cached_property
     def eps_rh02(self) -> float:
@@ -355,7 +360,7 @@ class _GridData:
         P = _first_true(lambda p: best(p) <= tolerance, self.P0, hint, floor(tolerance))
         capped = P is None
         reach = tolerance
-        if capped:
+        if P is None:  # capped
             reach = best(self.P0) + CAPPED_SLACK * tolerance
             P = _first_true(lambda p: best(p) <= reach, self.P0, hint, floor(reach))
             P = self.P0 if P is None else P

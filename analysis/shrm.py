@@ -215,6 +215,7 @@ class SHRM:
         if clamp:
             out = np.maximum(out, 0.0)
         if lights and self.has_lights:
+            assert self.lights is not None  # has_lights
             out += self.lights.radiance(self.lights_brdf(), R, V)
         return out
 
@@ -226,6 +227,7 @@ class SHRM:
         V = to_map_frame(_unit_rows(V, "V"), rotation)
         if not self.has_lights:
             return np.zeros(R.shape)
+        assert self.lights is not None  # has_lights
         return self.lights.radiance(self.lights_brdf(), R, V)
 
     def lights_brdf(self) -> Any:
@@ -625,9 +627,14 @@ def prefilter(
     timings["errors"] = time.perf_counter() - t0
     timings["total"] = time.perf_counter() - t
     pixel_capped = pixel_choice is not None and pixel_choice.capped
-    size_note = map_budget.note or ("" if not budget_bound else (
-        f"map rows held at {S} by the {budget_bytes / 2**20:g} MiB budget ({map_budget.rows_needed} rows, "
-        f"{map_budget.bytes_needed / 2**20:.0f} MiB, would meet eps; use size= or budget_bytes=)"))
+    size_note = map_budget.note
+    if not size_note:
+        size_note = ""
+        if budget_bound:
+            assert map_budget.bytes_needed is not None  # the budget held the rows: the rows that meet eps are known
+            size_note = (
+                f"map rows held at {S} by the {budget_bytes / 2**20:g} MiB budget ({map_budget.rows_needed} rows, "
+                f"{map_budget.bytes_needed / 2**20:.0f} MiB, would meet eps; use size= or budget_bytes=)")
     meta = {
         "brdf": brdf.name,
         "environment": source_env.name,

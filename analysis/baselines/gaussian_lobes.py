@@ -208,8 +208,8 @@ def transfer_samples(brdf: BRDF, theta_v: np.ndarray, *, n_theta: int = 120, n_p
     theta_v = np.asarray(theta_v, dtype=np.float64)
     th = (np.arange(n_theta) + 0.5) * np.pi / n_theta
     ps = (np.arange(n_psi) + 0.5) * np.pi / n_psi
-    T, P = np.meshgrid(th, ps, indexing="ij")
-    T, P = T.ravel(), P.ravel()
+    T_grid, P_grid = np.meshgrid(th, ps, indexing="ij")
+    T, P = T_grid.ravel(), P_grid.ravel()
     dirs = np.stack([np.sin(T) * np.cos(P), np.sin(T) * np.sin(P), np.cos(T)], axis=-1)
     weights = 2.0 * np.sin(T) * (np.pi / n_theta) * (np.pi / n_psi)
     values = np.empty((theta_v.size, T.size, 3))
@@ -290,7 +290,7 @@ def _fit_one(dirs, sw, b, starts, max_evals, bounds) -> tuple[np.ndarray, np.nda
         A = _design(dirs, x) * sw[:, None]
         return _solve_weights(A, b)[1]
 
-    best = (None, np.inf)
+    best: tuple[np.ndarray | None, float] = (None, np.inf)
     for x0 in starts:
         x0 = np.clip(x0, lo, hi)
         opt = nlopt.opt(nlopt.LN_BOBYQA, x0.size)
@@ -308,6 +308,7 @@ def _fit_one(dirs, sw, b, starts, max_evals, bounds) -> tuple[np.ndarray, np.nda
         if f < best[1]:
             best = (x, f)
     x = best[0]
+    assert x is not None  # at least one start
     w, f = _solve_weights(_design(dirs, x) * sw[:, None], b)
     return x, w, f, n_eval
 

@@ -91,7 +91,7 @@ class Setting:
 
     def check(self, value: Any) -> int:
         """``value`` as an int; :class:`BadInputError` (a ValueError) when it is not an integer in [lo, hi]."""
-        if isinstance(value, bool) or not isinstance(value, Integral) or not self.lo <= value <= self.hi:
+        if isinstance(value, bool) or not isinstance(value, Integral) or not self.lo <= int(value) <= self.hi:
             raise BadInputError(None, f"{self.name} must be an integer in [{self.lo}, {self.hi}], got {value!r}")
         return int(value)
 

@@ -412,7 +412,8 @@ def split_sum(
     t0 = time.perf_counter()
     if levels is None:
         n = default_level_rows(radiance.shape[0], material.alpha) if rows is None else int(rows)
-        chain = ((float(material.alpha), ggx_prefiltered(radiance, material.alpha, n)),)
+        chain: tuple[tuple[float, np.ndarray], ...] = (
+            (float(material.alpha), ggx_prefiltered(radiance, material.alpha, n)),)
     else:
         chain = prefiltered_levels(radiance, levels)
     seconds["levels"] = time.perf_counter() - t0

@@ -59,6 +59,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -390,7 +391,7 @@ def pixels_statement(shrm, values: np.ndarray, theta_v_deg: np.ndarray, *, signa
         lo, hi = band["theta_v_deg"]
         sel = (theta >= lo) & (theta < hi)
         rms_pix = float(np.sqrt(np.mean(channel_norm(values[sel]) ** 2))) if sel.any() else 0.0
-        record = {"theta_v_deg": [float(lo), float(hi)], "pixels": int(sel.sum())}
+        record: dict[str, Any] = {"theta_v_deg": [float(lo), float(hi)], "pixels": int(sel.sum())}
         for kind in ("predicted", "bound"):
             r = float(band[f"{kind}_rel_rms"])
             spread = float(absolute[kind][k]) / rms_pix if rms_pix > 0.0 else float("inf")

@@ -39,7 +39,9 @@ import numpy as np
 
 from ...brdf_io.brdf import BRDF
 from ...brdf_io.errors import BadInputError
+from ...brdf_io.models import AnalyticModel
 from ...brdf_io.specs import load_brdf
+from ...brdf_io.zernike import ZernikeBRDF
 from ..threads import single_threaded_blas
 from .crossval import DEFAULT_FOLDS, held_out
 from .isotropy import Isotropy, measure_isotropy
@@ -145,7 +147,7 @@ class RepresentationChoice:
         Cross-validation folds and seed, samples used, wall time.
     """
 
-    brdf: BRDF
+    brdf: AnalyticModel | ZernikeBRDF
     model: str
     fit: FitResult
     candidates: tuple[CandidateError, ...]
