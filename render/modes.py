@@ -169,7 +169,7 @@ def _rotation_tuples(value: Any) -> tuple[tuple[float, ...], ...] | None:
     rotations = [check_env_rotation(r) for r in value] if many else [check_env_rotation(value)]
     if not rotations:
         raise BadInputError(None, "env_rotation: an empty sequence of rotations")
-    return tuple(tuple(float(x) for x in r.reshape(-1)) for r in rotations)
+    return tuple(tuple(float(x) for x in r.reshape(-1)) for r in rotations if r is not None)  # never None here
 
 
 @dataclass(frozen=True, eq=False)
@@ -258,6 +258,7 @@ def lights_info(shrm: SHRM, *, per_pixel: bool = True) -> tuple[dict[str, Any], 
     if not shrm.has_lights:
         return ({"requested": requested, "count": 0, "samples": 0, "lights": []},
                 f"lights: none ({'none requested' if requested == 'none' else 'no compact bright region'})")
+    assert shrm.lights is not None  # has_lights
     lights = list(meta.get("lights", []))
     share = meta.get("lights_flux_share") or 0.0
     info: dict[str, Any] = {
@@ -269,6 +270,7 @@ def lights_info(shrm: SHRM, *, per_pixel: bool = True) -> tuple[dict[str, Any], 
         info["shaded"] = "maps"
         return info, line + "reflected into the twelve maps at their resolution"
     shading = cached_light_shading(shrm)
+    assert shading is not None  # has_lights
     info.update({"shaded": "per pixel", "brdf_glsl": shading.shader.source})
     if shading.table is not None:
         info["brdf_table"] = {"shape": list(shading.table.shape), "missing": shading.table.missing,
