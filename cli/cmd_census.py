@@ -26,7 +26,7 @@ import csv
 import functools
 import json
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -34,6 +34,9 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
+
+if TYPE_CHECKING:
+    from rich.console import JustifyMethod
 
 from ..analysis.census import (
     CSV_COLUMNS,
@@ -251,9 +254,10 @@ def print_census(census: Census) -> None:
     P = census.P
     table = Table(title=f"census: accuracy 1 − ε(F = {census.F}, P), RH02's energy over all views and the worst "
                   f"view band; orders needed at ε = {census.eps:g} ({census.criterion} rule)")
-    for key, justify in (("material", "left"), ("analysed as", "left"), ("fit: worst band", "right"),
-                         (f"RH02 %, P = 0…{P}", "left"), (f"band P={P}", "right"), ("F, P needed", "right"),
-                         ("aniso.", "right"), ("reasons", "left")):
+    columns: tuple[tuple[str, JustifyMethod], ...] = (
+        ("material", "left"), ("analysed as", "left"), ("fit: worst band", "right"), (f"RH02 %, P = 0…{P}", "left"),
+        (f"band P={P}", "right"), ("F, P needed", "right"), ("aniso.", "right"), ("reasons", "left"))
+    for key, justify in columns:
         table.add_column(key, justify=justify)
     for r in census.rows:
         if not r.ok:

@@ -165,6 +165,7 @@ def _validate(args: argparse.Namespace, sequence: bool = False) -> tuple[list[Ca
     if sequence and (args.turntable or args.light_turntable or args.error_image):
         raise BadInputError(None, "several --env maps render one frame per map: --turntable, --light-turntable "
                             "and --error-image apply to one map")
+    rotation: np.ndarray | list[np.ndarray] | None  # one rotation, or one per frame (--light-turntable)
     rotation = env_rotation_arg(args.env_rotation) if args.env_rotation is not None else None
     if Path(args.output).suffix.lower() != ".png":
         raise BadInputError(args.output, "output must be a .png file")

@@ -446,6 +446,7 @@ def _processes(tasks: Sequence[ReportTask], workers: int, progress: BatchProgres
     threads = threads_per_worker(workers)
     preview_mode = tasks[0].preview_mode if tasks else None
     pending = deque(dataclasses.replace(task, nthreads=threads) for task in largest_first(tasks))
+    task: ReportTask | None  # below: the task a worker held, None when it held none
     if progress is not None:
         for task in pending:
             progress("start", task.name, "queued")
@@ -762,7 +763,8 @@ def run_batch(
     names = report_names([str(s) for s in sources])
     tasks = [ReportTask(str(s), n, options, mode) for s, n in zip(sources, names, strict=True)]
     rows: dict[str, dict[str, Any]] = {}
-    written, retried = 0, []
+    written = 0
+    retried: list[str] = []
     outcomes: Iterable[ReportOutcome] = ()
     lock = _lock_run(out)
     try:
@@ -899,7 +901,8 @@ def _remove_stale_temporaries(out: Path, own_lock: Path | None) -> list[str]:
         entries = list(os.scandir(out))
     except OSError:
         return []
-    stale, removed = [], []
+    stale: list[os.DirEntry[str]] = []
+    removed: list[str] = []
     for entry in entries:
         if _RUN_LOCK.fullmatch(entry.name):
             if own_lock is not None and entry.name == own_lock.name:

@@ -12,7 +12,7 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -20,6 +20,9 @@ from ...analysis.albedo import ALBEDO_CHECK_VIEWS_DEG, directional_albedo
 from ...analysis.reciprocity import reciprocity_check, scattered_reciprocity
 from ...brdf_io.brdf import BRDF
 from ...brdf_io.merl import merl_missing_above_surface
+
+if TYPE_CHECKING:
+    from ...brdf_io.cornell import ScatteredBRDF
 
 __all__ = ["data_checks"]
 
@@ -32,13 +35,14 @@ def data_checks(brdf: BRDF, analysis_brdf: BRDF, *, seed: int = 0, albedo_nodes:
     """
     scattered = brdf.kind == "scattered"
     if scattered:
-        reciprocity = scattered_reciprocity(brdf.L, brdf.V, brdf.rgb)
+        samples = cast("ScatteredBRDF", brdf)  # the BRDFs of kind "scattered" (duck-typed by kind)
+        reciprocity = scattered_reciprocity(samples.L, samples.V, samples.rgb)
     else:
         reciprocity = reciprocity_check(brdf, seed=seed)
     albedo = directional_albedo(analysis_brdf, ALBEDO_CHECK_VIEWS_DEG, nodes=albedo_nodes)
     k = int(np.argmax(albedo.max(axis=1)))
     return {
-        "n_measurements": int(len(brdf)) if scattered else None,
+        "n_measurements": int(len(cast("ScatteredBRDF", brdf))) if scattered else None,
         "n_missing": int(getattr(brdf, "n_missing", 0)),
         "n_missing_above_surface": merl_missing_above_surface(brdf),
         "n_clamped": int(getattr(brdf, "n_clipped", 0)),

@@ -33,13 +33,13 @@ import math
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
 from ..._version import __version__
 from ...analysis.compare import band_error, band_sample, beside_measured, pairs_per_band, relative_rms, sample_pairs
-from ...analysis.fit import fit_brdf
+from ...analysis.fit import FitResult, fit_brdf
 from ...analysis.fit.representation import choose_representation
 from ...analysis.lighting import lighting_coefficients
 from ...analysis.orders import OrderChoice, choose_orders_many
@@ -53,9 +53,12 @@ from ...brdf_io.jsonutil import to_jsonable
 from ...brdf_io.specs import load_brdf
 from ...render.preview import PREVIEW_DISABLED, PreviewImage, render_previews, resolve_preview_mode
 from .checks import data_checks
-from .explorer import explore, live_views
+from .explorer import LiveView, ReportImage, explore, live_views
 from .options import ReportOptions, load_report_env
 from .shared_state import OPENGL_LOCK
+
+if TYPE_CHECKING:
+    from ...brdf_io.cornell import ScatteredBRDF
 
 __all__ = [
     "REPORT_FORMAT",
@@ -119,7 +122,8 @@ def _fit_entry(result: Any) -> dict[str, Any]:
 
 
 def _fits(brdf: BRDF, options: ReportOptions) -> tuple[list[dict[str, Any]], list[Any]]:
-    entries, results = [], []
+    entries: list[dict[str, Any]] = []
+    results: list[FitResult | None] = []
     for model in options.models:
         t0 = time.perf_counter()
         try:
@@ -151,12 +155,13 @@ def _slices(brdf: BRDF, fitted: list[Any], models: tuple[str, ...]) -> dict[str,
     """
     views = []
     if brdf.kind == "scattered":
-        theta_i = np.degrees(np.arccos(np.clip(brdf.L[:, 2], -1, 1)))
+        samples = cast("ScatteredBRDF", brdf)  # the BRDFs of kind "scattered" (duck-typed by kind)
+        theta_i = np.degrees(np.arccos(np.clip(samples.L[:, 2], -1, 1)))
         levels = np.unique(np.round(theta_i))
         chosen = sorted({float(levels[np.argmin(np.abs(levels - v))]) for v in SLICE_VIEWS_DEG})
         for view in chosen:
             sel = np.abs(theta_i - view) < 0.5
-            L, V, rgb = brdf.L[sel], brdf.V[sel], brdf.rgb[sel]
+            L, V, rgb = samples.L[sel], samples.V[sel], samples.rgb[sel]
             dphi = np.arctan2(V[:, 1], V[:, 0]) - np.arctan2(L[:, 1], L[:, 0])
             in_plane = np.abs(np.sin(dphi)) < np.sin(np.radians(3.0))
             signed = np.degrees(np.arccos(np.clip(V[in_plane, 2], -1, 1))) * np.sign(np.cos(dphi[in_plane]))
@@ -213,8 +218,10 @@ def _orders(brdf: BRDF, options: ReportOptions) -> tuple[list[dict[str, Any]], d
     finest = choices[-1]
     F_keep = int(min(finest.F0, max(2 * max(c.F for c in choices) + 8, 32)))
     P_keep = int(min(finest.P0, max(c.P for c in choices) + 4))
+    source = finest.source
+    assert source is not None  # choose_orders keeps its grid data
     table = np.stack([finest.searched_table[: F_keep + 1, p] if not np.isnan(finest.searched_table[0, p])
-                      else finest.source.column(p)[: F_keep + 1] for p in range(P_keep + 1)], axis=1)
+                      else source.column(p)[: F_keep + 1] for p in range(P_keep + 1)], axis=1)
     eps_table = {"tolerance": finest.tolerance, "F0": finest.F0, "P0": finest.P0, "eps": table}
     return rows, eps_table, choices
 
@@ -238,7 +245,8 @@ def _environments(brdf: BRDF, options: ReportOptions, choices: dict[float, Order
                   nthreads: int = 0):
     # the headline measured error: pairs inside the view limit (the sampler of `shrm compare`)
     R, V, _ = sample_pairs(options.n_pairs, seed=options.seed, max_view_deg=options.max_view_deg)
-    env_entries, speed_rows, main_shrms = [], [], []
+    env_entries, main_shrms = [], []
+    speed_rows: list[dict[str, Any]] = []
     envs = [load_report_env(spec, options) for spec in options.envs]
     names = unique_names([env.name for env in envs])
     for spec, env, name in zip(options.envs, envs, names, strict=True):
@@ -426,7 +434,7 @@ def collect_report(
     preview_mode: str | None = None,
     progress: Progress | None = None,
     nthreads: int = 0,
-) -> tuple[dict[str, Any], list[PreviewImage]]:
+) -> tuple[dict[str, Any], list[PreviewImage | ReportImage | LiveView]]:
     """Compute the report of one BRDF.
 
     Parameters

@@ -31,7 +31,7 @@ import re
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -53,6 +53,9 @@ from ...render.output import to_8bit
 from ...render.preview import PREVIEW_VIEW, PreviewImage
 from ...render.webgl_page import ViewBudget, build_view, view_fragment
 from .plots import image_row_plot
+
+if TYPE_CHECKING:
+    from ...brdf_io.cornell import ScatteredBRDF
 
 __all__ = [
     "POLAR_INCIDENCE_DEG", "POLAR_THETA_DEG", "ALBEDO_CURVE_VIEWS_DEG", "MAX_SAMPLES", "SPHERE_FILE",
@@ -176,7 +179,8 @@ def _explore(brdf: BRDF, fit_results: Sequence[Any], models: Sequence[str], albe
     # polar plots of the plane of incidence
     curves = []
     if scattered:
-        theta_all = np.degrees(np.arccos(np.clip(np.asarray(brdf.L, float)[:, 2], -1.0, 1.0)))
+        samples = cast("ScatteredBRDF", brdf)  # the BRDFs of kind "scattered" (duck-typed by kind)
+        theta_all = np.degrees(np.arccos(np.clip(np.asarray(samples.L, float)[:, 2], -1.0, 1.0)))
         levels = np.unique(np.round(theta_all))
         incidence = sorted({float(levels[np.argmin(np.abs(levels - v))]) for v in POLAR_INCIDENCE_DEG})
     else:

@@ -325,7 +325,8 @@ def _scene_headline(doc: dict[str, Any], env: dict[str, Any]) -> str:
     """One environment in the summary's first lines: the scene's orders, the worst view band's error
     stated and measured, and the prefilter's time beside brute force's for the same map."""
     tol = doc["main"]["tolerance"]
-    row = next((r for r in doc.get("speed_vs_error", []) if r["env"] == env["name"] and r["tolerance"] == tol), {})
+    row: dict[str, Any] = next(
+        (r for r in doc.get("speed_vs_error", []) if r["env"] == env["name"] and r["tolerance"] == tol), {})
     line = (f"Under **{env['name']}** ({env['height']}×{env['width']}), ε = {fmt(tol)}: F_B = {env['F_B']}, "
             f"P_B = {env['P_B']}; worst view band relative RMS predicted {fmt(env.get('predicted_rel_rms'))}, "
             f"bound {fmt(env.get('bound_rel_rms'))}, **measured {fmt(env['measured_rel_rms'])}** "
