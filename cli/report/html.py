@@ -188,13 +188,24 @@ def column_label(key: str) -> str:
     return key
 
 
+def index_columns(columns: Sequence[str]) -> list[str]:
+    """The index page's column order: name, status and kind, the orders (``F@``/``P@``), the SHRM's
+    measured error under each environment and the prefilter time, then the rest as in ``summary.csv``."""
+    lead = [c for c in columns if c in ("name", "status", "kind") or c.startswith(("F@", "P@"))]
+    answer = [c for c in columns if c.startswith("shrm_rel_rms_") or c == "prefilter_seconds"]
+    return lead + answer + [c for c in columns if c not in lead and c not in answer]
+
+
 def index_html(columns: Sequence[str], rows: Sequence[Mapping[str, Any]], title: str = "shrm report summary",
                notes: Sequence[str] = (), thumbnails: Mapping[str, str] | None = None) -> str:
     """The batch summary page: one row per BRDF, linked to its report, sortable columns with
     readable headers (:func:`column_label`; the ``summary.csv`` key as each header's tooltip), the
     table scrolling sideways under a fixed name column, and a thumbnail per material where
-    ``thumbnails`` maps its name to an image path relative to the page (the report's preview)."""
+    ``thumbnails`` maps its name to an image path relative to the page (the report's preview).
+    The answer comes first (:func:`index_columns`): at 1280 px the first screen held only the
+    orders and the first fit's columns, the SHRM's measured error and times 15 columns further."""
     thumbnails = thumbnails or {}
+    columns = index_columns(columns)
     head = "".join(f'<th title="{html.escape(c)}">{html.escape(column_label(c))}</th>' for c in columns)
     body_rows = []
     for row in rows:
