@@ -30,13 +30,16 @@ Names are imported on first use, so ``import shrmkit.brdf_io`` stays fast.
 
 from __future__ import annotations
 
-from .brdf import BRDF
 from .errors import BadInputError, ScatteredEvalError, ShrmError
 from .lazy import lazy_exports as _lazy_exports
-from .specs import brdf_from_spec, load_brdf
 
 #: Public name → the module that defines it (imported on first use).
 _LAZY = {
+    # also BRDF and the spec readers: importing the package (e.g. for its errors, as the command line's
+    # start-up does) must not import numpy
+    "BRDF": "shrmkit.brdf_io.brdf",
+    "brdf_from_spec": "shrmkit.brdf_io.specs",
+    "load_brdf": "shrmkit.brdf_io.specs",
     "brdf_sources": "shrmkit.brdf_io.specs",
     "Lambert": "shrmkit.brdf_io.models",
     "PhongLobe": "shrmkit.brdf_io.models",
@@ -75,7 +78,7 @@ _LAZY = {
     "ReparamGrid": "shrmkit.brdf_io.reparam",
 }
 
-__all__ = ["BRDF", "BadInputError", "ScatteredEvalError", "ShrmError", "brdf_from_spec", "load_brdf", *_LAZY]
+__all__ = ["BadInputError", "ScatteredEvalError", "ShrmError", *_LAZY]
 
 
 __getattr__, __dir__ = _lazy_exports(__name__, _LAZY, __all__)
