@@ -136,8 +136,8 @@ def report_sections(doc: dict[str, Any], image_link: Any = None) -> Iterator[tup
                  f"{fmt(main_orders['max_view_deg'])}° meets ε under a point light (ε is the worst band's)"
                  if main_orders["criterion"] == "bands" else "RH02 §5.1, energy over all views") + ". By view band "
                  f"at (F, P) = ({main_orders['F']}, {main_orders['P']}), under a point light "
-                 "(the hardest lighting):\n\n")
-        body += md_table(["θ_v (°)", "ε", "rel. RMS", "note"], [
+                 "(the hardest lighting: its relative RMS is √ε; a scene's is stated under Environments):\n\n")
+        body += md_table(["θ_v (°)", "ε", "point-light rel. RMS (√ε)", "note"], [
             [f"{b['theta_v_deg'][0]:g}–{b['theta_v_deg'][1]:g}", b["eps"], b["rel_rms_point_light"],
              _band_note(b)] for b in main_orders["view_bands"]])
     body += "\n\n" + link("energy", "plot_energy.png", PLOT_TITLES["energy"])
