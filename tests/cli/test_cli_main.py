@@ -87,31 +87,10 @@ def test_unknown_verb_is_a_usage_error():
     assert all(f"'{verb}'" in proc.stderr for verb in _verbs())
 
 
-#: runs main(argv) for each argv of the JSON list argv[1], one after the other in this one fresh
-#: interpreter, and prints [exit code, stderr] of each as JSON: each its own stderr (warnings
-#: included) and warnings registry, as if each were its own process; an exception main does not
-#: turn into an exit code escapes, printing its traceback on the real stderr (exit 1)
-_RUN_EACH = (
-    "import contextlib, io, json, sys, warnings\n"
-    "from shrmkit.cli.main import main\n"
-    "done = []\n"
-    "for argv in json.loads(sys.argv[1]):\n"
-    "    err = io.StringIO()\n"
-    "    with warnings.catch_warnings(), contextlib.redirect_stderr(err), "
-    "contextlib.redirect_stdout(io.StringIO()):\n"
-    "        try:\n"
-    "            code = main(argv)\n"
-    "        except SystemExit as stop:\n"
-    "            code = stop.code\n"
-    "    done.append([code, err.getvalue()])\n"
-    "print(json.dumps(done))\n"
-)
-
-
 @pytest.mark.slow
-def test_unwritable_outputs_exit_2_without_traceback(tmp_path):
+def test_unwritable_outputs_exit_2_without_traceback(tmp_path, run_each):
     """Each command exits 2 with a one-line error, no traceback. They run in one fresh
-    interpreter (``_RUN_EACH``: main(argv), what the ``shrm`` script calls), not five: 2 s of
+    interpreter (conftest's ``run_each``: main(argv), what the ``shrm`` script calls), not five: 2 s of
     start-up and imports each."""
     cases = [
         ["prefilter", "--env", "builtin:sky,height=16", "--brdf", "phong:s=8", "-o", "/proc/x.shrm.npz"],
@@ -121,10 +100,7 @@ def test_unwritable_outputs_exit_2_without_traceback(tmp_path):
         ["report", "phong:s=32", "--quick", "--env", str(tmp_path / "missing.exr"), "--out", str(tmp_path / "r")],
         ["orders", "phong:s=8", "--env", "builtin:sky", "--env-flip"],
     ]
-    proc = subprocess.run([sys.executable, "-c", _RUN_EACH, json.dumps(cases)], capture_output=True, text=True)
-    assert proc.returncode == 0 and not proc.stderr, proc.stderr[-3000:]
-    done = json.loads(proc.stdout)
-    assert len(done) == len(cases)
+    done = run_each(cases, timeout=600)
     for args, (code, stderr) in zip(cases, done, strict=True):
         assert code == 2, (args, stderr)
         assert "Traceback" not in stderr and stderr.startswith("shrm "), stderr
