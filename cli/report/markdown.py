@@ -122,6 +122,15 @@ def report_sections(doc: dict[str, Any], image_link: Any = None) -> Iterator[tup
                    else ""))
     yield "Summary", "\n\n".join(head)
 
+    # the preview next, on the first screen with the answer (issue 26), before the tables behind it
+    p = doc["preview"]
+    parts = _live_parts(doc.get("live_preview"))
+    parts += [f"{img['key']} ({img['renderer']}, ε = {fmt(p['tolerance'])}, F = {p['F']}, P = {p['P']}, "
+              f"environment {p['env']}):\n\n" + link(f"preview_{img['key']}", img["file"], f"preview {img['key']}")
+              for img in p["images"]]
+    parts += [f"- {n}" for n in p["notes"]]
+    yield "Preview", "\n\n".join(parts) if parts else "No preview."
+
     if doc["warnings"]:
         yield "Data warnings", "\n".join(f"- **{w['code']}**: {w['message']}" for w in doc["warnings"])
     else:
@@ -239,13 +248,6 @@ def report_sections(doc: dict[str, Any], image_link: Any = None) -> Iterator[tup
     if explorer:
         yield "BRDF Explorer views", _explorer_body(doc, explorer, link)
 
-    p = doc["preview"]
-    parts = _live_parts(doc.get("live_preview"))
-    parts += [f"{img['key']} ({img['renderer']}, ε = {fmt(p['tolerance'])}, F = {p['F']}, P = {p['P']}, "
-              f"environment {p['env']}):\n\n" + link(f"preview_{img['key']}", img["file"], f"preview {img['key']}")
-              for img in p["images"]]
-    parts += [f"- {n}" for n in p["notes"]]
-    yield "Preview", "\n\n".join(parts) if parts else "No preview."
 
 
 def _live_parts(live: dict[str, Any] | None) -> list[str]:
