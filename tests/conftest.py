@@ -21,17 +21,20 @@ from __future__ import annotations
 import base64
 import contextlib
 import fcntl
+import importlib.util
 import io
 import json
 import os
 import select
 import shutil
 import subprocess
+import sys
 import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from types import ModuleType
 
 import numpy as np
 import pytest
@@ -40,6 +43,7 @@ from PIL import Image
 from shrmkit.render.offscreen import probe_offscreen
 
 SHARED_DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
 
 
 @pytest.hookimpl(optionalhook=True)
@@ -82,6 +86,22 @@ def shared_data() -> Path:
     if not SHARED_DATA.is_dir():
         pytest.skip(f"real data folder {SHARED_DATA} not present (only in the project workspace)")
     return SHARED_DATA
+
+
+@pytest.fixture(scope="session")
+def benchmark_module() -> Callable[[str], ModuleType]:
+    """``benchmark_module(name)``: the script ``benchmarks/NAME.py`` imported as the module ``NAME``, once
+    per run (the tests that drive a benchmark's cheap cases or its self-test)."""
+    def load(name: str) -> ModuleType:
+        if name not in sys.modules:
+            spec = importlib.util.spec_from_file_location(name, BENCHMARKS / f"{name}.py")
+            assert spec is not None and spec.loader is not None
+            module = importlib.util.module_from_spec(spec)
+            sys.modules[name] = module  # its dataclasses look their module up there
+            spec.loader.exec_module(module)
+        return sys.modules[name]
+
+    return load
 
 
 _PROBE: list[tuple[bool, str]] = []

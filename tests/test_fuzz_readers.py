@@ -8,9 +8,7 @@ command that reruns one of them.
 
 from __future__ import annotations
 
-import importlib.util
 import os
-import sys
 from pathlib import Path
 
 import pytest
@@ -18,17 +16,9 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _harness():
-    spec = importlib.util.spec_from_file_location("fuzz_readers", ROOT / "benchmarks" / "fuzz_readers.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules.setdefault("fuzz_readers", module)  # dataclasses look their module up there
-    spec.loader.exec_module(module)
-    return module
-
-
-def test_harness_classifies_misbehaviour():
+def test_harness_classifies_misbehaviour(benchmark_module):
     """The harness itself can fail a reader: each misbehaviour gets its own outcome."""
-    outcomes = _harness().self_test(timeout=8.0)
+    outcomes = benchmark_module("fuzz_readers").self_test(timeout=8.0)
     assert outcomes == {
         "sleep": "hang", "die": "crash", "huge": "memory", "creep": "memory", "keyerror": "crash",
         "nan": "garbage", "unnamed": "garbage", "clean": "clean", "fine": "valid",
@@ -36,8 +26,8 @@ def test_harness_classifies_misbehaviour():
 
 
 @pytest.mark.slow
-def test_seeded_fuzz_subset_has_no_failures():
-    harness = _harness()
+def test_seeded_fuzz_subset_has_no_failures(benchmark_module):
+    harness = benchmark_module("fuzz_readers")
     per_reader = int(os.environ.get("SHRM_FUZZ_CASES", "120"))
     # the two slowest readers per case (MERL writes and reads 35 MB, EXR ~90 ms) get fewer cases: each
     # still draws every one of its <= 7 mutation kinds several times over

@@ -9,8 +9,6 @@ whose R lies in the region, as ``benchmarks/lights_matrix.py`` measures)."""
 
 from __future__ import annotations
 
-import importlib.util
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -24,12 +22,8 @@ ROOT = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture(scope="module")
-def matrix():
-    spec = importlib.util.spec_from_file_location("lights_matrix", ROOT / "benchmarks" / "lights_matrix.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules.setdefault("lights_matrix", module)  # its dataclasses look their module up
-    spec.loader.exec_module(module)
-    return module
+def matrix(benchmark_module):
+    return benchmark_module("lights_matrix")
 
 
 def test_region_bounds_closed_form_on_a_constant_map() -> None:

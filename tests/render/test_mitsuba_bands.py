@@ -9,9 +9,7 @@ checked always; the slow test renders the scene again when ``mitsuba`` imports.
 
 from __future__ import annotations
 
-import importlib.util
 import json
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -21,19 +19,11 @@ ROOT = Path(__file__).resolve().parents[2]
 RECORD = ROOT / "tests" / "resources" / "mitsuba_bands_grace16.json"
 
 
-def _bench():
-    spec = importlib.util.spec_from_file_location("mitsuba_bands", ROOT / "benchmarks" / "mitsuba_bands.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules.setdefault("mitsuba_bands", module)  # its dataclass looks its module up
-    spec.loader.exec_module(module)
-    return module
-
-
 @pytest.fixture(scope="module")
-def recorded(shared_data: Path):
+def recorded(shared_data: Path, benchmark_module):
     """The record, the benchmark module, the scene it describes and the file of the material."""
     record = json.loads(RECORD.read_text())
-    bench = _bench()
+    bench = benchmark_module("mitsuba_bands")
     scene = bench.sphere_scene(record["size"], tuple(record["view"]))
     env = bench.scene_env(record["env_rows"], shared_data / record["env"])
     return record, bench, scene, env, shared_data / record["material"]
