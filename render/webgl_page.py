@@ -356,13 +356,9 @@ def _squared_difference(maps: np.ndarray, dirs: np.ndarray, given: np.ndarray, c
     """Σ over directions, maps and channels of (lookup of ``maps`` at ``dirs`` − ``given``)², a chunk of
     directions at a time: the (N, n, 3) lookups of the whole set and their difference are not held
     (2 × 18 MB for a P = 18 SHRM at 4096 directions)."""
-    matrix = _lookup_matrix(dirs, maps.shape[1], maps.shape[2])
-    n = maps.shape[0]
-    flat = np.ascontiguousarray(np.moveaxis(np.asarray(maps, np.float32), 0, 2)).reshape(-1, n * 3)
     total = 0.0
     for s in range(0, len(dirs), chunk):
-        # float32 lookups, as _lookup stores them
-        diff = (matrix[s:s + chunk] @ flat).astype(np.float32).reshape(-1, n, 3) - given[s:s + chunk]
+        diff = _lookup(maps, dirs[s:s + chunk]) - given[s:s + chunk]
         total += float(np.einsum("snc,snc->", diff, diff, dtype=np.float64))
     return total
 
