@@ -1,49 +1,11 @@
-"""The BRDF in GLSL: one shader per model, for the lights beside the SHRM (DESIGN §5a).
+"""The BRDF in GLSL for the lights beside the SHRM [RH02] (DESIGN §5a): one shader file per model.
 
-A scene's explicit lights (``analysis.lights``: samples ω_k with RGB power E_k) are shaded
-exactly per pixel, as :meth:`SHRM.radiance` does on the CPU:
-
-    B_lights(R, V) = Σ_k ρ̂(ω_k; V, N) E_k,    N = normalize(R + V),
-
-so every renderer needs the BRDF's ρ̂ in GLSL. Each model has **one** GLSL file in
-``render/webgl/`` (package data), used verbatim by the desktop VTK shaders (``render.shader``)
-and by the WebGL2 page (``render.webgl_page``, ``view.js``), as ``latlong.glsl`` is:
-
-==========================  ========================  =====================================
-model (``brdf_io.models``)  GLSL file                 parameters (uniforms / #defines)
-==========================  ========================  =====================================
-``PhongLobe``               ``brdf_phong.glsl``       ``shrmPhongS``, ``shrmPhongKs``
-``SimplifiedMicrofacet``    ``brdf_microfacet.glsl``  ``shrmMicrofacetSigma``, ``…Ks``
-``Lambert``                 ``brdf_lambert.glsl``     ``shrmLambertAlbedo``
-``Lafortune``               ``brdf_lafortune.glsl``   ``shrmLafKd``, per lobe ``shrmLafCxy[k]``,
-                                                      ``…Cz[k]``, ``…N[k]``, ``…Ks[k]``;
-                                                      ``SHRM_LAF_LOBES``
-``CookTorrance``            ``brdf_cook_torrance…``   ``shrmCtKd``, ``…Ks``, ``…F0``,
-                                                      ``shrmCtAlpha``; ``SHRM_CT_GGX``
-measured (kind ≠ analytic)  ``brdf_table.glsl``       the table texture ``shrmBrdfTex``,
-                                                      ``shrmBrdfScale``; ``SHRM_TAB_*``
-==========================  ========================  =====================================
-
-Each file defines ``vec3 shrm_brdf_rho_hat(vec3 N, vec3 L, vec3 V)`` for unit vectors in one
-frame (the z-up world frame); the models are isotropic, so only dot products of N, L, V enter
-and no tangent frame is built. ``brdf_common.glsl`` (helpers) comes first, ``lights.glsl`` (the
-sum over the samples: ``shrm_lights(R, V)``, uniforms ``shrmLightCount``, ``shrmLightDir[]``,
-``shrmLightPower[]``, array size ``SHRM_NLIGHTS``) last. The one table is :data:`BRDF_GLSL`
-(one :class:`BrdfShader` per model class); :func:`brdf_shader_for` picks the entry of a BRDF.
-
-Measured BRDFs (MERL ``.binary``, RGL ``.bsdf``, table ``.npz``, scattered data — every BRDF
-whose ``kind`` is not ``"analytic"``, and analytic models without an entry) are tabulated
-(:func:`tabulate_brdf`) into a float texture: ρ cos θ_L cos θ_V on a grid of Rusinkiewicz's
-half/difference angles, θ_h on MERL's square-root scale, φ_d folded by the mirror symmetry of an
-isotropic BRDF (ρ(φ_d) = ρ(−φ_d)), trilinear in the indices and divided by cos θ_V at the lookup
-(``brdf_table.glsl``). The default grid (:data:`TABLE_GRID`, 91 × 91 × 181) puts texels on MERL's
-own samples (a MERL file's values at its nodes); the table's error against the BRDF's own
-``eval`` is measured on the lights' reflection (:func:`table_error`) and reported.
-
-References: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
-SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611; S. Rusinkiewicz, "A New Change of Variables
-for Efficient BRDF Representation", EGWR 1998; W. Matusik et al., "A Data-Driven Reflectance
-Model", SIGGRAPH 2003 (MERL's table).
+A scene's explicit lights (``analysis.lights``) are shaded exactly per pixel, as
+:meth:`SHRM.radiance` does on the CPU: B_lights(R, V) = Σ_k ρ̂(ω_k; V, N) E_k, N = normalize(R + V).
+:data:`BRDF_GLSL` gives each analytic model its GLSL file; every other BRDF is tabulated on
+half/difference angles [Rus98] at MERL's spacing [MERL03] (:func:`tabulate_brdf`), on the
+coarsest grid whose measured error is within 1 % (:func:`choose_table`); :func:`light_shading`
+gathers what a renderer binds. Files and uniforms: ``data_specs/render_outputs.md``.
 """
 
 from __future__ import annotations
@@ -100,7 +62,11 @@ _WEBGL_DIR = "webgl"
 
 
 def glsl_source(name: str) -> str:
-    """The text of ``render/webgl/<name>`` (package data)."""
+    """The text of ``render/webgl/<name>`` (package data).
+
+    Each GLSL file is used verbatim by the desktop VTK shaders (``render.shader``) and by the
+    WebGL2 page (``render.webgl_page``, ``view.js``), as ``latlong.glsl`` is.
+    """
     return resources.files(__package__).joinpath(_WEBGL_DIR).joinpath(name).read_text(encoding="utf-8")
 
 
@@ -119,7 +85,9 @@ class BrdfShader:
     model
         The BRDF class it shades (an exact type match).
     source
-        File name in ``render/webgl/`` defining ``shrm_brdf_rho_hat``.
+        File name in ``render/webgl/`` defining ``vec3 shrm_brdf_rho_hat(vec3 N, vec3 L, vec3 V)``
+        for unit vectors in one frame (the z-up world frame); the models are isotropic, so only
+        dot products of N, L, V enter and no tangent frame is built.
     uniforms
         brdf → {uniform name: (GLSL type, flat values)}.
     defines
@@ -144,7 +112,23 @@ def _lafortune_uniforms(b: Lafortune) -> dict[str, Uniform]:
     return out
 
 
-#: The BRDF shader table: one entry per analytic model class (module docstring).
+#: The BRDF shader table: one :class:`BrdfShader` per analytic model class; :func:`brdf_shader_for`
+#: picks the entry of a BRDF. Each model has **one** GLSL file in ``render/webgl/``:
+#:
+#: ==========================  ========================  =====================================
+#: model (``brdf_io.models``)  GLSL file                 parameters (uniforms / #defines)
+#: ==========================  ========================  =====================================
+#: ``PhongLobe``               ``brdf_phong.glsl``       ``shrmPhongS``, ``shrmPhongKs``
+#: ``SimplifiedMicrofacet``    ``brdf_microfacet.glsl``  ``shrmMicrofacetSigma``, ``…Ks``
+#: ``Lambert``                 ``brdf_lambert.glsl``     ``shrmLambertAlbedo``
+#: ``Lafortune``               ``brdf_lafortune.glsl``   ``shrmLafKd``, per lobe ``shrmLafCxy[k]``,
+#:                                                       ``…Cz[k]``, ``…N[k]``, ``…Ks[k]``;
+#:                                                       ``SHRM_LAF_LOBES``
+#: ``CookTorrance``            ``brdf_cook_torrance…``   ``shrmCtKd``, ``…Ks``, ``…F0``,
+#:                                                       ``shrmCtAlpha``; ``SHRM_CT_GGX``
+#: measured (kind ≠ analytic)  ``brdf_table.glsl``       the table texture ``shrmBrdfTex``,
+#:                                                       ``shrmBrdfScale``; ``SHRM_TAB_*``
+#: ==========================  ========================  =====================================
 BRDF_GLSL: dict[type, BrdfShader] = {
     s.model: s
     for s in (
@@ -165,7 +149,9 @@ BRDF_GLSL: dict[type, BrdfShader] = {
     if s.model is not None  # every entry here names its class (None is TABLE_SHADER's)
 }
 
-#: Every other BRDF: a table texture (``brdf_table.glsl``; :func:`tabulate_brdf`).
+#: Every other BRDF: a table texture (``brdf_table.glsl``; :func:`tabulate_brdf`) — measured BRDFs
+#: (MERL ``.binary``, RGL ``.bsdf``, table ``.npz``, scattered data: every BRDF whose ``kind`` is
+#: not ``"analytic"``) and analytic models without an entry in :data:`BRDF_GLSL`.
 TABLE_SHADER = BrdfShader("table", None, "brdf_table.glsl", lambda t: {"shrmBrdfScale": ("float", [float(t.scale)])},
                           lambda t: {"SHRM_TAB_NH": t.shape[0], "SHRM_TAB_ND": t.shape[1], "SHRM_TAB_NP": t.shape[2],
                                      "SHRM_TAB_COLS": t.cols, "SHRM_TAB_PERIODIC": int(t.periodic)})
@@ -277,6 +263,12 @@ def tabulate_brdf(brdf: BRDF, shape: Sequence[int] | None = None, periodic: bool
                   *, only: np.ndarray | None = None) -> BrdfTable:
     """ρ of ``brdf`` (its own ``eval``) on a half/difference grid (:class:`BrdfTable`); ``shape`` and
     ``periodic`` default to :func:`table_grid_for`.
+
+    The texture holds ρ cos θ_L cos θ_V on Rusinkiewicz's half/difference angles [Rus98], θ_h on
+    MERL's square-root scale [MERL03], φ_d folded by the mirror symmetry of an isotropic BRDF
+    (ρ(φ_d) = ρ(−φ_d)); ``brdf_table.glsl`` interpolates it trilinearly in the indices and divides
+    by cos θ_V (:func:`table_lookup`). The default grid (:data:`TABLE_GRID`) puts texels on MERL's
+    own samples (a MERL file's values at its nodes).
 
     ``only``: a boolean (NH, ND, NP) mask of the samples wanted; the others are left 0 and the
     BRDF is evaluated only where the wanted ones read (a candidate grid's error needs the few
@@ -553,7 +545,9 @@ class LightShading:
 
 
 def lights_glsl_parts(shader: BrdfShader) -> tuple[str, ...]:
-    """The GLSL files of the lights, in order: helpers, the BRDF, the sum."""
+    """The GLSL files of the lights, in order: helpers (``brdf_common.glsl``), the BRDF, the sum
+    (``lights.glsl``: ``shrm_lights(R, V)`` over the samples, uniforms ``shrmLightCount``,
+    ``shrmLightDir[]``, ``shrmLightPower[]``, array size ``SHRM_NLIGHTS``)."""
     return ("brdf_common.glsl", shader.source, "lights.glsl")
 
 
