@@ -1,16 +1,16 @@
-"""Frequency-space analysis (RH02): BRDF coefficients ρ̂_lpq, the choice of orders, lighting
+"""Frequency-space analysis ([RH02]): BRDF coefficients ρ̂_lpq, the choice of orders, lighting
 coefficients, SHRM prefiltering and synthesis, the stated error per view band, and the
 angular-domain reference (DESIGN §4–6). Imports only :mod:`shrmkit.brdf_io`.
 
 Public API — the names in ``__all__``, importable from ``shrmkit.analysis``:
 
-- The SHRM: :func:`prefilter` (environment × BRDF → :class:`SHRM`, RH02 §4–5),
+- The SHRM: :func:`prefilter` (environment × BRDF → :class:`SHRM`, [RH02] §4–5),
   :func:`load_shrm` (``data_specs/shrm_file.md``).
-- Orders: :func:`choose_orders` and :func:`choose_orders_many` (RH02 §5.1) returning
+- Orders: :func:`choose_orders` and :func:`choose_orders_many` ([RH02] §5.1) returning
   :class:`OrderChoice`; the defaults :data:`DEFAULT_EPS`, :data:`DEFAULT_MAX_VIEW_DEG` and the
   rules :data:`CRITERIA`; :class:`BandStatement`, one view band's stated error
   (``data_specs/view_bands.md``).
-- The pieces of the pipeline: :func:`rho_lpq` (RH02 eq. 13) → :class:`BRDFCoefficients`;
+- The pieces of the pipeline: :func:`rho_lpq` ([RH02] eq. 13) → :class:`BRDFCoefficients`;
   :func:`lighting_coefficients` → :class:`LightingCoefficients`; :func:`scene_orders` →
   :class:`SceneOrders` and :func:`residual_bound`; :func:`real_sph_harm` (the real SH basis of
   DESIGN §2).

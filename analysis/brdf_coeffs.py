@@ -1,4 +1,4 @@
-"""BRDF coefficients ρ̂_lpq (RH02 eq. 13, Appendix C three-pass algorithm).
+"""BRDF coefficients ρ̂_lpq ([RH02] eq. 13, Appendix C three-pass algorithm).
 
     ρ̂_lpq = 2π ∫₀^π ∫₀^π ∫₀^{2π} ρ̂(θ_i', θ_o', φ') f_lq(θ_i') f_pq(θ_o') cos(qφ')
              sin θ_i' sin θ_o' dφ' dθ_o' dθ_i',        0 <= q <= min(l, p),
@@ -8,8 +8,7 @@ a cosine transform in φ' (FFT), a Gauss–Legendre sum over θ_o', then one ove
 ρ̂_{l,−q,p,−q} = ρ̂_lpq, and Parseval reads
 ∫∫ ρ̂² dω_i dω_o = Σ_{l,p} (ρ̂_lp0² + 2 Σ_{q>=1} ρ̂_lpq²).
 
-Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
-SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
+Reference: [RH02] (``data_specs/bibliography.md``).
 """
 
 from __future__ import annotations

@@ -1,8 +1,8 @@
-"""BRDF Explorer's views of a BRDF (Burley 2012): the half/difference slice, the plane of incidence,
+"""BRDF Explorer's views of a BRDF [Burley12]: the half/difference slice, the plane of incidence,
 the lit sphere.
 
 - **Half/difference slice**: ρ on a θ_h × θ_d grid (cell centres every :data:`SLICE_STEP_DEG`) at
-  φ_d = :data:`SLICE_PHI_D_DEG`, the directions from the half/difference angles (Rusinkiewicz 1998,
+  φ_d = :data:`SLICE_PHI_D_DEG`, the directions from the half/difference angles ([Rus98],
   ``brdf_io.halfdiff.halfdiff_to_directions``, φ_h = 0). A cell is *missing* where the table has no
   present sample in its interpolation cell (``eval_masked``), *below the surface* where L or V is.
 - **Plane of incidence**: L = (−sin θ_i, 0, cos θ_i), V = (sin θ_o, 0, cos θ_o) with signed θ_o
@@ -11,12 +11,6 @@ the lit sphere.
 - **Lit sphere**: a unit sphere seen orthographically along −z (V = +z at every pixel) under one
   distant light of irradiance π at normal incidence, radiance ρ(L, V)·max(N·L, 0)·π in each pixel's
   tangent frame (a white Lambertian surface facing the light has radiance 1).
-
-References
-----------
-B. Burley, "Physically-Based Shading at Disney", SIGGRAPH 2012 course notes (BRDF Explorer).
-S. Rusinkiewicz, "A New Change of Variables for Efficient BRDF Representation", EGWR 1998,
-doi:10.1007/978-3-7091-6453-2_2.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """A census of a BRDF library: accuracy at given orders, orders needed, the fit, and why each miss.
 
-RH02 Fig. 8 asks of a whole library (the 61 CURET surfaces) how much of each BRDF's energy a
+[RH02] Fig. 8 asks of a whole library (the 61 CURET surfaces) how much of each BRDF's energy a
 fixed number of coefficients captures: the accuracy 1 − ε(F, P) at F = 30 and P = 0…5. This
 module answers that, and more, for any library ``report`` accepts, one :class:`CensusRow` per
 material:
@@ -10,8 +10,8 @@ material:
   (:func:`~shrmkit.analysis.fit.representation.choose_representation`); tables and models are
   analysed as they are;
 - **accuracy at (F, P)**: on one quadrature grid sized for (F, P)
-  (:func:`~shrmkit.analysis.orders.orders_on_grid_for`), 1 − ε(F, p) for p = 0…P by RH02's
-  criterion (energy over all views, RH02 §5.1: what Fig. 8 plots) and by the bands criterion
+  (:func:`~shrmkit.analysis.orders.orders_on_grid_for`), 1 − ε(F, p) for p = 0…P by [RH02]'s
+  criterion (energy over all views, [RH02] §5.1: what Fig. 8 plots) and by the bands criterion
   (the worst θ_v band inside the view limit under a point light, ``analysis/view_bands.py``);
 - **orders needed** at a tolerance (:func:`~shrmkit.analysis.orders.choose_orders`);
 - **grazing share**: the share of the energy missed at (F, P) (bands criterion, per band
@@ -28,13 +28,8 @@ Public objects: :func:`run_census`, :func:`census_sources`, :class:`Census`, :cl
 :data:`REASONS`, :data:`CSV_COLUMNS`, and the defaults :data:`DEFAULT_F`, :data:`DEFAULT_P`,
 :data:`DEFAULT_THRESHOLD`.
 
-References
-----------
-R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering", SIGGRAPH 2002
-(RH02), doi:10.1145/566654.566611, §5.1 (ε(F, P)), §6.2 and Fig. 8 (CURET: 56 of 61 BRDFs above
-90 % accuracy at F = 30, P = 5; the surfaces their fits could not represent are anisotropic).
-K. J. Dana, B. van Ginneken, S. K. Nayar, J. J. Koenderink, "Reflectance and texture of
-real-world surfaces", ACM Trans. Graph. 18(1), 1999, doi:10.1145/300776.300778 (CURET).
+References: [RH02] §5.1 (ε(F, P)), §6.2 and Fig. 8 (CURET: 56 of 61 BRDFs above 90 % accuracy
+at F = 30, P = 5; the surfaces their fits could not represent are anisotropic); [CURET99].
 """
 
 from __future__ import annotations

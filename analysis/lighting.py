@@ -1,4 +1,4 @@
-"""Lighting coefficients L_lm of an environment and their accuracy ε_L(F) (RH02 §5.1).
+"""Lighting coefficients L_lm of an environment and their accuracy ε_L(F) ([RH02] §5.1).
 
     L_lm = ∫ L(ω) Y*_lm(ω) dω,      1 − ε_L(F) = Σ_{l<=F} Σ_m |L_lm|² / ∫ L² dω.
 
@@ -12,8 +12,7 @@ rows) — the integral ∫L dω is preserved exactly.
 Coefficients are stored in the ducc0/healpy layout (m >= 0 only; index
 m(2 lmax + 1 − m)/2 + l), one row per RGB channel.
 
-Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
-SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
+Reference: [RH02] (``data_specs/bibliography.md``).
 """
 
 from __future__ import annotations

@@ -26,14 +26,12 @@ any order); taken out, the residual is a smooth sky whose SHRM needs low orders 
 
 **Samples.** A light of up to :data:`MAX_SAMPLES_PER_LIGHT` pixels is one sample per pixel
 (exact, as the reference); a larger one is cut into that many groups by median cut (split the
-group of largest angular extent at its flux median along its longest axis), each group one
+group of largest angular extent at its flux median along its longest axis, [Debevec05]), each group one
 sample at its flux-weighted direction carrying its total RGB power. The merge moves flux by at
 most the group's angular radius, stated per light (``merge_deg``) and counted in the error
 statements of :func:`~shrmkit.analysis.shrm.prefilter`.
 
-Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
-SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611; P. Debevec, "A Median Cut Algorithm for Light
-Probe Sampling", SIGGRAPH 2005 posters (the split rule of the samples).
+References: [RH02]; [Debevec05] (the split rule of the samples).
 """
 
 from __future__ import annotations

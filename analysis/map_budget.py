@@ -2,7 +2,7 @@
 
 The per-band statement of an SHRM (:func:`~shrmkit.analysis.view_bands.shrm_view_bands`) counts
 the bilinear lookup in the stored S × 2S maps: a map term per degree,
-κ_l ≈ (l(l+1))² h⁴/160 with h = π/S (and, in the bound, at degree l + P, RH02 eq. 8). When a cap
+κ_l ≈ (l(l+1))² h⁴/160 with h = π/S (and, in the bound, at degree l + P, [RH02] eq. 8). When a cap
 holds S below what F needs — the 256 MiB memory budget (``analysis.map_size.default_size``) or a
 ``size=`` — that Taylor term grows past 1 (κ_l ∝ (lh)⁴) and the bound says nothing: measured on
 Grace at 512 rows, F_B 295–403 on 185 rows gave bounds 1.05–9.07 where brute force measured
@@ -15,8 +15,7 @@ costs (``map_rel_rms``: the map term of the prediction; ``map_bound_cost``: the 
 bound without lookup), and the rows and bytes a map would need for its lookup to take at most
 the share of ε that ``analysis.map_size.map_rows`` allows (the memory budget that meets ε).
 
-Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
-SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611, §5.2 (S ≈ 10 F).
+Reference: [RH02] §5.2 (S ≈ 10 F).
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Rows of the SHRM's S × 2S lat-long maps: RH02's S ≈ 10F within a memory budget (``"rh02"``
+"""Rows of the SHRM's S × 2S lat-long maps: [RH02]'s S ≈ 10F within a memory budget (``"rh02"``
 rule), the error-driven size of the ``"bands"`` rule, and sizes with fast FFTs.
 
 The global SHRM holds (P+1)² float32 RGB maps; their rows decide the bilinear lookup error the

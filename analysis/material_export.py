@@ -5,7 +5,7 @@ table) and a target of :data:`~shrmkit.brdf_io.export_material.MATERIAL_TARGETS`
 
 1. the **closest model the renderers share**: a Lambert or Cook–Torrance model is used as it
    is; a Lafortune model without lobes (or with zero ks) is its Lambert term; every other BRDF (Lafortune lobes,
-   RH02's Phong and simplified microfacet, Zernike expansions, tables) has no counterpart and
+   [RH02]'s Phong and simplified microfacet, Zernike expansions, tables) has no counterpart and
    goes through its closest Cook–Torrance GGX model, fitted by :func:`~shrmkit.analysis.fit.fit_brdf`
    (cosine-weighted relative RMS);
 2. the target's closest material to that model
@@ -18,8 +18,7 @@ table) and a target of :data:`~shrmkit.brdf_io.export_material.MATERIAL_TARGETS`
 
 Public objects: :class:`MaterialExport`, :func:`export_material`, :func:`closest_shared_model`.
 
-Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
-SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611 (the view-band errors of DESIGN §4).
+Reference: [RH02] (the view-band errors of DESIGN §4).
 """
 
 from __future__ import annotations

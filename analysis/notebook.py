@@ -1,10 +1,10 @@
 """Notebook display (``_repr_html_``, ``_repr_png_``) of the analysis results: the order choice and the SHRM.
 
-:class:`~shrmkit.analysis.orders.OrderChoice`: F, P, ε, the rule and its view limit, RH02's ε,
-capped / converged, the time, and the per-view-band table at the chosen orders (RH02 §5.1,
+:class:`~shrmkit.analysis.orders.OrderChoice`: F, P, ε, the rule and its view limit, [RH02]'s ε,
+capped / converged, the time, and the per-view-band table at the chosen orders ([RH02] §5.1,
 DESIGN §4). :class:`~shrmkit.analysis.shrm.SHRM`: the orders, the map size, the stated error of
 the worst view band (predicted and bound, relative RMS), the lights, the window, the timings, the
-per-band table, and a picture: the distant-viewer map of RH02 eq. 12 for a viewer at the zenith,
+per-band table, and a picture: the distant-viewer map of [RH02] eq. 12 for a viewer at the zenith,
 as a lat-long thumbnail over the reflection direction R (the SHRM part; the lights are shaded per
 pixel by the renderers). Cards are built from the pieces of :mod:`~shrmkit.brdf_io.notebook`.
 

@@ -1,7 +1,7 @@
 """The pixel rule: F_B raised until the reflected field is accurate per direction, not only on
 average (issue 23: "a stated error holds where a user reads it").
 
-The order rules (RH02's energy rule and the per-view-band rule of :mod:`.view_bands`) bound an
+The order rules ([RH02]'s energy rule and the per-view-band rule of :mod:`.view_bands`) bound an
 *energy* fraction: the error of a map, weighted by where its reflection is bright. Under a high
 dynamic range map (a cathedral's windows beside dark stone) the truncation error of the bright
 parts spreads over the dark ones as ringing, and there the *relative* error of a pixel can be 100 %

@@ -1,9 +1,9 @@
 """The engines' GGX-prefiltered environment as a cube mip chain (split sum, one roughness per level).
 
 Real-time engines keep the first factor of the split sum (``analysis/baselines/split_sum.py``,
-Karis 2013) as a cube map whose mip levels hold the environment prefiltered for increasing GGX
+[Karis13]) as a cube map whose mip levels hold the environment prefiltered for increasing GGX
 roughness; a material looks its roughness up between two levels. The level → roughness rule
-here is the glTF one (Khronos glTF-IBL-Sampler, glTF-Sample-Viewer: ``lod = roughness ·
+here is the glTF one ([glTF-IBL], glTF-Sample-Viewer: ``lod = roughness ·
 (levels − 1)``): level m of N holds the perceptual roughness r_m = m/(N − 1), GGX width
 α_m = r_m² (level 0: r = 0, the environment itself). Each level with α > 0 is Karis's
 prefilter L̄_α(R) = ∫ L(ω) D_α(h) max(R·ω, 0) dω / ∫ D_α(h) max(R·ω, 0) dω summed over every
@@ -19,10 +19,7 @@ project X = z_c, Y = −x_c, Z = y_c), which is what a y-up engine samples: face
 Public objects: :class:`CubeChain`, :func:`ggx_cube_chain`, :func:`chain_roughness`,
 :func:`material_lod`.
 
-References
-----------
-B. Karis, "Real Shading in Unreal Engine 4", SIGGRAPH 2013 course notes (split sum,
-``PrefilterEnvMap``); Khronos glTF-IBL-Sampler (``lod = roughness · (mipCount − 1)``).
+References: [Karis13] (split sum, ``PrefilterEnvMap``); [glTF-IBL] (``lod = roughness · (mipCount − 1)``).
 """
 
 from __future__ import annotations

@@ -1,14 +1,13 @@
 """Angular-domain reference: brute-force integration of the reflected radiance.
 
-    B(R, V) = ∫ L(ω) ρ̂(ω; V, N) dω,    N = normalize(R + V)             (RH02 eq. 2)
+    B(R, V) = ∫ L(ω) ρ̂(ω; V, N) dω,    N = normalize(R + V)             ([RH02] eq. 2)
 
 summed over every pixel of the lat-long environment, each weighted by its exact solid
 angle, with ρ̂ evaluated in the local frame of N (the BRDF's own ρ̂ for models that
-define it, ρ max(N·ω, 0) otherwise). O(W S_L²) per output value (RH02 Table 3): the
+define it, ρ max(N·ω, 0) otherwise). O(W S_L²) per output value ([RH02] Table 3): the
 ground truth for tests and the baseline every speed ratio is measured against.
 
-Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
-SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
+Reference: [RH02] (``data_specs/bibliography.md``).
 """
 
 from __future__ import annotations

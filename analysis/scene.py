@@ -1,4 +1,4 @@
-"""Scene orders and the residual error bound (RH02 §5.1 and Appendix B, re-derived).
+"""Scene orders and the residual error bound ([RH02] §5.1 and Appendix B, re-derived).
 
 The reflected light field has coefficients B_lmpq = L_lm ρ̂_lpq on the orthogonal
 functions 𝒟^l_mq(α, β) Y_pq(ω_o'), and ∫|𝒟^l_mq|² dΩ = Λ_l² = 4π/(2l+1). Hence
@@ -16,7 +16,7 @@ Residual bound (using only residual energies): for non-negative terms
 
 with ε_ρ^l(F) the fraction of ρ̂'s energy at l > F and ε_ρ^p(F, P) the fraction at
 l <= F, p > P. With C the captured energy (known exactly), the relative error obeys
-ε_B = E_err/(C + E_err) <= U/(C + U). (RH02 Appendix B states a bound of this kind; its
+ε_B = E_err/(C + E_err) <= U/(C + U). ([RH02] Appendix B states a bound of this kind; its
 Λ power is fixed here by the normalization ∫|𝒟|² = Λ².) Per RGB channel; the worst
 channel is reported.
 
@@ -25,8 +25,7 @@ by σ_lp ∈ [0, 1] adds the energy W = Σ_{l<=F, p<=P} Λ_l² a_l r_lp (1 − �
 to the truncated part, so ε_B = (E_err + W)/(C + E_err); since W <= C this grows with
 E_err and ε_B <= (U + W)/(C + U) still bounds it.
 
-Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
-SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
+Reference: [RH02] (``data_specs/bibliography.md``).
 """
 
 from __future__ import annotations

@@ -13,8 +13,7 @@ against scipy up to l = 500 and for orthonormality by Gauss–Legendre quadratur
 l = :data:`LEGENDRE_TESTED_LMAX` (2000); beyond that :func:`legendre_f` warns with
 :class:`NumericalLimitWarning`.
 
-Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
-SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
+Reference: [RH02] (``data_specs/bibliography.md``).
 """
 
 from __future__ import annotations

@@ -1,10 +1,9 @@
-"""The tolerance ε on uncaptured energy (RH02 §5.1): its one default and its one validator.
+"""The tolerance ε on uncaptured energy ([RH02] §5.1): its one default and its one validator.
 
 Every API that takes ε takes it keyword-only as ``eps=`` with default :data:`DEFAULT_EPS`
 and checks it with :func:`check_eps`; the CLI's ``--eps`` uses the same pair.
 
-Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
-SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
+Reference: [RH02] (``data_specs/bibliography.md``).
 """
 
 from __future__ import annotations

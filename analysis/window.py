@@ -6,7 +6,7 @@ below zero around bright regions. ``--window`` chooses what to do about it (:dat
 
 - ``none``: the bare truncated expansion;
 - ``lanczos``: the Lanczos σ-factors in full (:func:`~shrmkit.analysis.scene.lanczos_sigma`):
-  in (l, p) under RH02's rule, whose projected view dependence rings too, and in l under the
+  in (l, p) under [RH02]'s rule, whose projected view dependence rings too, and in l under the
   ``"bands"`` rule, whose fitted view dependence does not need damping (a window in p would cost
   the grazing bands most);
 - ``auto`` (default): the bare expansion when its undershoot (−min/max of the sampled radiance,
@@ -22,8 +22,7 @@ view and three fixed oblique views of every pixel of a coarse grid of about 3(F 
 coefficients; the synthesis is linear in σ, so the sample at strength t is (1 − t)·bare +
 t·full without another synthesis. The map itself is synthesized once, at the chosen strength.
 
-Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
-SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611; C. Lanczos, "Applied Analysis" (1956), σ-factors.
+References: [RH02]; [Lanczos56] (σ-factors).
 """
 
 from __future__ import annotations

@@ -6,7 +6,7 @@ Public API — the names in ``__all__``, importable from ``shrmkit.brdf_io``:
 - BRDFs: :class:`BRDF` (the evaluable interface), :func:`load_brdf` (spec string or file),
   :func:`brdf_from_spec`, :func:`brdf_sources` (the members of a multi-BRDF file); the
   analytic models :class:`Lambert`, :class:`PhongLobe`, :class:`SimplifiedMicrofacet`
-  (RH02 eq. 11), :class:`CookTorrance` [CT82], :class:`Lafortune` and :class:`LafortuneLobe`
+  ([RH02] eq. 11), :class:`CookTorrance` [CT82], :class:`Lafortune` and :class:`LafortuneLobe`
   [Laf97]; the measured and fitted kinds :class:`MerlBRDF` [MERL03], :class:`TableBRDF`,
   :class:`ScatteredBRDF` (Cornell), :class:`RGLBRDF` [DJ18], :class:`ZernikeBRDF`.
 - Readers and writers: :func:`read_merl` / :func:`write_merl` / :func:`tabulate_merl`,
@@ -18,7 +18,7 @@ Public API — the names in ``__all__``, importable from ``shrmkit.brdf_io``:
 - Conventions (DESIGN §2): :func:`pixel_directions`, :func:`row_solid_angles` and
   :func:`bilinear_lookup` (the lat-long grid), :func:`directions_to_halfdiff` and
   :func:`halfdiff_to_directions` [Rus98].
-- The reparameterization by the reflection vector (RH02 §3.1): :func:`reparameterize`,
+- The reparameterization by the reflection vector ([RH02] §3.1): :func:`reparameterize`,
   :class:`ReparamBRDF`, :class:`ReparamGrid`.
 - Errors: :class:`ShrmError` (every error of the package), :class:`BadInputError` (a bad file,
   spec or argument), :class:`ScatteredEvalError`.

@@ -3,13 +3,10 @@
 Directions are unit vectors in the local frame of the surface (normal +z), both
 pointing away from the surface. ``eval`` returns rho without the cosine factor;
 ``rho_hat`` returns the cosine-weighted transfer function rho * max(N.L, 0) used by the
-frequency analysis (RH02 §3.1), which some models (Phong, RH02's simplified microfacet)
+frequency analysis ([RH02] §3.1), which some models (Phong, [RH02]'s simplified microfacet)
 define directly.
 
-References
-----------
-R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering", SIGGRAPH 2002
-(RH02), ACM Trans. Graph. 21(3), doi:10.1145/566654.566611.
+Reference: [RH02] (``data_specs/bibliography.md``).
 """
 
 from __future__ import annotations

@@ -4,9 +4,9 @@ weights (:data:`REC709_LUMA`).
 Pipeline, for samples s(λ) at λ = 400, 410, ..., 700 nm:
 
 1. CIE 1931 XYZ under the CIE D65 illuminant S(λ), normalized so that a flat spectrum
-   s ≡ 1 has Y = 1 (CIE 015:2004 §7.1, eq. 7.1–7.3 with k = 1 / Σ S ȳ Δλ):
+   s ≡ 1 has Y = 1 ([CIE1931] §7.1, eq. 7.1–7.3 with k = 1 / Σ S ȳ Δλ):
    X = Σ s S x̄ / Σ S ȳ, Y = Σ s S ȳ / Σ S ȳ, Z = Σ s S z̄ / Σ S ȳ.
-2. Linear sRGB with the IEC 61966-2-1 XYZ → RGB matrix (D65 white, no transfer curve).
+2. Linear sRGB with the [sRGB] XYZ → RGB matrix (D65 white, no transfer curve).
 3. A diagonal white balance diag(1/w), w = the sRGB of the flat spectrum s ≡ 1 from
    steps 1–2, so a spectrally flat rho = c maps to exactly (c, c, c).
 
@@ -17,12 +17,8 @@ the identity; with 10-nm sampling truncated to 400–700 nm and the 4-digit IEC 
 differs from (1, 1, 1) by less than 1 % (``white_balance()`` reports it) and the
 diagonal makes the flat-spectrum property exact.
 
-References
-----------
-CIE 015:2004, Colorimetry, 3rd ed., Table T.1 (D65 relative SPD) and Table T.4 (CIE
-1931 2° standard observer x̄, ȳ, z̄); here the 10-nm rows 400–700 nm of those tables.
-IEC 61966-2-1:1999, Multimedia systems and equipment — Colour measurement and management —
-Part 2-1: Default RGB colour space — sRGB, §5.2 (the XYZ → RGB matrix).
+References: [CIE1931] Table T.1 (D65 relative SPD) and Table T.4 (CIE 1931 2° standard
+observer x̄, ȳ, z̄), here their 10-nm rows 400–700 nm; [sRGB] §5.2 (the XYZ → RGB matrix).
 """
 
 from __future__ import annotations

@@ -9,11 +9,7 @@ mirror direction of the incident one is at φ_s = π (the data's specular peaks 
 
 Public objects: :class:`ScatteredBRDF`, :func:`read_cornell`.
 
-References
-----------
-Cornell University Program of Computer Graphics measurements, as distributed with pbrt-v2
-(scenes/brdfs/); M. Pharr, G. Humphreys, "Physically Based Rendering", 2nd ed., §8.6.2
-(``IrregIsotropicBRDF``), which reads the same files.
+References: [CornellBRDF]; [PBRT2] §8.6.2 (``IrregIsotropicBRDF``), which reads the same files.
 """
 
 from __future__ import annotations

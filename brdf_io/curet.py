@@ -20,12 +20,7 @@ components, as for every :class:`~shrmkit.brdf_io.cornell.ScatteredBRDF`: 3 per 
 Public objects: :func:`read_curet`, :func:`read_curet_all`, :func:`curet_samples`,
 :func:`curet_sample_name`, :data:`CURET_SAMPLE_NAMES`, :func:`curet_files`.
 
-References
-----------
-K. J. Dana, B. van Ginneken, S. K. Nayar, J. J. Koenderink, "Reflectance and texture of
-real-world surfaces", ACM Trans. Graph. 18(1), 1999, doi:10.1145/300776.300778.
-Columbia-Utrecht Reflectance and Texture Database (CURET), www.cs.columbia.edu/CAVE/software/curet/
-(BRDF database, sample list).
+Reference: [CURET99] (the paper, and the database's BRDF files and sample list).
 """
 
 from __future__ import annotations

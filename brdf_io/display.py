@@ -6,19 +6,12 @@ re-exports it for the image writers.
 
 1. scale by 2^exposure (:func:`middle_grey_exposure` picks the exposure that brings a mean
    luminance to 0.18);
-2. tone map (``srgb``: clip to [0, 1]; ``filmic``: the ACES fitted curve of Narkowicz 2015,
+2. tone map (``srgb``: clip to [0, 1]; ``filmic``: the ACES fitted curve of [Narkowicz15],
    x(2.51x + 0.03) / (x(2.43x + 0.59) + 0.14));
-3. encode with the sRGB transfer function (IEC 61966-2-1) and quantize to 8 bits;
-4. :func:`encode_png`: an 8-bit RGB or RGBA image as PNG bytes (PNG spec, ISO/IEC 15948:2004:
+3. encode with the sRGB transfer function [sRGB] and quantize to 8 bits;
+4. :func:`encode_png`: an 8-bit RGB or RGBA image as PNG bytes ([PNG]:
    signature, IHDR, one zlib-compressed IDAT with filter type 0 per row, IEND), written with the
    standard library only, so that a notebook thumbnail imports nothing heavy.
-
-References
-----------
-K. Narkowicz, "ACES Filmic Tone Mapping Curve", 2015,
-https://knarkowicz.wordpress.com/2016/01/06/aces-filmic-tone-mapping-curve/
-IEC 61966-2-1:1999, sRGB transfer function.
-ISO/IEC 15948:2004 (W3C PNG, 2nd ed.), https://www.w3.org/TR/png/
 """
 
 from __future__ import annotations

@@ -10,7 +10,7 @@ so the radiance reflected under it, for any representation B(R, V) of the unrota
     B_Q(R, V) = B(Qᵀ R, Qᵀ V)
 
 (and the lights' directions ω_k move to Q ω_k): a rotation is a change of the lookup
-directions at view time, and nothing is prefiltered again (RH02 §1, §8; for an isotropic
+directions at view time, and nothing is prefiltered again ([RH02] §1, §8; for an isotropic
 BRDF the identity is exact, every error statement of the scene holds unchanged).
 
 Euler angles (degrees) in the z-up frame of DESIGN §2, applied roll first:

@@ -4,18 +4,13 @@ For a light direction L and a view direction V (unit vectors in the local frame,
 +z, both pointing away from the surface) the half vector is H = normalize(L + V), with
 spherical angles (θ_h, φ_h). The *difference* vector D is L expressed in a frame where H
 is the pole: D = Ry(−θ_h) Rz(−φ_h) L (rotate by −φ_h about z, then by −θ_h about y), and
-(θ_d, φ_d) are its spherical angles (Rusinkiewicz 1998, §3 and Fig. 2). In that frame V
+(θ_d, φ_d) are its spherical angles ([Rus98] §3 and Fig. 2). In that frame V
 is the mirror image of D about the pole, V' = (−D_x, −D_y, D_z), so swapping L and V
 keeps θ_h, θ_d and maps φ_d to φ_d + π (mod 2π): reciprocity is a half turn in φ_d.
 
 Conventions: θ_h ∈ [0, π], θ_d ∈ [0, π/2], φ_h and φ_d ∈ (−π, π] (``arctan2``). D is
 built from L (the incident direction), as MERL's ``BRDFRead.cpp`` builds it from its
 ``theta_in, fi_in`` pair.
-
-References
-----------
-S. Rusinkiewicz, "A New Change of Variables for Efficient BRDF Representation",
-Eurographics Workshop on Rendering 1998, doi:10.1007/978-3-7091-6453-2_2.
 """
 
 from __future__ import annotations

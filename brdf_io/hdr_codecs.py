@@ -12,14 +12,9 @@ registry by file suffix. Public objects: :func:`read_exr`, :func:`write_exr`, :f
 :func:`read_pfm`, :func:`write_pfm`, :func:`read_image`, :func:`write_image`,
 :data:`IMAGE_SUFFIXES`.
 
-References
-----------
-- OpenEXR file layout, https://openexr.com/en/latest/OpenEXRFileLayout.html (read and
-  written through the ``OpenEXR`` 3.x Python bindings).
-- G. Ward, "Real Pixels", Graphics Gems II (1991) 80-83: the RGBE shared-exponent pixel.
-- Radiance file formats, https://radiance-online.org/learning/documentation/manual-pages
-  (``picture`` format: header, resolution string, new-style run-length encoding).
-- Portable FloatMap, https://www.pauldebevec.com/Research/HDR/PFM/
+References: [OpenEXR] (read and written through the ``OpenEXR`` 3.x Python bindings); [Ward91]
+(the RGBE shared-exponent pixel); [Radiance] (``picture`` format: header, resolution string,
+new-style run-length encoding); [PFM].
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """MERL BRDF database ``.binary`` format input/output.
 
-The format (Matusik et al. 2003; layout in ``data_specs/merl_binary.md``): a header of
+The format ([MERL03]; layout in ``data_specs/merl_binary.md``): a header of
 3 little-endian int32 dimensions (90, 90, 180), then 3 · 90·90·180 little-endian
 float64, all red, then all green, then all blue; each channel is indexed
 [θ_half][θ_diff][φ_diff] with φ_diff fastest. Sample (i, j, k) sits at
@@ -11,11 +11,7 @@ for (R, G, B). Negative numbers mark missing measurements.
 Public objects: :class:`MerlBRDF`, :func:`read_merl`, :func:`write_merl`,
 :func:`tabulate_merl`, :func:`merl_sample_angles`, :func:`merl_index_coordinates`.
 
-References
-----------
-W. Matusik, H. Pfister, M. Brand, L. McMillan, "A Data-Driven Reflectance Model",
-ACM Trans. Graph. 22(3), 2003, doi:10.1145/882262.882343; the database's reference
-reader ``BRDFRead.cpp`` (MERL, 2006).
+Reference: [MERL03] (the paper and the database's reference reader ``BRDFRead.cpp``).
 """
 
 from __future__ import annotations

@@ -1,35 +1,32 @@
 """Analytic isotropic BRDF models.
 
 Each model is an immutable object with ``eval`` (rho, 1/sr, no cosine) and
-``rho_hat`` (rho * cos, RH02 §3.1). Parameters may be scalars or RGB triples.
+``rho_hat`` (rho * cos, [RH02] §3.1). Parameters may be scalars or RGB triples.
 
 Models
 ------
 ``phong``
-    RH02 §6.3 (eq. in Appendix D): rho_hat = (s+1)/(2π) max(R·L, 0)^s with R the mirror
+    [RH02] §6.3 (eq. in Appendix D): rho_hat = (s+1)/(2π) max(R·L, 0)^s with R the mirror
     direction of V. The model *defines* rho_hat; there is no horizon clipping, so the
     lobe is exactly radially symmetric about R; ``eval`` = rho_hat / max(cos θ_i, 1e-20).
 ``microfacet``
-    RH02 eq. 11: rho_hat = exp(-(θ_h/σ)²) / (4πσ²), θ_h the angle between N and the half
+    [RH02] eq. 11: rho_hat = exp(-(θ_h/σ)²) / (4πσ²), θ_h the angle between N and the half
     vector; zero where N·L <= 0. The model defines rho_hat; ``eval`` divides by
     max(cos θ_i, 1e-20).
 ``lambert``
     rho = albedo / π.
 ``lafortune``
-    Lafortune et al. 1997, isotropic: rho = kd/π + Σ_k ks_k max(Cxy_k (LxVx + LyVy)
+    [Laf97], isotropic: rho = kd/π + Σ_k ks_k max(Cxy_k (LxVx + LyVy)
     + Cz_k LzVz, 0)^n_k.
 ``cook-torrance``
-    Cook & Torrance 1982 with a Beckmann (Walter et al. 2007 Smith G1 rational
-    approximation) or GGX (exact separable Smith G1) distribution and Schlick's Fresnel:
+    [CT82] with a Beckmann ([Walter07] Smith G1 rational approximation) or GGX (exact
+    separable Smith G1) distribution and Schlick's Fresnel [Schlick94]:
     rho = kd/π + ks D(θ_h) F(V·H) G(L, V) / (4 cos θ_i cos θ_o).
 
 Parameter bounds (``MAX_SCALE`` ... ``COS_FLOOR`` below; data_specs/spec_strings.md) keep
 every model's values finite for every pair of unit directions; the spec parser enforces them.
 
-References
-----------
-R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering", SIGGRAPH 2002
-(RH02), ACM Trans. Graph. 21(3), doi:10.1145/566654.566611.
+References: [RH02], [Laf97], [CT82], [Walter07], [Schlick94] (``data_specs/bibliography.md``).
 """
 
 from __future__ import annotations

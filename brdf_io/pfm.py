@@ -1,7 +1,6 @@
 """Portable FloatMap (``.pfm``) reader and writer.
 
-Reference: P. Debevec, "PFM Portable Float Map", https://www.pauldebevec.com/Research/HDR/PFM/
-(the reading rules are in ``data_specs/image_files.md``).
+Reference: [PFM] (the reading rules are in ``data_specs/image_files.md``).
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Debevec angular light probes: pixel geometry and conservative resampling to lat-long.
 
-Angular probes (Debevec, "Light Probe Image Gallery", angular map format): a square
+Angular probes ([DebevecProbes], angular map format): a square
 D × D image, u = 2(c + ½)/D − 1 to the right, v = 1 − 2(r + ½)/D upwards; the direction
 (Dx, Dy, Dz) in the probe frame (y up) appears at (u, v) = (Dx, Dy)·acos(Dz)/(π sqrt(Dx² + Dy²)),
 so the image centre looks along +z and the rim along −z. The probe frame maps into the
@@ -19,11 +19,6 @@ The lat-long geometry lives in :mod:`~shrmkit.brdf_io.latlong`, cube maps in
 
 Public objects: :data:`PROBE_TO_PROJECT`, :func:`probe_pixel_directions`,
 :func:`probe_to_latlong`.
-
-References
-----------
-P. Debevec, "Light Probe Image Gallery", https://www.pauldebevec.com/Probes/
-(angular map formula).
 """
 
 from __future__ import annotations

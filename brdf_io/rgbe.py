@@ -7,9 +7,8 @@ encodings, colour handling, size checks) are documented in ``data_specs/image_fi
 
 References
 ----------
-- G. Ward, "Real Pixels", Graphics Gems II (1991) 80-83: the RGBE shared-exponent pixel.
-- Radiance ``doc/notes/picture.format`` and the Radiance sources
-  (https://github.com/NREL/Radiance, ``src/common``): ``header.c`` (``getheader``: the
+- [Ward91]: the RGBE shared-exponent pixel.
+- [Radiance]: ``doc/notes/picture.format`` and the Radiance sources (``src/common``): ``header.c`` (``getheader``: the
   header ends at the first line that is empty or ``"\\r"``; ``formatval``), ``resolu.h`` /
   ``resolu.c`` (resolution line, ``YMAJOR``/``XDECR``/``YDECR``), ``image.c``
   (``pix2loc``: pixel positions), ``color.c`` (``freadcolrs``: new-style run-length

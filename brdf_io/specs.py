@@ -10,10 +10,7 @@ A value written ``r/g/b`` is an RGB triple. Lafortune lobes are numbered by a su
 the lobe keys: ``cxy, cz, n, ks`` (lobe 1), ``cxy2, cz2, n2, ks2`` (lobe 2), ...
 Parameter values are parsed and range-checked by :mod:`~shrmkit.brdf_io.spec_params`.
 
-References
-----------
-R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering", SIGGRAPH 2002
-(RH02), ACM Trans. Graph. 21(3), doi:10.1145/566654.566611.
+Reference: [RH02] (``data_specs/bibliography.md``).
 """
 
 from __future__ import annotations

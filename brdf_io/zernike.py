@@ -4,7 +4,7 @@
 Koenderink, van Doorn & Stavridi (1996) expand a BRDF over the product of the incident and
 the exit hemisphere in products of Zernike polynomials, after mapping each hemisphere onto
 the unit disc; CURET published its BRDF fits in this basis (Dana et al. 1999, with 5 and 55
-coefficients) and RH02 (Fig. 8) analysed those fits.
+coefficients) and [RH02] (Fig. 8) analysed those fits.
 
 Hemisphere → disc
 -----------------
@@ -32,7 +32,7 @@ disc: ∫₀¹∫₀^{2π} Z_n^m Z_n'^m' ρ dρ dφ = δ_nn' δ_mm' (:func:`zern
 The reciprocal isotropic basis
 ------------------------------
 A BRDF that depends on the azimuths only through φ_i − φ_o (isotropy) and is even in it
-(bilateral symmetry, which every isotropic BRDF of this toolkit has: RH02 eq. 13 uses
+(bilateral symmetry, which every isotropic BRDF of this toolkit has: [RH02] eq. 13 uses
 cos(qφ') only) has, in the products Z_n^m(ρ_i, φ_i) Z_n'^m'(ρ_o, φ_o), only the combinations
 m' = m with Z_n^m Z_n'^m + Z_n^{−m} Z_n'^{−m} ∝ R_n^m(ρ_i) R_n'^m(ρ_o) cos(m(φ_i − φ_o)).
 Reciprocity, ρ(L, V) = ρ(V, L), pairs (n, n') with (n', n). The basis functions are, for
@@ -75,8 +75,7 @@ doi:10.1007/3-540-61123-1_125.
 K. J. Dana, B. van Ginneken, S. K. Nayar, J. J. Koenderink, "Reflectance and texture of
 real-world surfaces", ACM Trans. Graph. 18(1), 1999, doi:10.1145/300776.300778 (CURET).
 M. Born, E. Wolf, *Principles of Optics*, Appendix VII (Zernike circle polynomials).
-R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering", SIGGRAPH 2002
-(RH02), doi:10.1145/566654.566611, Fig. 8.
+[RH02], Fig. 8.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Mesh rendering of measured BRDFs under environment maps: the SHRM shaders (RH02 §6) and the
+"""Mesh rendering of measured BRDFs under environment maps: the SHRM shaders ([RH02] §6) and the
 comparison render modes, offscreen through VTK (EGL or OSMesa), with a numpy reference renderer.
 Imports :mod:`shrmkit.analysis` and :mod:`shrmkit.brdf_io`, never the CLI.
 

@@ -15,7 +15,7 @@ an OpenEXR file whose R, G and B channels all hold it (``brdf_io.exr.write_exr``
 
 Only the SHRM modes have a statement (:func:`error_image_modes`: ``distant``, ``perpixel``,
 ``kautz-mccool``). In ``distant`` mode with a perspective camera the SHRM part of a pixel is the
-frame's map at the view Ṽ toward the object (RH02 eq. 12); the image states the error of the
+frame's map at the view Ṽ toward the object ([RH02] eq. 12); the image states the error of the
 SHRM at the pixel's own V and does not count that distant-viewer approximation (with an ortho
 camera V = Ṽ at every pixel, and the image describes the render exactly).
 """

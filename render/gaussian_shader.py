@@ -1,35 +1,9 @@
-"""GLSL for Green, Kautz & Durand 2007 Gaussian-lobe shading (render mode ``gaussian-lobes``).
+"""GLSL for the Gaussian-lobe shading of [Green07] (render mode ``gaussian-lobes``).
 
 The fragment shader evaluates exactly what :meth:`shrmkit.analysis.baselines.gaussian_lobes.
-GaussianLobeModel.radiance` computes on the CPU:
-
-    B(R, V) = Σ_n a_n Σ_k w_nk (G_σnk * L)(d_nk),   d_nk = cos θ_μ,nk R + sin θ_μ,nk t,
-
-with t the unit vector toward V perpendicular to R (for V ∥ R: normalize(R × h), h = +z
-unless |R_z| ≥ 0.9, then +x), a_n the linear interpolation weights of θ_v = angle(N, V)
-between the two neighbouring fitted elevations (clamped to the first/last), and
-(G_σ * L) read from the SG mip stack by linear interpolation in log2 σ between two levels.
-σ is constant per lobe, so the level pair and its weight are computed once on the CPU.
-
-Storage (all float32, no 8-bit data anywhere):
-
-- the mip stack is one atlas texture (:func:`sg_atlas`): level j (H_j × 2H_j) occupies rows
-  [row_j, row_j + H_j) and columns [0, 2H_j), levels stacked top to bottom; each level is
-  read with the bilinear lat-long rule of ``brdf_io.latlong.bilinear_lookup`` by four
-  ``texelFetch``es (φ wraps, θ clamped to the first/last row centres), as in ``render.glsl``;
-- the lobe table (N elevations × K lobes: cos θ_μ, sin θ_μ, RGB weight, level, level weight)
-  and the elevation nodes are compiled into the shader as ``const`` arrays (one shader per
-  object; float literals with 9 significant digits are exact in float32).
-
-Optional self-shadowing (Green et al. 2007 eq. 7, :mod:`shrmkit.analysis.baselines.selfshadow`):
-25 order-4 SH visibility coefficients per vertex arrive as seven ``vec4`` vertex attributes
-``glVis0..6`` (the last padded), are interpolated to the fragment (varyings ``glVis0_f..6_f``,
-``render.glsl.varying``), and each lobe is multiplied
-by V(d_nk) = clamp(Σ c_i Y^r_i(d_nk), 0, 1), or (``normalized``) the attributes hold the
-occlusion coefficients o = step(n_vertex) − c and V = clamp(1 − Σ o_i Y^r_i(d) / S(max(N·d, 0)), 0, 1)
-with S the SH-4 truncated hemisphere step (``selfshadow.visibility_at``). Under a rotated
-environment (``render.glsl.TO_MAP_UNIFORM``) the lobes are read in the map's frame and the
-visibility, the mesh's own, at the world direction Q d_nk.
+GaussianLobeModel.radiance` computes on the CPU (:func:`gaussian_fragment_replacements`), reading
+the SG mip stack from one float32 atlas (:func:`sg_atlas`; no 8-bit data anywhere), with optional
+self-shadowing by per-vertex SH visibility ([Green07] eq. 7, :func:`gaussian_shading`).
 """
 
 from __future__ import annotations
@@ -61,7 +35,11 @@ VIS_ATTRIBUTES = tuple(f"glVis{i}" for i in range(N_VIS_ATTRIBUTES))
 def sg_atlas(levels: tuple[np.ndarray, ...]) -> tuple[np.ndarray, list[int], list[int]]:
     """Stack the mip levels (H_j, 2H_j, 3) into one float32 image; returns (atlas, row offsets, heights).
 
-    The atlas is (Σ H_j, max 2H_j, 3); texel (x, y) of the texture is ``atlas[y, x]``.
+    The atlas is (Σ H_j, max 2H_j, 3); texel (x, y) of the texture is ``atlas[y, x]``. Level j
+    (H_j × 2H_j) occupies rows [row_j, row_j + H_j) and columns [0, 2H_j), levels stacked top to
+    bottom; the shader reads each level with the bilinear lat-long rule of
+    ``brdf_io.latlong.bilinear_lookup`` by four ``texelFetch``es (φ wraps, θ clamped to the
+    first/last row centres), as in ``render.glsl``.
     """
     heights = [int(level.shape[0]) for level in levels]
     rows = [int(r) for r in np.concatenate([[0], np.cumsum(heights)[:-1]])]
@@ -181,7 +159,19 @@ def gaussian_fragment_replacements(
     """(tag, replacement) pairs for the fragment shader of one Gaussian-lobe actor.
 
     Uniforms and prelude as in ``render.glsl``; sampler ``shrmTex`` holds the mip atlas of
-    :func:`sg_atlas`; with ``shadow`` the varyings of :data:`VIS_ATTRIBUTES` hold the visibility.
+    :func:`sg_atlas`; with ``shadow`` the varyings of :data:`VIS_ATTRIBUTES` hold the visibility
+    (:func:`gaussian_shading`). The shader computes
+
+        B(R, V) = Σ_n a_n Σ_k w_nk (G_σnk * L)(d_nk),   d_nk = cos θ_μ,nk R + sin θ_μ,nk t,
+
+    with t the unit vector toward V perpendicular to R (for V ∥ R: normalize(R × h), h = +z
+    unless |R_z| ≥ 0.9, then +x), a_n the linear interpolation weights of θ_v = angle(N, V)
+    between the two neighbouring fitted elevations (clamped to the first/last), and (G_σ * L)
+    read from the SG mip stack by linear interpolation in log2 σ between two levels. σ is
+    constant per lobe, so the level pair and its weight are computed once on the CPU. The lobe
+    table (N elevations × K lobes: cos θ_μ, sin θ_μ, RGB weight, level, level weight) and the
+    elevation nodes are compiled into the shader as ``const`` arrays (one shader per object;
+    float literals with 9 significant digits are exact in float32).
     """
     sigmas = np.asarray(sigmas, dtype=np.float64)
     dec = [
@@ -205,10 +195,18 @@ def gaussian_fragment_replacements(
 def gaussian_shading(
     model: GaussianLobeModel, mesh: Mesh, visibility_sh: np.ndarray | None = None, normalized: bool = True
 ) -> Shading:
-    """Green et al. 2007: mip atlas texture + lobe table compiled into the fragment shader.
+    """[Green07]: mip atlas texture + lobe table compiled into the fragment shader.
 
-    ``visibility_sh`` (n_vertices, 25) turns on self-shadowing; with ``normalized`` the
-    attributes carry the occlusion coefficients step(n_vertex) − visibility (module docstring).
+    ``visibility_sh`` (n_vertices, 25) turns on self-shadowing ([Green07] eq. 7,
+    :mod:`shrmkit.analysis.baselines.selfshadow`): the 25 order-4 SH visibility coefficients per
+    vertex arrive as seven ``vec4`` vertex attributes ``glVis0..6`` (the last padded), are
+    interpolated to the fragment (varyings ``glVis0_f..6_f``, ``render.glsl.varying``), and each
+    lobe is multiplied by V(d_nk) = clamp(Σ c_i Y^r_i(d_nk), 0, 1); with ``normalized`` the
+    attributes hold the occlusion coefficients o = step(n_vertex) − c and
+    V = clamp(1 − Σ o_i Y^r_i(d) / S(max(N·d, 0)), 0, 1), S the SH-4 truncated hemisphere step
+    (``selfshadow.visibility_at``). Under a rotated environment (``render.glsl.TO_MAP_UNIFORM``)
+    the lobes are read in the map's frame and the visibility, the mesh's own, at the world
+    direction Q d_nk.
     """
     image, rows, heights = sg_atlas(model.stack.levels)
     check_texture_size(image.shape, "SG mip atlas")

@@ -7,17 +7,11 @@ Pipeline (data_specs/render_outputs.md):
 2. EXR: the linear composite as float32 channels R, G, B plus coverage A — before any
    exposure or tone mapping;
 3. PNG: scale by 2^exposure, tone map (``srgb``: clip to [0, 1]; ``filmic``: the ACES
-   fitted curve of Narkowicz 2015, x(2.51x + 0.03) / (x(2.43x + 0.59) + 0.14)), encode with
-   the sRGB transfer function (IEC 61966-2-1), quantize to 8 bits; RGBA when the
+   fitted curve of [Narkowicz15], x(2.51x + 0.03) / (x(2.43x + 0.59) + 0.14)), encode with
+   the sRGB transfer function [sRGB], quantize to 8 bits; RGBA when the
    background is transparent (alpha = coverage). Step 3 lives in ``brdf_io.display`` (re-exported here).
 
 All writers are atomic (temporary file in the target folder, then ``os.replace``).
-
-References
-----------
-K. Narkowicz, "ACES Filmic Tone Mapping Curve", 2015,
-https://knarkowicz.wordpress.com/2016/01/06/aces-filmic-tone-mapping-curve/
-IEC 61966-2-1:1999, sRGB transfer function.
 """
 
 from __future__ import annotations

@@ -1,21 +1,20 @@
 """Shading of the SHRM render modes (``distant``, ``perpixel``, ``kautz-mccool``, ``rsibr``).
 
-RH02 = Ramamoorthi & Hanrahan, "Frequency Space Environment Map Rendering", SIGGRAPH 2002,
-doi:10.1145/566654.566611. Per fragment, after the shared prelude of ``render.glsl``
+Per fragment, after the shared prelude of ``render.glsl``
 (N, V, R in the z-up world frame):
 
-- ``distant`` (RH02 eq. 12): radiance = M(R) with M = Σ B̃_pq Y^r_pq(Ṽ) one lat-long map per
+- ``distant`` ([RH02] eq. 12): radiance = M(R) with M = Σ B̃_pq Y^r_pq(Ṽ) one lat-long map per
   frame and object, Ṽ the direction from the object's bounding-sphere centre toward the eye,
   computed on the CPU (:func:`distant_update`) and uploaded as a float texture;
-- ``perpixel`` (RH02 eq. 8): radiance = Σ B̃_pq(R) Y^r_pq(V), the 3·(P+1)² scalar maps
+- ``perpixel`` ([RH02] eq. 8): radiance = Σ B̃_pq(R) Y^r_pq(V), the 3·(P+1)² scalar maps
   (coefficient c, channel k) packed four to an RGBA texel in one float texture
   (:func:`packed_coefficient_atlas`: scalar map j = 3c + k is component j mod 4 of tile
   t = j div 4, tile t at column (t mod cols)·W, row (t div cols)·H) and Y^r_pq(V) evaluated
-  in the shader; ``kautz-mccool`` draws the azimuth-free (q = 0) SHRM the same way. Packing
+  in the shader; ``kautz-mccool`` [KM00] draws the azimuth-free (q = 0) SHRM the same way. Packing
   four channels a texel takes ⌈3(P+1)²/4⌉ fetches per bilinear corner instead of (P+1)² RGB
   ones (48 instead of 64 at P = 3): texel fetches are most of the per-pixel cost of this mode
   on a CPU rasterizer (``benchmarks/render_speed.py``);
-- ``rsibr`` (Cabral et al. 1999): the distant shader fed, per frame, the spherical-barycentric
+- ``rsibr`` [Cabral99]: the distant shader fed, per frame, the spherical-barycentric
   blend of the twelve maps of ``analysis.baselines.rsibr`` (:func:`rsibr_update`).
 
 All maps are looked up with the bilinear lat-long rule of ``render.glsl`` (four ``texelFetch``es).

@@ -1,8 +1,8 @@
-"""Side-by-side image strip: reference, each representation, and difference images (RH02 Figs. 9–10).
+"""Side-by-side image strip: reference, each representation, and difference images ([RH02] Figs. 9–10).
 
 Computed on the CPU (``render.cpu_reference``): an orthographic camera looks at a unit
 sphere (or a small mesh), each hit pixel gets its R and V, the reference column is the
-angular-domain integral (RH02 eq. 2) and every other column a representation's B(R, V).
+angular-domain integral ([RH02] eq. 2) and every other column a representation's B(R, V).
 The bottom row holds |B − B_ref| per channel, **not amplified**: it is tone mapped with the
 same exposure as the images above it, so a difference is as visible as it would be on
 screen. The exposure maps the reference's 99th percentile to 1 (sRGB curve, no filmic

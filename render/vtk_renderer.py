@@ -33,7 +33,7 @@ skipped whole), and each is shaded once. Its fragment shader reads R back from t
 pass's colour texture (the display framebuffer's GL_RGBA32F attachment, which VTK's blit at
 the end of pass 1 filled; no readback to the CPU), discards the pixels of other objects' tags,
 computes V from the quad's point (on the same pixel ray as the surface point) and evaluates
-the mode's sum (RH02 eq. 8) once. The forward path shades each fragment of each small
+the mode's sum ([RH02] eq. 8) once. The forward path shades each fragment of each small
 triangle: a CPU rasterizer (llvmpipe) shades whole 2×2 quads / 4×4 blocks of every one- or
 two-pixel triangle, plus overdraw. Images equal the forward path's to float rounding (R is
 passed exactly; V differs by the rounding of the interpolated point); coverage is identical.

@@ -1,35 +1,12 @@
-"""A self-contained HTML page that renders an SHRM live in WebGL2: ``shrm view``.
+"""A self-contained HTML page that renders an SHRM [RH02] live in WebGL2: ``shrm view``.
 
-The page (``data_specs/view_html.md``) holds everything it needs — no network, no CDN, it
-works from ``file://``: the viewer (``render/webgl/view.js``, plain JavaScript) and its GLSL
-ES 3.0 shaders (``render/webgl/*.glsl``, ``*.vert``, ``*.frag``), both package data inlined
-here; the SHRM coefficient maps as one half-float RGB atlas (base64); the environment for the
-background (half float, at most :attr:`ViewBudget.env_rows` rows); the mesh (float32 vertices
-and normals, decimated to :attr:`ViewBudget.mesh_bytes`); and a still PNG of the initial view
-for browsers without WebGL2. The shaders draw the SHRM as ``shrm render`` does
-(``render.shader``): ``distant`` (RH02 eq. 12, the view map Σ B̃_pq Y^r_pq(Ṽ), clamped at 0,
-made per view on the CPU and looked up by R) and ``perpixel`` (RH02 eq. 8, Σ B̃_pq(R) Y^r_pq(V)
-per fragment), the bilinear lat-long rule of ``brdf_io.latlong.bilinear_lookup`` with
-``texelFetch``, and the display transform of ``render.output.to_8bit``.
-
-Size budget: the whole page stays within :attr:`ViewBudget.page_bytes` (8 MiB). When the
-coefficient maps do not fit in what the rest leaves, :func:`fit_coefficients` lowers the map
-resolution (solid-angle-weighted area means) and/or P (dropping the highest view bands) — the
-combination of least estimated error — and the page shows a note that says so.
-
-Public objects:
-
-- :func:`build_view` → :class:`ViewPage` (the page's data, with what it stores decoded for tests);
-- :func:`page_html` (a whole page) and :func:`view_fragment` (a ``<div>`` + scripts to embed,
-  e.g. in a report); :func:`view_html` = ``page_html(build_view(...))``; :func:`write_view`;
-- :func:`page_camera`: the camera the page uses for a view (azimuth, elevation, zoom);
-- :func:`fit_coefficients`: the budget rule.
-
-References
-----------
-R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering", SIGGRAPH 2002
-(RH02), doi:10.1145/566654.566611. Khronos, "WebGL 2.0 Specification" and "The OpenGL ES
-Shading Language 3.00".
+:func:`build_view` gathers the page's data (:class:`ViewPage`): the viewer ``render/webgl/view.js``
+and its GLSL ES 3.00 shaders ([WebGL2], [GLSLES3]; package data inlined: no network, it works from
+``file://``), the SHRM's coefficient maps as a half-float atlas, the background, the mesh and a
+still PNG for browsers without WebGL2; :func:`page_html` writes a whole page, :func:`view_fragment`
+one to embed. The shaders draw ``distant`` ([RH02] eq. 12) and ``perpixel`` ([RH02] eq. 8) as
+``shrm render`` does (``render.shader``); maps that do not fit the page's budget (:class:`ViewBudget`)
+are reduced by :func:`fit_coefficients`, with a note. The page: ``data_specs/view_html.md``.
 """
 
 from __future__ import annotations
@@ -371,7 +348,9 @@ def _atlas_fits(P: int, h: int, w: int, max_bytes: int, max_edge: int) -> bool:
 def fit_coefficients(
     coeffs: np.ndarray, P: int, max_bytes: int, *, max_edge: int = 2048, min_rows: int = 8, samples: int = 4096
 ) -> CoefficientFit:
-    """The SHRM's coefficient maps at the (rows, P) of least estimated error within ``max_bytes``.
+    """The SHRM's coefficient maps at the (rows, P) of least estimated error within ``max_bytes``:
+    the page's budget rule (the maps get what the rest of :attr:`ViewBudget.page_bytes` leaves;
+    the page states a reduction in a visible note).
 
     The maps ((P+1)², H, W, 3) are stored as a half-float RGB atlas (6 bytes a texel, tiles as
     (:func:`~shrmkit.render.shader.coefficient_atlas`) whose edges must not exceed ``max_edge``. Candidates:

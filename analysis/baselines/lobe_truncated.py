@@ -1,6 +1,6 @@
-"""Lobe-truncated angular-domain sum: the best brute-force baseline (RH02 Table 4).
+"""Lobe-truncated angular-domain sum: the best brute-force baseline ([RH02] Table 4).
 
-RH02 §6 measures frequency-space prefiltering against an angular-domain integration that
+[RH02] §6 measures frequency-space prefiltering against an angular-domain integration that
 "considers only the pixels where the BRDF lobe is significant". For each output (R, V):
 
     B(R, V) ≈ Σ_{p : angle(ω_p, R) ≤ c(θ_v)} L_p Ω_p ρ̂(ω_p; V, N),   N = normalize(R + V),

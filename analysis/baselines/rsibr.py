@@ -10,7 +10,7 @@ Our maps and the warp, precisely
 Map i is stored indexed by the **reflection direction** R on the lat-long grid of DESIGN §2:
 
     M_i(R) = B(R, v_i),    the radiance leaving a surface with normal n = normalize(R + v_i)
-                           toward the distant viewer v_i (RH02 eq. 12 with V = v_i).
+                           toward the distant viewer v_i ([RH02] eq. 12 with V = v_i).
 
 Cabral's maps are images of a sphere seen from v_i, i.e. indexed by the **normal** n. Their
 reflection-space warp looks map i up, for a pixel of the new view with reflection r, at the
@@ -26,7 +26,7 @@ replaces B(r, v) by B(r, v_i): wrong wherever the lobe's shape depends on the vi
 Fresnel and shadowing rise and the off-specular shift near grazing).
 
 For a distant viewer the per-frame work is one weighted sum of three maps
-(:meth:`RSIBRMaps.view_map`), the same kind of per-frame map as RH02 eq. 12.
+(:meth:`RSIBRMaps.view_map`), the same kind of per-frame map as [RH02] eq. 12.
 """
 
 from __future__ import annotations

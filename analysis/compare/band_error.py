@@ -34,8 +34,7 @@ the k-th of n pairs takes its R-selector from [k/n, (k + 1)/n) of q's cumulative
 **Standard error.** The ratio is linearized (delta method): z_k = w_k (a_k − r² b_k) / B̄, and
 the variance of the stratified mean is estimated by successive differences over the strata,
 v = Σ_k (z_{k+1} − z_k)² / (2 n (n − 1)) (the successive-difference estimator of systematic
-sampling: K. M. Wolter, *Introduction to Variance Estimation*, 2nd ed., Springer 2007,
-doi:10.1007/978-0-387-35099-8; conservative when neighbouring strata differ in mean), then
+sampling, [Wolter07]; conservative when neighbouring strata differ in mean), then
 s.e.(r) = √(v · ν/(ν − 2)) / (2r). The factor ν/(ν − 2) is the variance of Student's t with ν
 degrees of freedom: v is itself estimated from the same n pairs, and near grazing a few pairs hold
 20–45 % of a band's error energy, so seeds that miss them state too little. ν = 2 / (2/(n − 1) + κ/n)

@@ -1,4 +1,4 @@
-"""Fitting analytic models (Lafortune, Cook–Torrance, RH02's simplified microfacet) to
+"""Fitting analytic models (Lafortune, Cook–Torrance, [RH02]'s simplified microfacet) to
 measured BRDFs with nlopt, Koenderink's Zernike expansion by cross-validated least squares, and
 the choice of one representation for scattered measurements.
 
@@ -11,8 +11,7 @@ ridge: ``fit_zernike_cv``), ``crossval`` (k-fold held-out predictions), ``isotro
 scattered measurements are from isotropic), ``representation`` (``choose_representation``: the
 candidate with the smallest held-out worst-band error, ``data_specs/representation_json.md``).
 
-Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
-SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
+Reference: [RH02] (``data_specs/bibliography.md``).
 """
 
 from .fit_file import fit_document, write_fit_json

@@ -10,10 +10,7 @@ with the metrics of ``metrics.py`` and per view band (``summary.band_errors``).
 
 Public objects: :func:`fold_of`, :func:`subset`, :func:`held_out`, :data:`DEFAULT_FOLDS`.
 
-References
-----------
-T. Hastie, R. Tibshirani, J. Friedman, *The Elements of Statistical Learning*, 2nd ed.,
-Springer 2009, §7.10 (K-fold cross-validation; K = 5 or 10), doi:10.1007/978-0-387-84858-7.
+Reference: [Hastie09] §7.10 (K-fold cross-validation; K = 5 or 10).
 """
 
 from __future__ import annotations

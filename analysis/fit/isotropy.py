@@ -38,15 +38,9 @@ relative RMS above 0.5) its misfit dominates and ``judged`` is False.
 Public objects: :func:`anisotropic_basis`, :func:`measure_isotropy`, :class:`Isotropy`,
 :data:`ANISO_ORDER`, :data:`ANISOTROPIC_ABOVE`.
 
-References
-----------
-J. J. Koenderink, A. J. van Doorn, M. Stavridi, "Bidirectional reflection distribution
-function expressed in terms of surface scattering modes", ECCV 1996, doi:10.1007/3-540-61123-1_125
-(the Zernike products; the isotropic subset keeps m' = m with cos m(φ_i − φ_o)).
-K. J. Dana, B. van Ginneken, S. K. Nayar, J. J. Koenderink, "Reflectance and texture of
-real-world surfaces", ACM Trans. Graph. 18(1), 1999, doi:10.1145/300776.300778 (CURET's geometries).
-R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering", SIGGRAPH 2002,
-doi:10.1145/566654.566611, §6.2 (the CURET surfaces their isotropic fits could not represent).
+References: [Koe96] (the Zernike products; the isotropic subset keeps m' = m with
+cos m(φ_i − φ_o)); [CURET99] (CURET's geometries); [RH02] §6.2 (the CURET surfaces their
+isotropic fits could not represent).
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Fit error metrics, and the per-sample least-squares weights each metric induces.
 
-Both metrics compare the cosine-weighted transfer ρ̂ = ρ · cos θ_i (RH02 §3.1) of a model
+Both metrics compare the cosine-weighted transfer ρ̂ = ρ · cos θ_i ([RH02] §3.1) of a model
 (m) and a measurement (y) on the fit samples, with the quadrature weights w of
 ``sampling.py`` (so the sums estimate integrals over dω_i dω_o):
 
@@ -20,8 +20,7 @@ A fit minimizes a weighted least-squares sum; for ``rel`` it is exactly rel_rms�
 about the data (ln(ε + m) − ln(ε + y) ≈ (m − y)/(ε + y)), which keeps the colour weights
 linear (variable projection) and the objective smooth.
 
-Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
-SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
+Reference: [RH02] (``data_specs/bibliography.md``).
 """
 
 from __future__ import annotations

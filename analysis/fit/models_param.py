@@ -10,11 +10,11 @@ lobes with exponents ~10⁴ be evaluated without overflow.
 Energy conservation is one linear constraint per channel, Σ_j a_j c_j <= 1:
 
 * Lafortune: kd + Σ_k ks_k 2π/(n_k + 2) <= 1 with lobes written in the max-normalized form
-  max(|Cxy|, |Cz|) = 1 — the normalization of Lafortune et al. 1997 (and of Ngan et al.
-  2005's ρ_s (n+2)/(2π)); exact at normal incidence for a mirror lobe (Cxy = −Cz).
+  max(|Cxy|, |Cz|) = 1 — the normalization of [Laf97] (and of [Ngan05]'s
+  ρ_s (n+2)/(2π)); exact at normal incidence for a mirror lobe (Cxy = −Cz).
 * Cook–Torrance: kd + ks <= 1 (Fresnel F <= 1 and a normalized D with Smith G keep the
   specular albedo <= ks).
-* RH02's simplified microfacet: ks <= 1 (for small σ its ρ̂ integrates to ks).
+* [RH02]'s simplified microfacet: ks <= 1 (for small σ its ρ̂ integrates to ks).
 
 Lafortune lobe shape is shared by the three channels (the lobe weights ks are per
 channel): one lobe direction/exponent per lobe is what the model means physically, and the
@@ -24,8 +24,7 @@ the result is reported max-normalized. Cook–Torrance's Fresnel term is linear 
 ks F = (ks f0) S₀ + (ks (1 − f0)) S₁ with S₀ = DG/(4 cos θ_i cos θ_o) and
 S₁ = S₀ (1 − cos θ_d)⁵, so only ln α is nonlinear.
 
-Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
-SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
+Reference: [RH02] (``data_specs/bibliography.md``).
 """
 
 from __future__ import annotations

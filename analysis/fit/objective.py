@@ -9,8 +9,7 @@ objective seen by nlopt is the reduced functional
 
     φ(x) = min_c Σ_s Σ_ch W_s,ch ((B(x) c)_s,ch − y_s,ch)² cos² θ_i
 
-(variable projection; Golub & Pereyra 1973, SIAM J. Numer. Anal. 10(2), 413–432,
-doi:10.1137/0710036). Eliminating the linear weights leaves nlopt 1–2 dimensions per lobe
+(variable projection, [GP73]). Eliminating the linear weights leaves nlopt 1–2 dimensions per lobe
 instead of 4–8, removes the scale degeneracies between weights and shapes, and makes
 multi-start fits fast and robust.
 """

@@ -1,4 +1,4 @@
-"""``fit_brdf``: fit Lafortune, Cook–Torrance or RH02's simplified microfacet model with nlopt.
+"""``fit_brdf``: fit Lafortune, Cook–Torrance or [RH02]'s simplified microfacet model with nlopt.
 
 Pipeline
 --------
@@ -18,8 +18,7 @@ Pipeline
 The same inputs and ``seed`` give the same result: every random choice is seeded and
 nlopt's own generator is seeded with ``nlopt.srand(seed)``.
 
-Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
-SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
+Reference: [RH02] (``data_specs/bibliography.md``).
 """
 
 from __future__ import annotations

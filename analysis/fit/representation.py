@@ -20,11 +20,7 @@ is), with ``success`` False: its orders then describe the representation, not th
 Public objects: :func:`choose_representation`, :class:`RepresentationChoice`,
 :class:`CandidateError`, :data:`CANDIDATES`.
 
-References
-----------
-R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering", SIGGRAPH 2002
-(RH02), doi:10.1145/566654.566611, §6.2 and Fig. 8 (CURET analysed through fitted Zernike
-expansions).
+Reference: [RH02] §6.2 and Fig. 8 (CURET analysed through fitted Zernike expansions).
 """
 
 from __future__ import annotations

@@ -3,8 +3,8 @@
 A fit compares a model with a BRDF on a finite set of direction pairs (L, V). This module
 builds that set:
 
-* **analytic and tabulated BRDFs** are sampled in Rusinkiewicz half/difference angles with
-  a randomly shifted Kronecker (R_d) low-discrepancy sequence (:func:`kronecker_points`,
+* **analytic and tabulated BRDFs** are sampled in Rusinkiewicz half/difference angles [Rus98]
+  with a randomly shifted Kronecker (R_d) low-discrepancy sequence [Roberts18] (:func:`kronecker_points`,
   deterministic given ``seed``):
   θ_h = (π/2) u₀² (the square-root scale of MERL's θ_h axis: dense near the specular
   peak, so even lobes with exponents ~10⁴ get thousands of samples), θ_d = (π/2) u₁,
@@ -21,25 +21,16 @@ Weighting
 ---------
 Each sample carries a quadrature weight ``w`` such that Σ w g ≈ ∫∫ g dω_i dω_o over the
 pairs kept, so a weighted squared error is an estimate of the L² error of ρ·cos θ_i that
-RH02 uses. With dω_i dω_o = 4 cos θ_d dω_h dω_d (Rusinkiewicz 1998) and the sampling
+[RH02] uses. With dω_i dω_o = 4 cos θ_d dω_h dω_d ([Rus98]) and the sampling
 density p(θ_h, θ_d, φ_d) = (2π θ_h)^(−1/2) · (2/π) · (1/π),
 
     w = 2π (φ_h) · 2 (φ_d ≡ φ_d + π) · 4 cos θ_d sin θ_h sin θ_d / p / n.
 
 Grazing angles are handled in two documented ways: pairs with θ_i or θ_o above
-``max_theta_deg`` (default 80°, the cut of Ngan et al. 2005 — MERL and Cornell data are
+``max_theta_deg`` (default 80°, the cut of [Ngan05] — MERL and Cornell data are
 unreliable and enormous there) are not used, and the residual is taken on ρ·cos θ_i, whose
 cosine damps grazing incidence. Scattered samples all get weight 1 (the Cornell gantry
 spreads them roughly evenly over its angle range).
-
-References
-----------
-M. Roberts, "The Unreasonable Effectiveness of Quasirandom Sequences", 2018 (the R_d sequence).
-S. Rusinkiewicz, "A New Change of Variables for Efficient BRDF Representation", EGWR 1998.
-A. Ngan, F. Durand, W. Matusik, "Experimental Analysis of BRDF Models", EGSR 2005.
-
-Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
-SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
 """
 
 from __future__ import annotations

@@ -1,13 +1,8 @@
-"""Fit error per view-elevation band (in the spirit of Green, Kautz & Durand 2007, Fig. 4).
+"""Fit error per view-elevation band (in the spirit of [Green07] Fig. 4).
 
 A model that is good on average can still fail at grazing views (Fresnel rise, off-specular
 peaks) or near normal viewing. Splitting the fit samples by the view elevation θ_o and
 computing each metric of ``metrics.py`` inside each band shows where.
-
-References
-----------
-P. Green, J. Kautz, F. Durand, "Efficient Reflectance and Visibility Approximations for
-Environment Map Rendering", Computer Graphics Forum 26(3), 2007 (Eurographics), Fig. 4.
 """
 
 from __future__ import annotations

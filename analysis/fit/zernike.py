@@ -1,9 +1,9 @@
 """Koenderink's Zernike-basis BRDF representation and its linear least-squares fit.
 
-Koenderink, van Doorn & Stavridi (1996) expand a BRDF over the product of the incident and
+Koenderink, van Doorn & Stavridi [Koe96] expand a BRDF over the product of the incident and
 the exit hemisphere in products of Zernike polynomials, after mapping each hemisphere onto
-the unit disc; CURET published its BRDF fits in this basis (Dana et al. 1999, with 5 and 55
-coefficients) and RH02 (Fig. 8) analysed those fits.
+the unit disc; CURET published its BRDF fits in this basis ([CURET99], with 5 and 55
+coefficients) and [RH02] (Fig. 8) analysed those fits.
 
 The basis, the model (:class:`~shrmkit.brdf_io.zernike.ZernikeBRDF`) and its spec string live in
 ``brdf_io/zernike.py`` (a model that ``load_brdf`` reads back); this module fits it.
@@ -21,10 +21,7 @@ and ``rank`` says so; ``ridge`` adds Tikhonov damping. A polynomial fit is not c
 to be positive: outside the measured directions (CURET: θ above 83.9°) it extrapolates, and
 may go negative; :meth:`ZernikeBRDF.negative_fraction` measures how much.
 
-References
-----------
-Koenderink et al. 1996 (the basis), Dana et al. 1999 (CURET), RH02 Fig. 8: see the model's
-module, :mod:`shrmkit.brdf_io.zernike`.
+References: [Koe96] (the basis), [CURET99], [RH02] Fig. 8; the model: :mod:`shrmkit.brdf_io.zernike`.
 """
 
 from __future__ import annotations
