@@ -55,12 +55,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 from functools import cached_property
 
+import ducc0
 import numpy as np
-import scipy.fft
-from scipy.special import roots_legendre
 
 from ..brdf_io.brdf import BRDF
 from ..brdf_io.errors import BadInputError
+from ..brdf_io.quadrature import gauss_legendre
 from ..brdf_io.reparam import ReparamGrid, sample_rho_hat_half
 from .brdf_coeffs import BRDFCoefficients, weighted_legendre
 from .sh import Lambda, legendre_f
@@ -114,7 +114,7 @@ def _band_nodes(edges_deg: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarr
     theta, weight, band = [], [], []
     for b, (lo, hi) in enumerate(zip(edges_deg[:-1], edges_deg[1:], strict=True)):
         n = max(4, int(np.ceil((hi - lo) / 2.5)))
-        x, w = roots_legendre(n)
+        x, w = gauss_legendre(n)
         half = np.radians(hi - lo) / 2.0
         theta.append(np.radians(lo) + half * (x + 1.0))
         weight.append(half * w)
@@ -232,7 +232,7 @@ def _cosine_transform(half: np.ndarray, n_phi: int) -> np.ndarray:
     period x_0 .. x_{n_phi // 2} of an even sequence on axis 2: the real part of its rfft. For
     even n_phi a DCT-I of the half (half the points), for odd n_phi the rfft of the mirrored whole."""
     if n_phi % 2 == 0 and half.shape[2] > 1:
-        return scipy.fft.dct(half, type=1, axis=2)
+        return ducc0.fft.dct(half, type=1, axes=(2,))
     inner = np.arange(1, (n_phi + 1) // 2)
     whole = np.concatenate([half, half[:, :, inner[::-1]]], axis=2)
     return np.fft.rfft(whole, axis=2).real

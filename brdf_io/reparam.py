@@ -24,10 +24,10 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
-from scipy.special import roots_legendre
 
 from .brdf import BRDF
 from .errors import BadInputError
+from .quadrature import gauss_legendre
 
 __all__ = [
     "ReparamGrid", "ReparamBRDF", "reparameterize", "reparam_directions", "sample_rho_hat", "sample_rho_hat_grid",
@@ -83,7 +83,7 @@ class ReparamGrid:
 @lru_cache(maxsize=64)
 def _gauss_legendre_descending(n: int) -> tuple[np.ndarray, np.ndarray]:
     """Gauss–Legendre nodes on [−1, 1] in descending order and their weights (read-only)."""
-    x, w = roots_legendre(n)
+    x, w = gauss_legendre(n)
     x, w = x[::-1].copy(), w[::-1].copy()
     x.setflags(write=False)
     w.setflags(write=False)
