@@ -13,7 +13,8 @@ Pixel formats (:data:`DDS_FORMATS`): ``rgba16f`` (``DXGI_FORMAT_R16G16B16A16_FLO
 engines' HDR format), ``rgba32f`` (``R32G32B32A32_FLOAT``, 2) and ``rgba8`` (``R8G8B8A8_UNORM``,
 28: values clipped to [0, 1] and rounded; for LDR data). Alpha is written as 1.
 
-Public objects: :data:`DDS_FORMATS`, :func:`write_dds_cube`, :func:`read_dds_cube`.
+Public objects: :data:`DDS_FORMATS`, :func:`write_dds_cube`, :func:`read_dds_cube`, and the helpers
+shared with ``brdf_io/ktx2.py``: :func:`check_cube_chain`, :func:`pack_rgba`.
 
 References
 ----------
@@ -34,7 +35,7 @@ from .atomic import atomic_path
 from .errors import BadInputError
 from .limits import read_bytes, regular_file
 
-__all__ = ["DDS_FORMATS", "write_dds_cube", "read_dds_cube"]
+__all__ = ["DDS_FORMATS", "check_cube_chain", "pack_rgba", "write_dds_cube", "read_dds_cube"]
 
 #: format name -> (DXGI_FORMAT value, numpy dtype of one channel)
 DDS_FORMATS: dict[str, tuple[int, str]] = {"rgba16f": (10, "<f2"), "rgba32f": (2, "<f4"), "rgba8": (28, "u1")}
@@ -52,13 +53,42 @@ _MISC_TEXTURECUBE = 0x4  # DDS_RESOURCE_MISC_TEXTURECUBE
 _HEADER_BYTES = 4 + 124 + 20
 
 
-def _pack(values: np.ndarray, fmt: str) -> bytes:
-    """RGB (…, 3) float → RGBA bytes of ``fmt`` (alpha 1)."""
+def pack_rgba(values: np.ndarray, fmt: str) -> bytes:
+    """RGB (…, 3) float → little-endian RGBA bytes of ``fmt`` (a key of :data:`DDS_FORMATS`;
+    alpha 1), texels in C order. Shared by the DDS and KTX2 writers (``brdf_io/ktx2.py``)."""
     rgba = np.concatenate([values, np.ones(values.shape[:-1] + (1,))], axis=-1)
     dtype = DDS_FORMATS[fmt][1]
     if fmt == "rgba8":
         return np.rint(np.clip(rgba, 0.0, 1.0) * 255.0).astype(dtype).tobytes()
     return rgba.astype(dtype).tobytes()
+
+
+def check_cube_chain(path: str | os.PathLike[str] | None, levels: Sequence[np.ndarray], fmt: str,
+                     container: str) -> list[np.ndarray]:
+    """The mip levels of a cube chain as float64 arrays, checked before a byte is written
+    (shared by the DDS and KTX2 writers).
+
+    Raises
+    ------
+    BadInputError
+        ``fmt`` not a key of :data:`DDS_FORMATS`; no level; a level m not (6, S >> m, S >> m, 3)
+        (at least 1 texel); NaN or infinite values; for ``rgba16f`` values beyond 65504.
+    """
+    if fmt not in DDS_FORMATS:
+        raise BadInputError(path, f"unknown {container} format {fmt!r}; choose from {', '.join(DDS_FORMATS)}")
+    arrays = [np.asarray(level, dtype=np.float64) for level in levels]
+    if not arrays:
+        raise BadInputError(path, "no mip levels to write")
+    size = arrays[0].shape[1] if arrays[0].ndim == 4 else 0
+    for m, a in enumerate(arrays):
+        want = (6, max(1, size >> m), max(1, size >> m), 3)
+        if a.shape != want or size < 1:
+            raise BadInputError(path, f"mip level {m} has shape {a.shape}, expected {want}")
+        if not np.all(np.isfinite(a)):
+            raise BadInputError(path, f"mip level {m} holds NaN or infinite values")
+        if fmt == "rgba16f" and np.max(np.abs(a)) > 65504.0:
+            raise BadInputError(path, f"mip level {m} exceeds float16's largest value 65504 (use rgba32f)")
+    return arrays
 
 
 def write_dds_cube(path: str | os.PathLike[str], levels: Sequence[np.ndarray], *, fmt: str = "rgba16f") -> Path:
@@ -93,20 +123,8 @@ def write_dds_cube(path: str | os.PathLike[str], levels: Sequence[np.ndarray], *
     [[0.5, 0.5, 0.5], [0.25, 0.25, 0.25]]
     >>> folder.cleanup()
     """
-    if fmt not in DDS_FORMATS:
-        raise BadInputError(path, f"unknown DDS format {fmt!r}; choose from {', '.join(DDS_FORMATS)}")
-    arrays = [np.asarray(level, dtype=np.float64) for level in levels]
-    if not arrays:
-        raise BadInputError(path, "no mip levels to write")
-    size = arrays[0].shape[1] if arrays[0].ndim == 4 else 0
-    for m, a in enumerate(arrays):
-        want = (6, max(1, size >> m), max(1, size >> m), 3)
-        if a.shape != want or size < 1:
-            raise BadInputError(path, f"mip level {m} has shape {a.shape}, expected {want}")
-        if not np.all(np.isfinite(a)):
-            raise BadInputError(path, f"mip level {m} holds NaN or infinite values")
-        if fmt == "rgba16f" and np.max(np.abs(a)) > 65504.0:
-            raise BadInputError(path, f"mip level {m} exceeds float16's largest value 65504 (use rgba32f)")
+    arrays = check_cube_chain(path, levels, fmt, "DDS")
+    size = arrays[0].shape[1]
     dxgi, dtype = DDS_FORMATS[fmt]
     texel = 4 * np.dtype(dtype).itemsize
     pixel_format = struct.pack("<II4sIIIII", 32, _DDPF_FOURCC, b"DX10", 0, 0, 0, 0, 0)
@@ -117,7 +135,7 @@ def write_dds_cube(path: str | os.PathLike[str], levels: Sequence[np.ndarray], *
         f.write(_MAGIC + header + dx10)
         for face in range(6):  # face-major: each face followed by its whole mip chain
             for a in arrays:
-                f.write(_pack(a[face], fmt))
+                f.write(pack_rgba(a[face], fmt))
     return Path(path)
 
 

@@ -3,8 +3,9 @@
 Each :class:`ExportFormat` names its kind: ``material`` (a renderer's material snippet,
 :data:`~shrmkit.brdf_io.export_material.MATERIAL_TARGETS`), ``brdf-table`` (a MERL ``.binary``
 table, :func:`~shrmkit.brdf_io.merl.write_merl`) or ``cube-mip-chain`` (a prefiltered
-environment, :func:`~shrmkit.brdf_io.dds.write_dds_cube`). :func:`export_format` picks the
-format from a name or from the output file's suffix. Layouts: ``data_specs/export.md``.
+environment as a DDS or KTX2 cube map, :func:`~shrmkit.brdf_io.dds.write_dds_cube`,
+:func:`~shrmkit.brdf_io.ktx2.write_ktx2_cube`: the entry's ``write_cube``). :func:`export_format`
+picks the format from a name or from the output file's suffix. Layouts: ``data_specs/export.md``.
 
 Public objects: :class:`ExportFormat`, :data:`EXPORT_FORMATS`, :func:`export_format`.
 """
@@ -12,23 +13,34 @@ Public objects: :class:`ExportFormat`, :data:`EXPORT_FORMATS`, :func:`export_for
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
 from pathlib import Path
 
+from .dds import write_dds_cube
 from .errors import BadInputError
 from .export_material import MATERIAL_TARGETS
+from .ktx2 import write_ktx2_cube
 
 __all__ = ["ExportFormat", "EXPORT_FORMATS", "export_format"]
 
 
 @dataclass(frozen=True)
 class ExportFormat:
-    """One export target: its name, the output suffix, its kind and a one-line description."""
+    """One export target: its name, the output suffix, its kind and a one-line description;
+    for a ``cube-mip-chain`` its writer ``write_cube(path, levels, *, fmt)`` (levels largest
+    first, (6, S_m, S_m, 3) each; ``fmt`` a key of ``brdf_io.dds.DDS_FORMATS``)."""
 
     name: str
     suffix: str
     kind: str
     description: str
+    write_cube: Callable[..., Path] = field(default=lambda path, *_, **__: _no_cube(path))
+
+
+def _no_cube(path: str | os.PathLike[str]) -> Path:
+    """``write_cube`` of a format that is not a cube map: refuses."""
+    raise BadInputError(path, "this export format does not hold a cube map")
 
 
 #: Every export target, by name (``shrm export --to NAME``).
@@ -36,7 +48,11 @@ EXPORT_FORMATS: dict[str, ExportFormat] = {
     **{name: ExportFormat(name, t.suffix, "material", t.description) for name, t in MATERIAL_TARGETS.items()},
     "merl": ExportFormat("merl", ".binary", "brdf-table", "MERL .binary table (90 x 90 x 180 half/diff samples)"),
     "dds": ExportFormat("dds", ".dds", "cube-mip-chain",
-                        "GGX-prefiltered environment, DX10 DDS cube map with one roughness per mip level"),
+                        "GGX-prefiltered environment, DX10 DDS cube map with one roughness per mip level",
+                        write_dds_cube),
+    "ktx2": ExportFormat("ktx2", ".ktx2", "cube-mip-chain",
+                         "GGX-prefiltered environment, KTX 2.0 cube map with one roughness per mip level",
+                         write_ktx2_cube),
 }
 
 
