@@ -10,7 +10,16 @@ at θ = (i + ½)π/H, φ = 2π(j + ½)/W (φ from +x toward +y), direction
 probes, Direct3D cube maps (a folder of six faces), OpenEXR files carrying the standard
 ``envmap`` attribute (lat-long or cube, OpenEXR's own conventions, ImfEnvmap) and
 procedural ``builtin:`` specs, and maps each file's own orientation convention into the
-project frame; the rules are written down in data_specs/environment_maps.md.
+project frame; the rules are written down in data_specs/environment_maps.md. Lat-long files
+are read **y-up by default** (``up="y"``), the convention of nearly every panorama in the wild
+and of the tools that read them: a file is placed as Blender's Environment Texture places it in
+its z-up world (Cycles ``direction_to_equirectangular``: image centre toward +X), as three.js's
+``equirectUv`` places it in its y-up world mapped by (X, Y, Z) = (x, −z, y), and as Mitsuba 3's
+``envmap`` emitter places it in its y-up world mapped by (X, Y, Z) = (z, x, y) (checked against
+Mitsuba's emitter, and on OpenEXR's ``KernerEnvLatLong.exr``, whose ``envmap`` attribute states its
+orientation: the same map turned by −90°); ``up="z"`` reads a file literally in the project
+convention (mirrored for a viewer inside the sphere). :func:`save_env` writes the same y-up
+convention, so a saved map reads back unchanged and opens unmirrored in those tools.
 
 Radiance checks (all sources, :func:`EnvironmentMap` included): NaN and infinite values are
 refused; negative values no larger than :data:`NEGATIVE_CLAMP_FRACTION` (10⁻³) × the map's
@@ -280,12 +289,13 @@ class EnvironmentMap:
 # loading
 # --------------------------------------------------------------------------------------
 def _y_up_to_project(image: np.ndarray) -> np.ndarray:
-    """Re-index a y-up lat-long file (data_specs: up='y') into the project frame.
+    """Re-index a y-up lat-long file (data_specs: up='y', the default) into the project frame.
 
     The file column j looks at ψ = 2π(j + ½)/W − π in the file frame, i.e. the file's
     direction (sin θ cos ψ, cos θ, sin θ sin ψ) = (x_f, y_f, z_f); project (X, Y, Z) =
     (x_f, −z_f, y_f), so φ = −ψ and project column j' = (W/2 − 1 − j) mod W. A pure
-    permutation of columns (exact); W must be even.
+    permutation of columns (exact for even W, as every 2:1 map has) and its own inverse, so
+    :func:`save_env` writes a map into the file convention with the same call.
     """
     w = image.shape[1]
     j = (w // 2 - 1 - np.arange(w)) % w
@@ -449,11 +459,15 @@ def load_env(
         ``.hdr``, ``.pfm``); a cube-map folder holding ``px, nx, py, ny, pz, nz`` faces,
         or the path of one of those faces.
     up
-        Lat-long file convention: ``"z"`` (default) reads the file literally in the
-        DESIGN §2 pixel convention (top row +z, φ growing with the column); ``"y"`` reads
-        a y-up file (top row +y_f, image centre looking along +x_f, columns to the right
-        turning clockwise seen from above; project (X, Y, Z) = (x_f, −z_f, y_f)). Cube maps
-        and probes have their own fixed y-up conventions: ``up`` must be None or ``"y"``.
+        Lat-long file convention. ``"y"`` (the default, None) reads a y-up panorama, the
+        convention of files in the wild (Poly Haven, the USC ICT probes, three.js, Blender,
+        Mitsuba 3): top row +y_f, image centre looking along +x_f, columns to the right
+        turning clockwise seen from above; project (X, Y, Z) = (x_f, −z_f, y_f), so the image
+        centre faces project +X and its right-hand quarter −Y, as in Blender's z-up world.
+        ``"z"`` reads the file literally in the DESIGN §2 pixel convention (top row +z, φ
+        growing with the column, i.e. mirrored for a viewer inside the sphere). Cube maps,
+        probes and OpenEXR ``envmap`` files have their own fixed y-up conventions: ``up`` must
+        be None or ``"y"`` for them.
     azimuth
         Degrees; the loaded map is rotated about the project +z axis so that a feature
         at φ moves to φ + azimuth (applied last).
@@ -500,7 +514,7 @@ def load_env(
     θ = (i + ½)π/4, φ = 2π(j + ½)/8:
 
     >>> import numpy as np
-    >>> env = load_env("tests/resources/tiny_4x8.hdr")
+    >>> env = load_env("tests/resources/tiny_4x8.hdr", up="z")
     >>> env.radiance.shape, env.radiance.dtype
     ((4, 8, 3), dtype('float32'))
     >>> env.radiance[1, 6]
@@ -509,10 +523,10 @@ def load_env(
     >>> env.lookup(np.array([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)]))
     array([0.875, 0.5  , 0.5  ])
 
-    Read as a y-up panorama, file column j becomes project column (W/2 − 1 − j) mod W,
-    here (3 − 6) mod 8 = 5:
+    With the default (a y-up panorama), file column j becomes project column
+    (W/2 − 1 − j) mod W, here (3 − 6) mod 8 = 5:
 
-    >>> load_env("tests/resources/tiny_4x8.hdr", up="y").radiance[1, 5]
+    >>> load_env("tests/resources/tiny_4x8.hdr").radiance[1, 5]
     array([0.875, 0.5  , 0.5  ], dtype=float32)
 
     A built-in map, with its closed-form integral ∫ L dω = 4π · 2:
@@ -601,7 +615,7 @@ def _load_file(
         return EnvironmentMap(radiance, path.stem, f"{path}" + _options_text("y", False, azimuth, "probe"))
     if flip:
         image = image[::-1]
-    up = up or "z"
+    up = up or "y"  # files in the wild are y-up (module docstring, data_specs §3)
     if up == "y":
         image = _y_up_to_project(image)
     return EnvironmentMap(
@@ -679,11 +693,21 @@ def _load_openexr_envmap(
 
 
 def save_env(path: str | Path, env: EnvironmentMap, half: bool = False) -> None:
-    """Write ``env`` as stored (project frame, top row +z, read back with the defaults).
+    """Write ``env`` as a y-up lat-long file, the convention :func:`load_env` reads by default
+    (and Blender, three.js and Mitsuba 3 read): top row +z, project column j' stored in file
+    column (W/2 − 1 − j') mod W (data_specs/environment_maps.md §3), so ``load_env(path)`` gives
+    the same map back (exactly, within the format's precision) and the file opens unmirrored in
+    those tools. A map to be read back must be 2:1 (W = 2H).
 
     ``.exr`` (float32, or half floats with ``half=True``), ``.hdr`` (RGBE, run-length
     encoded) or ``.pfm``; the write is atomic (temporary file + ``os.replace``).
+
+    Raises
+    ------
+    BadInputError
+        ``env`` is not an :class:`EnvironmentMap`; the writer's errors (unknown suffix, half
+        overflow, an unwritable path).
     """
     if not isinstance(env, EnvironmentMap):
         raise BadInputError(path, f"save_env needs an EnvironmentMap, got {type(env).__name__}")
-    write_image(Path(path), env.radiance, half=half)
+    write_image(Path(path), _y_up_to_project(env.radiance), half=half)  # the permutation is an involution

@@ -349,14 +349,15 @@ def load_env_arg(spec: str, args: argparse.Namespace, **kwargs: Any):
 
 
 def orientation_note(env: Any, args: argparse.Namespace) -> str | None:
-    """One line when a lat-long map *file* was read with the default orientation (z-up, as stored):
-    most lat-long panoramas in the wild are y-up (three.js, Blender, Mitsuba, Filament, Poly Haven),
-    which the default shows mirrored, so the guess is never silent. None for built-ins, cube maps,
-    probes and an explicit ``--env-up``."""
-    if getattr(args, "env_up", None) is not None or "[latlong, up=z" not in str(getattr(env, "source", "")):
+    """One line when a lat-long map *file* was read with the default orientation (y-up, the
+    convention of panoramas in the wild: Poly Haven, three.js, Blender, Mitsuba 3), naming it and
+    how to change it, so the guess is never silent. None for built-ins, cube maps, probes, OpenEXR
+    ``envmap`` files (their format states the orientation) and an explicit ``--env-up``."""
+    if getattr(args, "env_up", None) is not None or "[latlong, up=y" not in str(getattr(env, "source", "")):
         return None
-    return (f"environment {env.name}: a lat-long file read z-up, as stored (data_specs/environment_maps.md); "
-            "most panoramas are y-up: --env-up y (and --env-flip if it is upside down)")
+    return (f"environment {env.name}: a lat-long file read y-up, as Blender and three.js place panoramas (image "
+            "centre facing +x; data_specs/environment_maps.md); --env-up z reads it as stored (z-up), "
+            "--env-azimuth DEG turns it, --env-flip if it is upside down")
 
 
 _GLOB_CHARS = frozenset("*?[")

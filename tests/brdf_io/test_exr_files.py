@@ -179,7 +179,7 @@ def test_luminance_chroma_file_comes_back_as_its_rgb(tmp_path, chroma, yw):
     assert rel[::2, ::2].max() < 2e-3, rel[::2, ::2].max()
     assert rel[14:-14, 14:-14].max() < 5e-3, rel[14:-14, 14:-14].max()
     assert rel.max() < 0.1, rel.max()
-    env = load_env(path)
+    env = load_env(path, up="z")  # the file's own pixel grid (read as stored)
     assert np.allclose(env.radiance, image.pixels)
     colour = np.ones((32, 64, 3)) * [0.2, 1.5, 0.7]
     _write_yca(tmp_path / "constant.exr", colour, yw, **header)
@@ -215,7 +215,7 @@ def test_centred_data_window_lights_a_quarter(tmp_path):
     8..23 (a quarter of the pixels) are lit, the rest is 0; the map is 2:1 on the display window."""
     path = _write(tmp_path / "bbox.exr", _rgb("", 2.0, (16, 32)),
                   dataWindow=_box(16, 8, 47, 23), displayWindow=_box(0, 0, 63, 31))  # fmt: skip
-    env = load_env(path)
+    env = load_env(path, up="z")  # read as stored: display pixel (i, j) is map pixel (i, j)
     assert env.radiance.shape == (32, 64, 3)
     lit = env.radiance.max(axis=-1) > 0
     assert lit.sum() == 32 * 64 // 4
@@ -430,7 +430,7 @@ def test_negative_threshold(tmp_path):
     image[5, 5, 0] = -0.9 * limit
     _write(tmp_path / "ok.exr", {"R": image[..., 0], "G": image[..., 1], "B": image[..., 2]})
     with pytest.warns(UserWarning, match=r"ok.exr: clamped 1 negative pixel"):
-        env = load_env(tmp_path / "ok.exr")
+        env = load_env(tmp_path / "ok.exr", up="z")  # read as stored: pixel (5, 5) stays (5, 5)
     assert env.radiance[5, 5, 0] == 0.0 and env.radiance[5, 5, 1] == 4.0
     image[5, 5, 0] = -1.1 * limit
     _write(tmp_path / "bad.exr", {"R": image[..., 0], "G": image[..., 1], "B": image[..., 2]})

@@ -155,17 +155,18 @@ def test_quiet_prints_nothing_but_json_and_errors(capsys):
 
 
 def test_default_orientation_of_a_lat_long_file_is_never_silent(tmp_path, capsys):
-    """A lat-long file read with the default (z-up, as stored) says so and how to read a y-up
-    panorama; --env-up, built-ins and --json print no such line."""
+    """A lat-long file read with the default (y-up, as panoramas in the wild) says so and how to
+    change it (--env-up z reads it as stored); an explicit --env-up, built-ins and --json print no
+    such line."""
     from shrmkit.cli.main import main
 
     hdr = str(Path(__file__).parents[1] / "resources" / "tiny_4x8.hdr")
     assert main(["prefilter", "--env", hdr, "--brdf", "phong:s=8", "--eps", "0.1", "-o", str(tmp_path / "a.npz")]) == 0
     out = capsys.readouterr().out
-    assert "a lat-long file read z-up, as stored" in out and "--env-up y" in out
-    assert main(["prefilter", "--env", hdr, "--env-up", "y", "--brdf", "phong:s=8", "--eps", "0.1",
+    assert out.startswith("environment tiny_4x8: a lat-long file read y-up") and "--env-up z" in out
+    assert main(["prefilter", "--env", hdr, "--env-up", "z", "--brdf", "phong:s=8", "--eps", "0.1",
                  "-o", str(tmp_path / "b.npz")]) == 0
-    assert "read z-up" not in capsys.readouterr().out
+    assert "read y-up" not in capsys.readouterr().out
     assert main(["prefilter", "--env", hdr, "--brdf", "phong:s=8", "--eps", "0.1", "--json",
                  "-o", str(tmp_path / "c.npz")]) == 0
     json.loads(capsys.readouterr().out)  # the JSON alone
