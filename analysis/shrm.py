@@ -15,40 +15,30 @@ SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
 from __future__ import annotations
 
 import functools
-import time
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .._version import __version__
 from ..brdf_io.cubemap import cube_map_directions
 from ..brdf_io.env_rotation import check_env_rotation, to_map_frame
 from ..brdf_io.envmap import EnvironmentMap, load_env
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.latlong import bilinear_lookup
 from ..brdf_io.specs import load_brdf
-from .lights import DEFAULT_LIGHTS, LightSet, check_lights, extract_lights, merge_error_by_band
-from .map_budget import assess_map
-from .map_size import DEFAULT_MAP_BUDGET_BYTES, default_size, fast_map_rows, map_rows
+from . import _prefilter as stage
+from .lights import DEFAULT_LIGHTS, LightSet, check_lights, extract_lights
+from .map_size import DEFAULT_MAP_BUDGET_BYTES, default_size
 from .notebook import shrm_html, shrm_png
-from .orders import (
-    DEFAULT_MAX_F,
-    DEFAULT_MAX_P,
-    OrderChoice,
-    choose_orders,
-    forced_orders_note,
-    orders_on_grid_for,
-)
-from .pixels import pixel_orders, pixel_sampler, pixel_statement
-from .scene import lighting_for, reflected_error_parts, residual_bound, scene_for
+from .orders import DEFAULT_MAX_F, DEFAULT_MAX_P, OrderChoice, choose_orders, orders_on_grid_for
+from .records import PrefilterInfo
+from .scene import scene_for
 from .sh import real_sph_harm
 from .shrm_file import read_shrm_fields, save_shrm
 from .synthesis import (
-    LOCAL_VIEWS_DEG,
     global_from_local,
-    global_shrm_cube,
     global_shrm_latlong,
     local_shrm_at,
     local_shrm_direct,
@@ -57,16 +47,14 @@ from .synthesis import (
 )
 from .threads import with_single_threaded_blas
 from .tolerance import DEFAULT_EPS, check_eps
-from .view_bands import DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG, bands_inside, shrm_view_bands
+from .view_bands import DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG
 from .window import (
     DEFAULT_WINDOW,
     UNDERSHOOT_MAX_VIEW_DEG,
     WINDOW_BUDGET_EPS,
     WINDOW_THRESHOLD,
     WINDOWS,
-    WindowChoice,
     check_window,
-    choose_window,
     gibbs_negative,
     undershoot,
     undershoot_samples,
@@ -128,7 +116,8 @@ class SHRM:
     eps
         Dict of achieved error estimates (``"brdf"``, ``"lighting"``, ``"bound"``).
     meta
-        Provenance: BRDF and environment names, timings, tool version.
+        Provenance: BRDF and environment names, timings, tool version, the window and the stated
+        errors, as JSON (``data_specs/shrm_file.md``); :attr:`info` is the same as a typed record.
     lights
         The explicit lights taken out of the environment before prefiltering
         (:class:`~shrmkit.analysis.lights.LightSet`; None or empty: none): the maps hold the
@@ -167,6 +156,14 @@ class SHRM:
     @property
     def width(self) -> int:
         return int(self.coeffs.shape[2])
+
+    @cached_property
+    def info(self) -> PrefilterInfo:
+        """``meta`` as a typed record (:class:`~shrmkit.analysis.records.PrefilterInfo`): what
+        ``prefilter`` did and states. Built from ``meta`` on first use, so an SHRM read from a file
+        has it too; keys a file written before them lacks read as None. ``meta`` stays the
+        serialized form (``data_specs/shrm_file.md``): do not change it after the first use."""
+        return PrefilterInfo.from_meta(self.meta)
 
     @property
     def has_lights(self) -> bool:
@@ -234,9 +231,9 @@ class SHRM:
         """The BRDF the lights are shaded with: ``brdf`` as given, else loaded (once) from
         ``meta["lights_brdf"]`` (a spec string or the file the BRDF came from)."""
         if self.brdf is None:
-            source = self.meta.get("lights_brdf")
+            source = self.info.lights.brdf
             if not source:
-                raise BadInputError(self.meta.get("brdf"), "this SHRM has lights but names no BRDF to shade them")
+                raise BadInputError(self.info.brdf, "this SHRM has lights but names no BRDF to shade them")
             object.__setattr__(self, "brdf", load_brdf(source))
         return self.brdf
 
@@ -282,25 +279,15 @@ def cube_directions(size: int) -> np.ndarray:
     return cube_map_directions(size)
 
 
-def _check_finite(coeffs: np.ndarray, env: Any) -> np.ndarray:
-    """``coeffs`` when every value is finite, else :class:`BadInputError` naming the map."""
-    if not np.all(np.isfinite(coeffs)):
-        raise BadInputError(
-            getattr(env, "source", None) or env.name,
-            "the prefiltered radiance overflows float32 maps (radiance values near 1e38?): rescale the map",
-        )
-    return coeffs
-
-
-def _check_given_orders(orders: OrderChoice, brdf: Any, eps: float, criterion: str, max_view_deg: float) -> None:
-    """Refuse an :class:`OrderChoice` made for another tolerance, rule or view limit."""
-    given = (orders.tolerance, orders.criterion, orders.max_view_deg)
-    if given != (float(eps), criterion, float(max_view_deg)):
-        raise BadInputError(
-            getattr(brdf, "name", None),
-            f"orders chosen at eps={given[0]:g}, criterion={given[1]}, max view {given[2]:g} deg do not match "
-            f"eps={eps:g}, criterion={criterion}, max view {max_view_deg:g} deg",
-        )
+def _brdf_orders(brdf: Any, eps: float, *, F: int | None, P: int | None, orders: OrderChoice | None,
+                 max_F: int, max_P: int, criterion: str, max_view_deg: float) -> OrderChoice:
+    """Stage 1: the BRDF's orders — on the grid of forced (F, P), the caller's (checked), or chosen."""
+    if F is not None and P is not None:
+        return orders_on_grid_for(brdf, int(F), int(P), eps=eps, criterion=criterion, max_view_deg=max_view_deg)
+    if orders is not None:
+        stage.check_given_orders(orders, brdf, eps, criterion, max_view_deg)
+        return orders
+    return choose_orders(brdf, eps=eps, max_F=max_F, max_P=max_P, criterion=criterion, max_view_deg=max_view_deg)
 
 
 @with_single_threaded_blas
@@ -440,254 +427,40 @@ def prefilter(
     eps = check_eps(eps)
     window = check_window(window)
     lights = check_lights(lights)
-
-    def stage(name: str) -> None:
-        if progress is not None:
-            progress(name)
-
-    timings: dict[str, float] = {}
-    t = time.perf_counter()
+    stages = stage.Stages(progress)
     if not isinstance(env, EnvironmentMap):
         env = load_env(env)
     if isinstance(brdf, str | Path):
         brdf = load_brdf(brdf)
-    stage("orders")
-    t0 = time.perf_counter()
-    if F is not None and P is not None:
-        orders = orders_on_grid_for(brdf, int(F), int(P), eps=eps, criterion=criterion, max_view_deg=max_view_deg)
-    elif orders is not None:
-        _check_given_orders(orders, brdf, eps, criterion, max_view_deg)
-    else:
-        orders = choose_orders(brdf, eps=eps, max_F=max_F, max_P=max_P, criterion=criterion,
-                               max_view_deg=max_view_deg)
-    timings["orders"] = time.perf_counter() - t0
-    stage("lights")
-    t0 = time.perf_counter()
-    extraction = extract_lights(env, lights)
-    light_set = extraction.lights
-    timings["lights"] = time.perf_counter() - t0
-    source_env, env = env, extraction.residual  # the SHRM holds the map without its lights
-    stage("lighting")
-    t0 = time.perf_counter()
-    lighting, scene = scene_for(env, orders, F=F, nthreads=nthreads)
-    timings["lighting"] = time.perf_counter() - t0
-    F_B = scene.F_B if F is None else int(min(F, lighting.lmax))
-    P_B = scene.P_B if P is None else int(min(P, orders.P0))
-    clamp_note = forced_orders_note(F, P, F_B, P_B, F_limit=lighting.lmax, P_limit=orders.P0)  # warns if lowered
-    base = orders.coefficients_for(P_B)  # projected (rh02) or fitted to the views that matter (bands)
-    band_energy = lighting.band_energy_all()
-    q_max = 0 if azimuth_free else None
-    top = min(lighting.lmax, orders.F0)
-    pixel_choice, pixel_from = None, None
-    sampler = pixel_sampler(lighting, base, P_B, q_max=q_max, nthreads=max(nthreads, 1))
-    stage("window")
-    t0 = time.perf_counter()
-    # the window (and, under the bands rule, the F it needs) from the coefficients and a coarse
-    # sample of the reflected field; the map itself is synthesized once, below
-    lighting_rows = (lighting.rows, lighting.source_rows)
-
-    @functools.cache
-    def rows_for(F_: int) -> int:
-        """The map's rows at order F_ (the window's sample needs no more)."""
-        if size is not None:
-            return int(size)
-        if orders.criterion == "rh02":
-            return fast_map_rows(default_size(F_, P_B, budget_bytes), F_, P_B, budget_bytes)
-        return fast_map_rows(map_rows(orders.profile, base, band_energy, F_, P_B, eps, q_max=q_max,
-                                   lighting_rows=lighting_rows, max_view_deg=orders.max_view_deg,
-                                   budget_bytes=budget_bytes)[0], F_, P_B, budget_bytes)
-
-    def window_at(F_: int, top_: int | None) -> WindowChoice:
-        return choose_window(
-            window, lighting, base, F_, P_B, eps, criterion=orders.criterion,
-            profile=orders.profile if orders.criterion != "rh02" else None, max_view_deg=orders.max_view_deg,
-            band_energy=band_energy, projected=orders.coefficients if orders.criterion == "rh02" else None,
-            q_max=q_max, top=top_, map_rows=rows_for, nthreads=max(nthreads, 1),
-        )
-
-    choice = window_at(F_B, None if F is not None else top)
-    F_B, sigma, strength = choice.F, choice.sigma, choice.strength
-    timings["window"] = time.perf_counter() - t0
-    if pixel_rule and F is None and orders.criterion != "rh02" and F_B < top:
-        # the map as windowed so far, per direction; when its 90th percentile passes √ε, the smallest
-        # order of the pixel rule's ladder that meets it (bare fields), and the window again there
-        stage("pixels")
-        t0 = time.perf_counter()
-        pixel_from = F_B
-        pixel_choice = pixel_statement(lighting, base, F_B, P_B, sigma, eps, top=top, q_max=q_max, fields=sampler)
-        if not pixel_choice.p90 <= pixel_choice.tolerance and pixel_choice.F_reference > F_B:
-            pixel_choice = pixel_orders(lighting, base, F_B, P_B, eps, top=top, q_max=q_max, fields=sampler)
-            if pixel_choice.F > F_B:
-                choice = window_at(pixel_choice.F, None)
-                F_B, sigma, strength = choice.F, choice.sigma, choice.strength
-        timings["pixels"] = time.perf_counter() - t0
-    coefficients = windowed(base, sigma, F_B, P_B)
-    t0 = time.perf_counter()
-    budget_bound = False
-    if size is not None:
-        S = int(size)
-    else:
-        if orders.criterion == "rh02":
-            S = default_size(F_B, P_B, budget_bytes)  # RH02 §5.2: S ≈ 10 F
-            budget_bound = S < int(np.clip(10 * F_B, 32, 1024))
-        else:
-            S, budget_bound = map_rows(
-                orders.profile, base, band_energy, F_B, P_B, eps, sigma=sigma, q_max=q_max,
-                lighting_rows=lighting_rows, max_view_deg=orders.max_view_deg, budget_bytes=budget_bytes,
-            )
-        S = fast_map_rows(S, F_B, P_B, budget_bytes)
-    if S < 2 or S > 8192:
-        raise BadInputError(None, f"SHRM size must be in [2, 8192] rows, got {S}")
-    timings["map size"] = time.perf_counter() - t0
-    stage("synthesis")
-    t0 = time.perf_counter()
-    with np.errstate(over="ignore", invalid="ignore"):  # overflow is checked (and reported) below
-        coeffs = global_shrm_latlong(
-            lighting, coefficients, F_B, P_B, S, 2 * S, nthreads=nthreads, azimuth_free=azimuth_free
-        )
-    coeffs = _check_finite(coeffs, env)
-    timings["synthesis"] = time.perf_counter() - t0
-    reason, before, after, negative_fraction = choice.reason, choice.before, choice.after, choice.negative_fraction
+    with stages("orders"):
+        orders = _brdf_orders(brdf, eps, F=F, P=P, orders=orders, max_F=max_F, max_P=max_P, criterion=criterion,
+                              max_view_deg=max_view_deg)
+    with stages("lights"):
+        extraction = extract_lights(env, lights)  # the SHRM holds the map without its lights
+    with stages("lighting"):
+        lighting, scene = scene_for(extraction.residual, orders, F=F, nthreads=nthreads)
+    s = stage.setup(orders, lighting, scene, eps=eps, F=F, P=P, azimuth_free=azimuth_free, size=size,
+                    budget_bytes=budget_bytes, nthreads=nthreads)
+    with stages("window"):
+        w = stage.choose_window_for(s, window)
+    if stage.pixel_rule_applies(s, w, pixel_rule):
+        with stages("pixels"):
+            w = stage.apply_pixel_rule(s, w, window)
+    coefficients = windowed(s.base, w.sigma, w.F_B, s.P_B)
+    with stages("map size", announce=None):
+        S, budget_bound = stage.map_size(s, w)
+    with stages("synthesis"):
+        coeffs = stage.synthesize(s, w, coefficients, S, extraction.residual, azimuth_free)
     cube_coeffs = None
     if cube:
-        stage("cube map")
-        t0 = time.perf_counter()
-        n_cube = max(2, S // 2) if cube_size is None else int(cube_size)
-        if n_cube < 2 or n_cube > 4096:
-            raise BadInputError(None, f"cube face size must be in [2, 4096], got {n_cube}")
-        cube_coeffs = global_shrm_cube(lighting, coefficients, F_B, P_B, n_cube, nthreads=nthreads,
-                                       azimuth_free=azimuth_free)
-        timings["cube"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    def state(signal: np.ndarray | None = None, rows: int | None = S):
-        return shrm_view_bands(
-            orders.profile, base, band_energy, F_B, P_B, sigma=sigma, q_max=q_max, map_rows=rows,
-            lighting_rows=lighting_rows, max_view_deg=orders.max_view_deg,
-            signal_band_energy=signal,
-        )
-
-    statement = state()
-    signal_energy, raw_bands = None, [dict(b) for b in statement.bands]
-    if len(light_set):
-        # the maps hold the map without its lights: relative to that reflection (what holds away from
-        # the lights, ``*_residual``) and, the main statement, to the whole map's reflection (the
-        # lights add signal and, where merged from pixels, their merge error)
-        whole = lighting_for(source_env, orders, F=F, nthreads=nthreads).band_energy_all()
-        signal_energy = whole
-        residual_bands, statement = statement.bands, state(whole)
-        raw_bands = [dict(b) for b in statement.bands]
-        part = SHRM(F=F_B, P=P_B, coeffs=coeffs)
-        merge_res, merge_whole = (np.zeros(len(residual_bands)),) * 2
-        if extraction.merged:
-            merge_res, merge_whole = merge_error_by_band(
-                extraction, brdf, lambda R, V: part.radiance(R, V, lights=False), orders.profile.edges_deg,
-                whole=lambda R, V: part.radiance(R, V, lights=False) + light_set.radiance(brdf, R, V))
-        for band, own, extra_res, extra in zip(statement.bands, residual_bands, merge_res, merge_whole, strict=True):
-            # merged samples: a Monte Carlo measure, 1.5× in amplitude in the bound covers its sampling error
-            band["lights_rel_rms"] = float(np.sqrt(extra))
-            band["predicted_rel_rms"] = float(np.sqrt(band["predicted_rel_rms"] ** 2 + extra))
-            band["bound_rel_rms"] = float(band["bound_rel_rms"] + 1.5 * np.sqrt(extra))
-            # the residual statements are the map's alone (what holds away from the lights); the merge
-            # error, relative to the same reflection, is stated beside them (it lives within the merge angle
-            # and the lobe of the merged light: added to them, a dim room's walls made them 10-60x loose)
-            band["lights_rel_rms_residual"] = float(np.sqrt(extra_res))
-            band["predicted_rel_rms_residual"] = float(own["predicted_rel_rms"])
-            band["bound_rel_rms_residual"] = float(own["bound_rel_rms"])
-    # what the map's size costs the statement, and whether a cap made a bound say nothing (issue 29)
-    map_budget = assess_map(
-        statement.bands, raw_bands, state(signal_energy, None).bands, rows=S, P=P_B, budget_bytes=budget_bytes,
-        inside=list(bands_inside(orders.profile, orders.max_view_deg)), capped=budget_bound,
-        rows_needed=lambda: fast_map_rows(map_rows(
-            orders.profile, base, band_energy, F_B, P_B, eps, sigma=sigma, q_max=q_max,
-            lighting_rows=lighting_rows, max_view_deg=orders.max_view_deg,
-            budget_bytes=1 << 62)[0], F_B, P_B, 1 << 62))
-    # on the coefficients the map was made of (the projection for rh02, the view fit for bands):
-    # the window's cost, the energy of its change over all views, is exact for either
-    truncation, cost = reflected_error_parts(lighting, base, F_B, P_B, sigma, q_max=q_max)
-    if orders.criterion == "rh02":
-        reflected = float((truncation + cost).max())
-        unwindowed = float(truncation.max())
-        bound = residual_bound(lighting, base, F_B, P_B, sigma, q_max=q_max)
-    else:  # fitted coefficients: Parseval no longer splits the error; the view-band sums do
-        reflected, bound = statement.eps_predicted, statement.eps_bound
-        unwindowed = reflected if sigma is None else shrm_view_bands(
-            orders.profile, base, band_energy, F_B, P_B, q_max=q_max, map_rows=S,
-            lighting_rows=lighting_rows, max_view_deg=orders.max_view_deg,
-        ).eps_predicted
-    # per direction (what a pixel shows), against a higher order: pixels.py
-    pixels = pixel_statement(lighting, base, F_B, P_B, sigma, eps, top=top, q_max=q_max, fields=sampler,
-                             F_reference=pixel_choice.F_reference if pixel_choice is not None else None)
-    eps_info = {
-        "brdf": orders.eps_at(min(F_B, orders.F0), P_B),
-        "lighting": float(lighting.eps()[min(F_B, lighting.lmax)]),
-        "reflected": reflected,
-        "bound": bound,
-        "gibbs_negative": choice.normal_after,  # the normal views V = R of the undershoot sample
-    }
-    timings["errors"] = time.perf_counter() - t0
-    timings["total"] = time.perf_counter() - t
-    pixel_capped = pixel_choice is not None and pixel_choice.capped
-    size_note = map_budget.note
-    if not size_note:
-        size_note = ""
-        if budget_bound:
-            assert map_budget.bytes_needed is not None  # the budget held the rows: the rows that meet eps are known
-            size_note = (
-                f"map rows held at {S} by the {budget_bytes / 2**20:g} MiB budget ({map_budget.rows_needed} rows, "
-                f"{map_budget.bytes_needed / 2**20:.0f} MiB, would meet eps; use size= or budget_bytes=)")
-    meta = {
-        "brdf": brdf.name,
-        "environment": source_env.name,
-        "environment_source": getattr(source_env, "source", ""),
-        "lights_requested": lights,
-        "lights": [light.to_dict() for light in light_set.lights],
-        "lights_flux_share": extraction.flux_share,
-        "lights_threshold": float(extraction.threshold) if np.isfinite(extraction.threshold) else None,
-        "lights_left_in_map": int(extraction.skipped),
-        "lights_brdf": (brdf.to_spec() if brdf.kind == "analytic" else getattr(brdf, "source", None))
-        if len(light_set) else None,
-        "statement_signal": "the reflection of the map without its lights" if len(light_set) else "the reflection",
-        "F_rho": orders.F,
-        "P_rho": orders.P,
-        "F_L": scene.F_L,
-        "lighting_capped": bool(scene.lighting_capped),
-        "orders_message": "; ".join(m for m in (orders.message, clamp_note, size_note) if m),
-        "orders_asked": None if F is None and P is None else {"F": F if F is None else int(F),
-                                                              "P": P if P is None else int(P)},
-        "timings": timings,
-        "shrmkit_version": __version__,
-        "frame": "z-up; lat-long pixel centres theta=(i+1/2)pi/H, phi=2pi(j+1/2)/W",
-        "azimuth_free": bool(azimuth_free),
-        "window": "lanczos" if strength > 0.0 else "none",
-        "window_requested": window,
-        "window_strength": float(strength),
-        "window_reason": reason,
-        "window_threshold": WINDOW_THRESHOLD,
-        "window_cost": float(cost.max()),
-        "eps_reflected_unwindowed": unwindowed,
-        "negative_before": before,
-        "negative_after": after,
-        "negative_fraction_after": negative_fraction,
-        "negative_max_view_deg": float(max(v[0] for v in LOCAL_VIEWS_DEG)) if P_B > 0 else 0.0,
-        "negative_sample_pairs": choice.pairs,
-        "window_capped": bool(choice.capped),
-        "criterion": orders.criterion,
-        "max_view_deg": orders.max_view_deg,
-        "scene_capped": bool(scene.capped),
-        # one summary of every budget that stops the rule from meeting ε (orders' caps, the map's
-        # resolution of the lighting, the window, the map's memory budget)
-        "capped": bool(orders.capped or scene.capped or choice.capped or budget_bound or pixel_capped),
-        "capped_by": [name for name, hit in (
-            ("orders: max_F/max_P", orders.capped), ("lighting: the map's resolution (F_B at its lmax)",
-                                                           scene.capped),
-            ("window budget", choice.capped), (f"map budget: {budget_bytes / 2**20:g} MiB", budget_bound),
-            ("pixel rule: no order the lighting holds meets √ε per direction", pixel_capped)) if hit],
-        # the rule's check: from F_B (the energy rule's, after the window) to F (raised when it failed)
-        "pixel_rule": {**pixel_choice.to_dict(), "F_from": pixel_from} if pixel_choice is not None else None,
-        "pixel_errors": pixels.to_dict(),
-        "view_bands": statement.bands,
-        "map_budget": map_budget.to_dict(),
-        "extrapolated_samples": int(orders.n_without_data),
-    }
-    return SHRM(F=F_B, P=P_B, coeffs=coeffs, tolerance=float(eps), eps=eps_info, meta=meta, cube=cube_coeffs,
-                lights=light_set if len(light_set) else None, brdf=brdf if len(light_set) else None)
+        with stages("cube", announce="cube map"):
+            cube_coeffs = stage.synthesize_cube(s, w, coefficients, S, cube_size, azimuth_free)
+    part = SHRM(F=w.F_B, P=s.P_B, coeffs=coeffs)
+    with stages("errors", announce=None):
+        st = stage.state_errors(s, w, S, budget_bound, extraction, brdf, env,
+                                functools.partial(part.radiance, lights=False))
+    info = stage.record(s, w, st, S, brdf=brdf, source_env=env, extraction=extraction, lights=lights,
+                        window=window, F=F, P=P, azimuth_free=azimuth_free, timings=stages.timings())
+    light_set = extraction.lights if len(extraction.lights) else None
+    return SHRM(F=w.F_B, P=s.P_B, coeffs=coeffs, tolerance=float(eps), eps=st.eps, meta=info.to_meta(),
+                cube=cube_coeffs, lights=light_set, brdf=brdf if light_set is not None else None)
