@@ -40,87 +40,27 @@ if TYPE_CHECKING:
 
 from ..analysis.census import (
     CSV_COLUMNS,
-    DEFAULT_F,
-    DEFAULT_P,
-    DEFAULT_THRESHOLD,
-    MAX_F_LIMIT,
-    MAX_P_LIMIT,
-    MAX_WORKERS,
     Census,
     CensusRow,
     census_sources,
     run_census,
 )
-from ..analysis.fit.crossval import DEFAULT_FOLDS
-from ..analysis.fit.representation import CANDIDATES
-from ..analysis.orders import DEFAULT_MAX_F, DEFAULT_MAX_P
-from ..analysis.tolerance import DEFAULT_EPS
 from ..brdf_io.atomic import atomic_paths, check_writable
 from ..brdf_io.brdf import BRDF
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.jsonutil import to_jsonable
 from ..brdf_io.specs import BRDF_FILE_TYPES, load_brdf
 from .common import (
-    add_order_rule,
-    add_rgl_incident,
-    brdf_help,
-    number_in,
     print_json,
     print_table,
     rgl_brdf_arg,
     say,
     stderr,
     stdout,
-    tolerance,
 )
+from .options_census import CSV_NAME, JSON_NAME, PLOT_NAME
 
-__all__ = ["HELP", "add_arguments", "load_census_brdf", "run", "plot_census", "write_census"]
-
-HELP = "census of a BRDF library: accuracy at (F, P) per material (RH02 Fig. 8), orders needed, fit error, reasons"
-
-#: Files written into ``--out``.
-CSV_NAME, JSON_NAME, PLOT_NAME = "census.csv", "census.json", "census.png"
-
-
-def _candidates(text: str) -> tuple[str, ...]:
-    items = tuple(t.strip() for t in text.split(",") if t.strip())
-    unknown = [t for t in items if t not in CANDIDATES]
-    if not items or unknown:
-        raise argparse.ArgumentTypeError(f"expected a comma-separated list of {', '.join(CANDIDATES)}, got {text!r}")
-    return items
-
-
-def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("brdfs", nargs="+", metavar="BRDF",
-                        help=brdf_help(many=True) + "; a folder is every BRDF file in it")
-    parser.add_argument("--out", default="shrm-census", help="output folder (default ./shrm-census)")
-    parser.add_argument("--F", type=number_in(0, DEFAULT_MAX_F, integer=True), default=DEFAULT_F, dest="F",
-                        help=f"lighting order of the accuracy table (default {DEFAULT_F}, RH02 Fig. 8)")
-    parser.add_argument("--P", type=number_in(0, DEFAULT_MAX_P, integer=True), default=DEFAULT_P, dest="P",
-                        help=f"largest view order of the accuracy table, P = 0..this (default {DEFAULT_P})")
-    parser.add_argument("--threshold", type=number_in(0.0, 1.0, lo_open=True, hi_open=True),
-                        default=DEFAULT_THRESHOLD,
-                        help=f"accuracy mark counted and explained (default {DEFAULT_THRESHOLD:g}, RH02's 90 %%)")
-    parser.add_argument("--eps", type=tolerance, default=DEFAULT_EPS,
-                        help=f"tolerance of the orders each material needs (default {DEFAULT_EPS:g})")
-    parser.add_argument("--max-F", type=number_in(1, MAX_F_LIMIT, integer=True), default=DEFAULT_MAX_F,
-                        help=f"cap on F needed (default {DEFAULT_MAX_F})")
-    parser.add_argument("--max-P", type=number_in(0, MAX_P_LIMIT, integer=True), default=DEFAULT_MAX_P,
-                        help=f"cap on P needed (default {DEFAULT_MAX_P})")
-    add_order_rule(parser)
-    parser.add_argument("--candidates", type=_candidates, default=CANDIDATES,
-                        help=f"representations tried for scattered data (default {','.join(CANDIDATES)})")
-    parser.add_argument("--folds", type=number_in(2, 100, integer=True), default=DEFAULT_FOLDS,
-                        help=f"cross-validation folds of the representation choice (default {DEFAULT_FOLDS})")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the folds and the fits (default 0)")
-    parser.add_argument("--max-theta", type=number_in(0.0, 90.0, lo_open=True, unit=" degrees"), default=80.0,
-                        help="measurements with θ_i or θ_o above this are not fitted (default 80)")
-    parser.add_argument("--workers", type=number_in(1, MAX_WORKERS, integer=True), default=1,
-                        help="processes computing the rows (default 1; the numbers do not depend on it)")
-    parser.add_argument("--no-plot", action="store_true", help=f"do not draw {PLOT_NAME}")
-    parser.add_argument("--json", action="store_true",
-                        help="print one JSON object (census.json's, with the files written) instead of the table")
-    add_rgl_incident(parser)
+__all__ = ["load_census_brdf", "run", "plot_census", "write_census"]
 
 
 def _check_sources(sources: list[str]) -> None:

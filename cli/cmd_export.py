@@ -28,51 +28,23 @@ import numpy as np
 from rich.table import Table
 
 from ..analysis.material_export import closest_shared_model, export_material
-from ..analysis.prefiltered_cube import MAX_FACE_SIZE, ggx_cube_chain, material_lod
+from ..analysis.prefiltered_cube import ggx_cube_chain, material_lod
 from ..brdf_io.atomic import atomic_paths, check_writable
-from ..brdf_io.dds import DDS_FORMATS, write_dds_cube
+from ..brdf_io.dds import write_dds_cube
 from ..brdf_io.errors import BadInputError
-from ..brdf_io.export_formats import EXPORT_FORMATS, export_format
+from ..brdf_io.export_formats import export_format
 from ..brdf_io.export_material import material_text, write_material
 from ..brdf_io.merl import read_merl, tabulate_merl, write_merl
 from ..brdf_io.models import CookTorrance, PhongLobe, SimplifiedMicrofacet
 from ..brdf_io.specs import load_brdf
 from .common import (
-    add_env_orientation,
-    add_rgl_incident,
-    brdf_help,
     load_analysis_brdf,
     load_env_arg,
-    number_in,
     print_json,
     print_table,
     rgl_brdf_arg,
     stdout,
 )
-
-HELP = "export a BRDF as a Mitsuba 3 / pbrt-v4 / MaterialX material or a MERL table, or a prefiltered cube map (DDS)"
-
-
-def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("brdf", help=brdf_help() + "; materials are fitted to scattered measurements directly, "
-                        "a MERL table goes through their representation with the smallest held-out error")
-    parser.add_argument("-o", "--output", required=True,
-                        help="output file; its suffix picks the format unless --to names it ("
-                        + ", ".join(f"{f.suffix} {f.name}" for f in EXPORT_FORMATS.values()) + ")")
-    parser.add_argument("--to", choices=tuple(EXPORT_FORMATS), default=None,
-                        help="format to write (default: from the output suffix)")
-    parser.add_argument("--name", default=None,
-                        help="material name in the snippet (default: the output file's stem)")
-    parser.add_argument("--env", default=None, help="dds: the environment (builtin:sky, builtin:studio or a map file)")
-    parser.add_argument("--face-size", type=number_in(1, MAX_FACE_SIZE, integer=True), default=128,
-                        help="dds: texels along a face of mip level 0, a power of two (default 128)")
-    parser.add_argument("--levels", type=number_in(1, 12, integer=True), default=None,
-                        help="dds: mip levels N (default log2(face size) + 1); level m holds roughness m/(N-1)")
-    parser.add_argument("--dds-format", choices=tuple(DDS_FORMATS), default="rgba16f",
-                        help="dds: texel format (default rgba16f, the engines' HDR format)")
-    parser.add_argument("--json", action="store_true", help="print one JSON object describing what was written")
-    add_env_orientation(parser)
-    add_rgl_incident(parser)
 
 
 def _material_name(args: argparse.Namespace, out: Path) -> str:

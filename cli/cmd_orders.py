@@ -1,4 +1,4 @@
-"""``shrm orders``: how many coefficients a BRDF needs (RH02 §5.1).
+"""``shrm orders``: how many coefficients a BRDF needs (RH02 §5.1); its parser is ``options_orders.py``.
 
 Scattered measurements (CURET, Cornell, gonioreflectometer CSV) are analysed through the
 representation with the smallest held-out worst-view-band error (``cli.common.load_analysis_brdf``,
@@ -18,15 +18,9 @@ import numpy as np
 from rich.table import Table
 
 from ..analysis.lights import extract_lights
-from ..analysis.orders import DEFAULT_MAX_F, DEFAULT_MAX_P, choose_orders
+from ..analysis.orders import choose_orders
 from ..analysis.scene import scene_for
-from ..analysis.tolerance import DEFAULT_EPS
 from .common import (
-    add_env_orientation,
-    add_lights_option,
-    add_order_rule,
-    add_rgl_incident,
-    brdf_help,
     in_cli_terms,
     load_analysis_brdf,
     load_env_arg,
@@ -35,25 +29,8 @@ from .common import (
     print_table,
     stderr,
     stdout,
-    tolerance,
 )
 from .view_bands_table import print_view_bands
-
-HELP = "choose the SH orders (F, P) a BRDF needs at a tolerance eps (RH02 §5.1)"
-
-
-def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("brdf", help=brdf_help())
-    parser.add_argument("--eps", type=tolerance, default=DEFAULT_EPS,
-                        help=f"tolerance on uncaptured energy (default {DEFAULT_EPS:g})")
-    parser.add_argument("--max-F", type=int, default=DEFAULT_MAX_F, help=f"cap on F (default {DEFAULT_MAX_F})")
-    parser.add_argument("--max-P", type=int, default=DEFAULT_MAX_P, help=f"cap on P (default {DEFAULT_MAX_P})")
-    parser.add_argument("--env", help="environment (builtin:sky or a map file): also report F_L, F_B and the bound")
-    parser.add_argument("--json", action="store_true", help="print one JSON object instead of tables")
-    add_order_rule(parser)
-    add_lights_option(parser)
-    add_env_orientation(parser)
-    add_rgl_incident(parser)
 
 
 def run(args: argparse.Namespace) -> int:

@@ -2,8 +2,8 @@
 
 Parse and check the options, load the mesh and the (oriented) environment, call
 :func:`shrmkit.render.api.render_scene`, print what it built and how long it took, write
-the PNG/EXR/GIF files. The modes and their help come from the render-mode table
-(``shrmkit.render.modes``).
+the PNG/EXR/GIF files. The parser is ``options_render.py``: the modes and their help come from
+the render-mode table (``shrmkit.render.modes``, through ``render.defaults``).
 """
 
 from __future__ import annotations
@@ -16,34 +16,24 @@ from typing import Any
 import numpy as np
 
 from ..analysis.notebook import stated_band
-from ..analysis.tolerance import DEFAULT_EPS, check_eps
+from ..analysis.tolerance import check_eps
 from ..brdf_io.atomic import atomic_paths, check_writable
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.limits import check_memory
 from ..render.api import SIZE_RANGE, SceneRender, SequenceRender, render_scene, render_sequence
 from ..render.camera import Camera
-from ..render.error_image import ERROR_IMAGE_HELP, check_error_image_request, error_image, write_error_image_line
+from ..render.defaults import LOBE_OPTION_MODES
+from ..render.error_image import check_error_image_request, error_image, write_error_image_line
 from ..render.mesh import load_mesh
 from ..render.modes import (
-    DEFAULT_MODE,
-    ELEVATIONS_RANGE,
-    LOBES_RANGE,
-    RENDER_MODES,
     RenderOptions,
-    mode_names,
     self_shadow_modes,
 )
 from ..render.offscreen import skipped_window_classes
 from ..render.output import to_8bit, turntable_paths, write_exr, write_gif, write_png
-from ..render.pipeline import BACKGROUNDS, Frame, light_turntable_rotations, turntable_cameras
+from ..render.pipeline import Frame, light_turntable_rotations, turntable_cameras
 from ..render.preview import preview_exposure
 from .common import (
-    add_env_orientation,
-    add_lights_option,
-    add_order_rule,
-    add_pixel_rule_option,
-    add_rgl_incident,
-    add_window_option,
     env_rotation_arg,
     env_sources_arg,
     load_analysis_brdf,
@@ -53,13 +43,6 @@ from .common import (
     print_json,
     say,
 )
-
-HELP = "render a mesh shaded by the SHRM of ENV and BRDF to PNG (and linear EXR), offscreen"
-
-#: The modes that use ``--lobes`` and ``--elevations``: those whose published method has these
-#: settings (the Gaussian-lobe fit; ``analysis.baselines.methods``).
-LOBE_OPTION_MODES = tuple(m.name for m in RENDER_MODES.values() if m.published is not None
-                          and {s.name for s in m.published.settings} >= {"lobes", "elevations"})
 
 
 def _vector(text: str, option: str) -> np.ndarray:
@@ -71,79 +54,6 @@ def _vector(text: str, option: str) -> np.ndarray:
     if v.shape != (3,) or not np.all(np.isfinite(v)) or not np.any(v):
         raise BadInputError(None, f"{option} must be three finite numbers x,y,z, not all zero, got {text!r}")
     return v
-
-
-class _StoreGiven(argparse.Action):
-    """Store the value and record that the option was given (``args.<dest>_given``), so that
-    an option that does not apply to the chosen mode is refused rather than ignored."""
-
-    def __call__(self, parser, namespace, values, option_string=None) -> None:
-        setattr(namespace, self.dest, values)
-        setattr(namespace, f"{self.dest}_given", True)
-
-
-def _mode_help() -> str:
-    listed = "; ".join(f"{m.name}: {m.help}" for m in RENDER_MODES.values())
-    return f"{listed} (default {DEFAULT_MODE})"
-
-
-def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument(
-        "mesh", metavar="MESH", help="mesh file (obj, ply, stl, off, glb, gltf) or builtin:sphere|torus|torus-knot"
-    )
-    p.add_argument("--env", nargs="+", default=["builtin:sky"], metavar="ENV",
-                   help="environment map spec or file (default builtin:sky); several maps, a folder of maps or a "
-                   "glob pattern render one frame per map to OUT_0000.png ... and OUT.gif (the BRDF's orders chosen "
-                   "once, each map prefiltered, its cost and stated error printed)")
-    p.add_argument("--brdf", default="microfacet:sigma=0.2", help="BRDF spec or file (default microfacet:sigma=0.2)")
-    p.add_argument("--eps", type=float, default=DEFAULT_EPS, help=f"SHRM tolerance epsilon (default {DEFAULT_EPS:g})")
-    p.add_argument("--mode", choices=mode_names(), default=DEFAULT_MODE, help=_mode_help())
-    defaults = RenderOptions()
-    shadow = " or ".join(self_shadow_modes())
-    lobe_modes = " or ".join(LOBE_OPTION_MODES)
-    # _StoreGiven: given with another mode they are refused, not silently ignored
-    p.add_argument("--lobes", type=int, default=defaults.lobes, action=_StoreGiven,
-                   help=f"{lobe_modes} only: lobes per elevation K, {LOBES_RANGE[0]}..{LOBES_RANGE[1]} "
-                   f"(default {defaults.lobes})")
-    p.add_argument("--elevations", type=int, default=defaults.elevations, action=_StoreGiven,
-                   help=f"{lobe_modes} only: fitted view elevations, {ELEVATIONS_RANGE[0]}..{ELEVATIONS_RANGE[1]} "
-                   f"(default {defaults.elevations})")
-    p.add_argument("--self-shadow", action="store_true",
-                   help=f"{shadow}: per-vertex self-shadowing by ray casting (Green et al. 2007 eq. 7)")
-    add_window_option(p)
-    add_pixel_rule_option(p)
-    add_lights_option(p)
-    add_order_rule(p)
-    p.add_argument("--size", type=int, default=512, help="image width and height in pixels (default 512)")
-    p.add_argument("--camera", choices=("perspective", "ortho"), default="perspective")
-    p.add_argument("--view", default="1,0,0", help="direction from the object toward the camera, z-up frame")
-    p.add_argument("--up", default="0,0,1", help="image up direction, z-up frame (default 0,0,1)")
-    p.add_argument("--exposure", type=float, default=None,
-                   help="exposure in stops for the PNG (default: the environment's mean luminance brought to "
-                   "middle grey, as shrm view does; printed)")
-    p.add_argument("--tone", choices=("filmic", "srgb"), default="filmic", help="PNG tone mapping (default filmic)")
-    p.add_argument("--background", choices=BACKGROUNDS, default="env",
-                   help="environment seen behind the object, black, or transparent PNG (default env)")
-    p.add_argument("--turntable", type=int, default=0, metavar="N",
-                   help="render N frames around the z axis to OUT_0000.png ... and OUT.gif")
-    p.add_argument("--env-rotation", default=None, metavar="AZ,EL[,ROLL]",
-                   help="rotate the environment at view time, degrees: AZ about the up axis (the sense of "
-                   "--env-azimuth), then EL raises the horizon point at azimuth 0, ROLL about it first; "
-                   "nothing is prefiltered again (README, 'Lighting that moves')")
-    p.add_argument("--light-turntable", type=int, default=0, metavar="N",
-                   help="render N frames with the environment turning about the up axis (360/N degrees a frame, "
-                   "after --env-rotation) and the camera still, to OUT_0000.png ... and OUT.gif; built once, "
-                   "per-frame cost printed")
-    p.add_argument("--fps-frames", type=int, default=10,
-                   help="repeated frames for the fps figure (default 10; not measured for a sequence of maps)")
-    p.add_argument("-o", "--output", required=True, help="output PNG")
-    add_env_orientation(p)
-    add_rgl_incident(p)
-    p.add_argument("--exr", help="also write linear radiance (before tone mapping) to this EXR")
-    p.add_argument("--error-image", metavar="PATH", help=ERROR_IMAGE_HELP)
-    p.add_argument("--json", action="store_true",
-                   help="print one JSON object (orders, stated errors, timings, files written; "
-                   "data_specs/render_outputs.md) instead of the text lines")
 
 
 def _validate(args: argparse.Namespace, sequence: bool = False) -> tuple[list[Camera], RenderOptions]:

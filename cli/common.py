@@ -1,4 +1,6 @@
-"""Shared CLI helpers: argument types, consoles and JSON output (the CLI's only I/O layer)."""
+"""Shared CLI helpers: consoles, tables and JSON output (the CLI's only I/O layer), loading a verb's
+BRDF and environments; the parsers' argument types and options are in :mod:`~shrmkit.cli.options`
+(numpy-free), re-exported here."""
 
 from __future__ import annotations
 
@@ -16,10 +18,6 @@ from rich.measure import Measurement
 from rich.table import Table
 
 from ..analysis.fit.representation import RepresentationChoice, choose_representation
-from ..analysis.lights import DEFAULT_LIGHTS, LIGHT_CONTRAST, MAX_LIGHT_RADIUS_DEG, MAX_LIGHTS, check_lights
-from ..analysis.shrm import DEFAULT_WINDOW, WINDOW_BUDGET_EPS, WINDOW_THRESHOLD, WINDOWS
-from ..analysis.tolerance import check_eps
-from ..analysis.view_bands import CRITERIA, DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG
 from ..brdf_io.brdf import BRDF
 from ..brdf_io.cubemap import CUBE_FACES
 from ..brdf_io.env_rotation import env_rotation_matrix
@@ -28,7 +26,19 @@ from ..brdf_io.errors import BadInputError
 from ..brdf_io.hdr_codecs import IMAGE_SUFFIXES
 from ..brdf_io.jsonutil import to_jsonable
 from ..brdf_io.rgl import RGL_INCIDENT
-from ..brdf_io.specs import BRDF_FILE_TYPES, load_brdf
+from ..brdf_io.specs import load_brdf
+from .options import (  # the parsers' options, numpy-free (cli/options.py), here for the verbs' and reports' use
+    add_env_orientation,
+    add_lights_option,
+    add_order_rule,
+    add_pixel_rule_option,
+    add_rgl_incident,
+    add_window_option,
+    brdf_help,
+    number_in,
+    positive_float,
+    tolerance,
+)
 
 __all__ = [
     "say",
@@ -62,42 +72,6 @@ stdout = Console(highlight=False, width=None if sys.stdout.isatty() else PIPE_WI
 stderr = Console(stderr=True, highlight=False)
 
 
-def number_in(
-    lo: float, hi: float, *, integer: bool = False, lo_open: bool = False, hi_open: bool = False, unit: str = ""
-):
-    """argparse type factory: a finite number (or integer) in [lo, hi]; ``lo_open``/``hi_open``
-    exclude the ends."""
-    kind = "an integer" if integer else "a number"
-
-    def parse(text: str) -> float:
-        try:
-            value = int(text) if integer else float(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"not {kind}: {text!r}") from None
-        if not np.isfinite(value) or value > hi or value < lo or (lo_open and value == lo) or (hi_open and value == hi):
-            left, right = "(" if lo_open else "[", ")" if hi_open else "]"
-            raise argparse.ArgumentTypeError(f"must be in {left}{lo:g}, {hi:g}{right}{unit}, got {text}")
-        return value
-
-    return parse
-
-
-def tolerance(text: str) -> float:
-    """argparse type for ε: the number checked by the one validator,
-    :func:`shrmkit.analysis.tolerance.check_eps` (a number in (0, 1))."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    try:
-        return check_eps(value)
-    except BadInputError as err:
-        raise argparse.ArgumentTypeError(str(err)) from None
-
-positive_float = number_in(0.0, np.inf, lo_open=True)
-"""argparse type: a finite number > 0."""
-
-
 def print_table(table: Table) -> None:
     """Print a rich ``table`` on stdout as it is when it fits the console, else one small
     "column: value" table per row (a narrow terminal gets every number whole, never "…")."""
@@ -123,69 +97,6 @@ def print_json(doc: dict[str, Any]) -> None:
     sys.stdout.write(json.dumps(to_jsonable(doc)) + "\n")
 
 
-def add_env_orientation(parser: argparse.ArgumentParser) -> None:
-    """``--env-up``, ``--env-flip``, ``--env-azimuth``: how a lat-long *file* is oriented
-    (data_specs/environment_maps.md; the shared Grace probe needs ``--env-up y --env-flip``);
-    ``--env-layer``, ``--env-part``: which layer/part of an OpenEXR file holds the map (§2.1)."""
-    group = parser.add_argument_group(
-        "environment orientation (--env-up/--env-flip: map files only, refused for builtin: maps; "
-        "--env-azimuth: any map)")
-    group.add_argument("--env-up", choices=("z", "y"), default=None,
-                       help="lat-long file convention: z (top row = zenith, default) or y (y-up files)")
-    group.add_argument("--env-flip", action="store_true", help="reverse the rows of a lat-long file first")
-    group.add_argument("--env-azimuth", type=float, default=0.0, metavar="DEG",
-                       help="rotate the map about the up axis by this many degrees")
-    group.add_argument("--env-layer", default=None, metavar="NAME",
-                       help="OpenEXR files: the layer (channel prefix, e.g. 'diffuse' for diffuse.R/G/B) to read; "
-                       "default: the plain R, G, B, else the only layer with colour")
-    group.add_argument("--env-part", default=None, metavar="NAME|INDEX",
-                       help="multi-part OpenEXR files: the part to read, by name or index; default: the only part "
-                       "with colour channels")
-
-
-def add_window_option(parser: argparse.ArgumentParser) -> None:
-    """``--window none|lanczos|auto``: the prefilter's window against Gibbs ringing, for every
-    verb that prefilters (the names are ``analysis.shrm.WINDOWS``; argparse exits 2 on others)."""
-    parser.add_argument(
-        "--window", choices=WINDOWS, default=DEFAULT_WINDOW,
-        help=f"damping of the SHRM's Gibbs ringing (negative lobes): auto (default) applies Lanczos sigma-factors "
-        f"just strong enough when the undershoot passes {100 * WINDOW_THRESHOLD:g}%% of the peak, raising F_B "
-        "until the windowed field meets eps in every view band (the rh02 rule: within "
-        f"{WINDOW_BUDGET_EPS:g} eps of added error); lanczos: full Lanczos; none: the bare truncation. What is left "
-        "is clamped to 0 at the output",
-    )
-
-
-def add_pixel_rule_option(parser: argparse.ArgumentParser) -> None:
-    """``--pixel-rule on|off``: the bands rule's per-direction check (``analysis.pixels``), for the verbs
-    that prefilter one SHRM (``prefilter``, ``render``, ``view``)."""
-    parser.add_argument(
-        "--pixel-rule", choices=("on", "off"), default="on",
-        help="on (default): raise F_B until 90%% of the sampled directions have a relative error within sqrt(eps) "
-        "(the band statements bound an average that dark regions of a high dynamic range map miss); off: the "
-        "energy rule's F_B only (faster, rings in dark regions)",
-    )
-
-
-def _lights_arg(text: str) -> str | int:
-    """argparse type of ``--lights`` (:func:`~shrmkit.analysis.lights.check_lights`)."""
-    try:
-        return check_lights(text)
-    except BadInputError as err:
-        raise argparse.ArgumentTypeError(str(err)) from None
-
-
-def add_lights_option(parser: argparse.ArgumentParser) -> None:
-    """``--lights auto|none|N``: bright compact regions taken out of the map as exact lights, for
-    every verb that prefilters (``analysis.lights``; data_specs/lights.md)."""
-    parser.add_argument(
-        "--lights", type=_lights_arg, default=DEFAULT_LIGHTS, metavar="auto|none|N",
-        help=f"take the sun, lamps and windows out of the map as lights shaded exactly (auto, default: regions "
-        f"{LIGHT_CONTRAST:g}x brighter than the map's median within a {MAX_LIGHT_RADIUS_DEG:g} degree cap, at most "
-        f"{MAX_LIGHTS}); N: at most N; none: keep them in the map (they ring)",
-    )
-
-
 def say(text: str) -> None:
     """One line of plain text on :data:`stdout`, as ``print`` writes it (no markup, highlighting,
     emoji codes or wrapping)."""
@@ -202,30 +113,6 @@ def in_cli_terms(text: str) -> str:
     for name, option in _OPTION_OF:
         text = text.replace(name, option)
     return text
-
-
-def brdf_help(*, many: bool = False) -> str:
-    """Help text of a BRDF argument, its file suffixes from the file-type registry
-    (``brdf_io.specs.BRDF_FILE_TYPES``); ``many``: the argument takes several BRDFs and a whole
-    multi-BRDF file expands to every member."""
-    suffixes = ", ".join(BRDF_FILE_TYPES)
-    picks = "/".join(s for s, kind in BRDF_FILE_TYPES.items() if kind.selector)
-    if many:
-        whole = "/".join(s for s, kind in BRDF_FILE_TYPES.items() if kind.members)
-        return (f"BRDF files ({suffixes}; a whole {whole} file is every member; FILE#... picks one part of a "
-                f"{picks} file) or specs (e.g. microfacet:sigma=0.2)")
-    return f"BRDF spec (e.g. microfacet:sigma=0.2) or file ({suffixes}; FILE#... picks one part of a {picks} file)"
-
-
-def add_rgl_incident(parser: argparse.ArgumentParser) -> None:
-    """``--rgl-incident camera|light``: which direction plays an RGL ``.bsdf`` file's incident
-    direction ω_i, for every verb that loads BRDFs (data_specs/rgl_bsdf.md; applied by
-    :func:`rgl_brdf_arg`)."""
-    parser.add_argument(
-        "--rgl-incident", choices=tuple(RGL_INCIDENT), default="camera",
-        help="RGL .bsdf files: the direction that plays the file's incident direction; camera (default) renders "
-        "as Mitsuba 3 does, light takes the direction the sample was lit from (the data are not reciprocal, "
-        "so the two differ). A file written FILE.bsdf#camera or FILE.bsdf#light keeps its own choice")
 
 
 def rgl_brdf_arg(source: str, args: argparse.Namespace) -> str:
@@ -273,20 +160,6 @@ def load_analysis_brdf(source: str, args: argparse.Namespace, *, quiet: bool = F
     with busy:
         choice = choose_representation(brdf)
     return brdf, choice.brdf, choice
-
-
-def add_order_rule(parser: argparse.ArgumentParser) -> None:
-    """``--criterion bands|rh02`` and ``--max-view-angle DEG``: the order rule of every verb that
-    chooses orders (``analysis.view_bands``; README, accuracy)."""
-    parser.add_argument(
-        "--criterion", choices=CRITERIA, default=DEFAULT_CRITERION,
-        help="order rule: bands (default) meets eps in every view band up to --max-view-angle; rh02 is "
-        "RH02's energy over all views with F_B = min(F_rho, F_L) (reproduces RH02 Table 5)")
-    parser.add_argument(
-        "--max-view-angle", type=number_in(0.0, 90.0, lo_open=True, unit=" degrees"), default=DEFAULT_MAX_VIEW_DEG,
-        metavar="DEG", dest="max_view_deg",
-        help=f"view limit of the bands rule, degrees between view and normal (default {DEFAULT_MAX_VIEW_DEG:g}); "
-        "beyond it errors are stated, not promised")
 
 
 def order_rule(args: argparse.Namespace) -> dict[str, Any]:
@@ -355,9 +228,11 @@ def orientation_note(env: Any, args: argparse.Namespace) -> str | None:
     ``envmap`` files (their format states the orientation) and an explicit ``--env-up``."""
     if getattr(args, "env_up", None) is not None or "[latlong, up=y" not in str(getattr(env, "source", "")):
         return None
-    return (f"environment {env.name}: a lat-long file read y-up, as Blender and three.js place panoramas (image "
-            "centre facing +x; data_specs/environment_maps.md); --env-up z reads it as stored (z-up), "
-            "--env-azimuth DEG turns it, --env-flip if it is upside down")
+    flip = ", rows flipped" if getattr(args, "env_flip", False) else ""
+    turn = f", turned {args.env_azimuth:g} deg" if getattr(args, "env_azimuth", 0.0) else ""
+    return (f"environment {env.name}: a lat-long file read y-up{flip}{turn}, as Blender and three.js place "
+            "panoramas (image centre facing +x; data_specs/environment_maps.md); --env-up z reads it as stored "
+            "(z-up), --env-flip turns it upside down, --env-azimuth DEG about the vertical")
 
 
 _GLOB_CHARS = frozenset("*?[")

@@ -1,14 +1,17 @@
 """Entry point of the ``shrm`` command.
 
-Each verb lives in a module ``cli/cmd_<verb>.py`` that defines ``HELP`` (one line),
-``add_arguments(parser)`` and ``run(args) -> int``; they are discovered here, so adding a
-verb touches no other file. A :class:`~shrmkit.brdf_io.errors.BadInputError` (or an
-``OSError`` from the file system) becomes one line on stderr and exit code 2.
+Each verb is two modules beside this file: ``options_<verb>.py`` defines ``HELP`` (one line)
+and ``add_arguments(parser)``, built from numpy-free modules (:mod:`~shrmkit.cli.options`,
+``brdf_io.names``, ``analysis.defaults``, ``render.defaults``); ``cmd_<verb>.py`` defines
+``run(args) -> int``, the verb's work. They are discovered here, so adding a verb touches no
+other file. A :class:`~shrmkit.brdf_io.errors.BadInputError` (or an ``OSError`` from the file
+system) becomes one line on stderr and exit code 2.
 
-The command line is lazy: a verb's module (and with it the analysis and render stack,
-VTK, matplotlib...) is imported only when that verb is parsed. ``shrm --help`` lists every
-verb with its ``HELP`` line read from the module's source, ``shrm --version`` imports no
-verb at all.
+The command line is lazy: a verb's parser module is imported only when that verb is parsed,
+and its ``cmd_`` module (and with it the analysis and render stack, VTK, matplotlib...) only
+when the arguments parsed and the verb runs. ``shrm --help`` lists every verb with its ``HELP``
+line read from the parser module's source, ``shrm --version`` imports no verb at all;
+``shrm VERB --help`` and a verb's usage errors import no numpy (issue 26, benchmarks/startup.py).
 
 Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
 SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
@@ -20,6 +23,7 @@ import argparse
 import ast
 import contextlib
 import difflib
+import functools
 import importlib
 import os
 import pkgutil
@@ -35,7 +39,7 @@ HERE = Path(__file__).parent
 
 
 def _verbs() -> list[str]:
-    """The verbs: one ``cmd_<verb>.py`` module each, beside this file."""
+    """The verbs: one ``cmd_<verb>.py`` module each (and its ``options_<verb>.py``), beside this file."""
     return sorted(
         name[len("cmd_"):]
         for _, name, _ in pkgutil.iter_modules([str(HERE)])
@@ -44,16 +48,27 @@ def _verbs() -> list[str]:
 
 
 def _module(verb: str):
+    """The verb's work, ``cmd_<verb>.py`` (imported when it runs)."""
     return importlib.import_module(f"shrmkit.cli.cmd_{verb}")
 
 
+def _options(verb: str):
+    """The verb's parser, ``options_<verb>.py`` (numpy-free)."""
+    return importlib.import_module(f"shrmkit.cli.options_{verb}")
+
+
+def _run(verb: str, args: argparse.Namespace) -> int:
+    """Run ``verb`` on its parsed ``args``: its ``cmd_`` module is imported now, not at parsing."""
+    return _module(verb).run(args)
+
+
 def _help(verb: str) -> str:
-    """The verb's ``HELP`` line, read from its source without importing it (imported only
-    where the source is not at hand or ``HELP`` is not a plain string literal)."""
+    """The verb's ``HELP`` line, read from its parser module's source without importing it
+    (imported only where the source is not at hand or ``HELP`` is not a plain string literal)."""
     try:
-        tree = ast.parse((HERE / f"cmd_{verb}.py").read_text(encoding="utf-8"))
+        tree = ast.parse((HERE / f"options_{verb}.py").read_text(encoding="utf-8"))
     except (OSError, SyntaxError, ValueError):
-        return _module(verb).HELP
+        return _options(verb).HELP
     for node in tree.body:
         if isinstance(node, ast.Assign):
             targets, value = node.targets, node.value
@@ -65,7 +80,7 @@ def _help(verb: str) -> str:
             if isinstance(value, ast.Constant) and isinstance(value.value, str):
                 return value.value
             break
-    return _module(verb).HELP
+    return _options(verb).HELP
 
 
 class _Parser(argparse.ArgumentParser):
@@ -95,20 +110,20 @@ class _Parser(argparse.ArgumentParser):
 
 
 class _VerbParser(_Parser):
-    """The parser of one verb: its module is imported and its arguments added on first use
-    (when the verb is parsed, or by :meth:`load`)."""
+    """The parser of one verb: its parser module is imported and its arguments added on first
+    use (when the verb is parsed, or by :meth:`load`); the verb's ``cmd_`` module is imported
+    only when it runs (``args._run``)."""
 
     verb: str | None = None
 
     def load(self) -> _VerbParser:
         if self.verb is not None:
-            module = _module(self.verb)
-            self.verb = None
-            module.add_arguments(self)
+            verb, self.verb = self.verb, None
+            _options(verb).add_arguments(self)
             self.add_argument("-q", "--quiet", action="store_true",
                               help="print nothing on stdout but what --json asks for (errors and warnings still "
                               "go to stderr; the exit status says how it went)")
-            self.set_defaults(_run=module.run)
+            self.set_defaults(_run=functools.partial(_run, verb))
         return self
 
     def parse_known_args(self, args=None, namespace=None):
@@ -133,7 +148,8 @@ def _parser(lazy: bool) -> argparse.ArgumentParser:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The whole parser, every verb's module imported and its arguments added."""
+    """The whole parser, every verb's parser module imported and its arguments added (the verbs'
+    ``cmd_`` modules are imported when ``args._run(args)`` runs one)."""
     return _parser(lazy=False)
 
 

@@ -49,7 +49,8 @@ def _loaded(modules: set[str], names: tuple[str, ...]) -> list[str]:
 
 
 def _verb_modules(modules: set[str]) -> list[str]:
-    return sorted(m for m in modules if m.startswith("shrmkit.cli.cmd_"))
+    """The verbs' modules imported: their parsers (``options_<verb>``) and their work (``cmd_<verb>``)."""
+    return sorted(m for m in modules if m.startswith(("shrmkit.cli.cmd_", "shrmkit.cli.options_")))
 
 
 def test_version_and_help(monkeypatch):
@@ -67,15 +68,15 @@ def test_version_and_help(monkeypatch):
 
 
 def test_verb_help_imports_that_verb_only():
-    """`shrm VERB --help` imports VERB's module only (not the other verbs'), prints VERB's own
-    options, and imports no VTK/matplotlib: `orders` not the render stack either."""
+    """`shrm VERB --help` imports VERB's parser module only (not its work, nor the other verbs'), prints
+    VERB's own options, and imports no VTK/matplotlib: `orders` not the render stack either."""
     code, out, modules = imports_of("orders", "--help")
     assert code == 0 and "--max-view-angle" in out and out.startswith("usage: shrm orders")
-    assert _verb_modules(modules) == ["shrmkit.cli.cmd_orders"]
+    assert _verb_modules(modules) == ["shrmkit.cli.options_orders"]
     assert not _loaded(modules, HEAVY + ("shrmkit.render", "shrmkit.cli.report")), _loaded(modules, HEAVY)
     code, out, modules = imports_of("render", "--help")
     assert code == 0 and "--turntable" in out and out.startswith("usage: shrm render")
-    assert _verb_modules(modules) == ["shrmkit.cli.cmd_render"]
+    assert _verb_modules(modules) == ["shrmkit.cli.options_render"]
     assert not _loaded(modules, HEAVY), _loaded(modules, HEAVY)
 
 

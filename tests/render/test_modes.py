@@ -21,6 +21,7 @@ from shrmkit.analysis.tolerance import DEFAULT_EPS
 from shrmkit.brdf_io.envmap import load_env
 from shrmkit.brdf_io.errors import BadInputError
 from shrmkit.cli.main import build_parser, main
+from shrmkit.render import defaults as render_defaults
 from shrmkit.render import modes
 from shrmkit.render.api import render_scene
 from shrmkit.render.camera import Camera
@@ -291,6 +292,8 @@ def _constant_build(env, brdf, mesh, *, eps, options) -> BuiltModel:
 def test_a_mode_added_to_the_table_reaches_the_renderer_and_the_cli(offscreen, monkeypatch) -> None:
     record = RenderMode("constant", "one colour everywhere", _constant_build, (np.ndarray,), _constant_shading)
     monkeypatch.setitem(RENDER_MODES, "constant", record)
+    # the CLI's parser reads the modes' names and help from render.defaults (numpy-free, issue 26)
+    monkeypatch.setitem(render_defaults.RENDER_MODE_HELP, "constant", record.help)
     assert "constant" in _action(_render_subparser(), "--mode").choices
     cam = Camera.looking_at(view=VIEW, projection="ortho")
     result = render_scene(SPHERE, ENV, BRDF, mode="constant", camera=cam, size=24, background="black", fps_frames=0)
