@@ -4,7 +4,7 @@ Public API (see README)::
 
     import shrmkit
     brdf = shrmkit.load_brdf("microfacet:sigma=0.2")   # or a path (.binary, .npz, .brdf, .json)
-    env = shrmkit.load_env("builtin:sky")              # or a path; lat-long, z-up
+    env = shrmkit.load_env("builtin:sky")              # or a path (lat-long files are read y-up)
     o = shrmkit.choose_orders(brdf, eps=0.03)          # o.F, o.P, o.eps, o.table
     m = shrmkit.prefilter(env, brdf, eps=0.03)         # an SHRM
     rgb = m.radiance(R, V)
