@@ -313,6 +313,29 @@ def _cells(u: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
     return i, t - i
 
 
+def _patch_columns(cols: list[np.ndarray]) -> np.ndarray:
+    """(n_cols, n_patches) contiguous float64: one row per per-patch quantity (structure of arrays:
+    a gather per quantity gives contiguous columns, ~6× faster arithmetic than strided (n, k) rows)."""
+    return np.ascontiguousarray(np.stack([np.ravel(c) for c in cols]), dtype=np.float64)
+
+
+def _gather(columns: np.ndarray, slice_size: int, cell: np.ndarray,
+            param: tuple[np.ndarray, np.ndarray, np.ndarray]) -> list[np.ndarray]:
+    """Each per-patch quantity at the patches ``cell`` (N,), linear between the parameter slices
+    ``lo`` and ``hi`` of ``param`` with weight ``w`` of ``hi``: (1 − w)·v_lo + w·v_hi."""
+    lo, hi, w = param
+    at_lo = lo * slice_size + cell
+    out = [np.take(row, at_lo) for row in columns]
+    if np.any(w > 0):
+        at_hi = hi * slice_size + cell
+        keep = 1.0 - w
+        for k, row in enumerate(columns):
+            value = out[k]
+            value *= keep
+            value += w * np.take(row, at_hi)
+    return out
+
+
 class _Bilinear:
     """Bilinear interpolation of vertex values on [0, 1]², linear between parameter slices.
 
@@ -323,9 +346,9 @@ class _Bilinear:
     def __init__(self, values: np.ndarray) -> None:
         T, H, W, C = values.shape
         self.shape = (H, W)
-        # one row per patch: the C values of its corners (0,0), (1,0), (0,1), (1,1) (x, y)
+        # per patch: the C values of its corners (0,0), (1,0), (0,1), (1,1) (x, y), corner-major
         corners = (values[:, :-1, :-1], values[:, :-1, 1:], values[:, 1:, :-1], values[:, 1:, 1:])
-        self._patches = np.concatenate(corners, axis=-1).reshape(-1, 4 * C)
+        self._columns = _patch_columns([corner[..., c] for corner in corners for c in range(C)])
         self._channels = C
         self._slice = (H - 1) * (W - 1)
 
@@ -333,17 +356,15 @@ class _Bilinear:
         H, W = self.shape
         i, fx = _cells(x, W)
         j, fy = _cells(y, H)
-        lo, hi, w = param
-        cell = j * (W - 1) + i
-        p = self._patches[lo * self._slice + cell]
-        if np.any(w > 0):
-            p *= (1.0 - w)[:, None]
-            p += w[:, None] * self._patches[hi * self._slice + cell]
         C = self._channels
-        fx = fx[:, None]
-        bottom = p[:, :C] + (p[:, C : 2 * C] - p[:, :C]) * fx
-        top = p[:, 2 * C : 3 * C] + (p[:, 3 * C :] - p[:, 2 * C : 3 * C]) * fx
-        return bottom + (top - bottom) * fy[:, None]
+        v = _gather(self._columns, self._slice, j * (W - 1) + i, param)
+        out = np.empty((x.shape[0], C))
+        for c in range(C):
+            v00, v10, v01, v11 = v[c], v[C + c], v[2 * C + c], v[3 * C + c]
+            bottom = v00 + (v10 - v00) * fx
+            top = v01 + (v11 - v01) * fx
+            out[:, c] = bottom + (top - bottom) * fy
+        return out
 
 
 class _InverseWarp:
@@ -375,7 +396,7 @@ class _InverseWarp:
         self.totals = total
         norm = (1.0 / np.where(total > 0, total, 1.0))[:, None, None]
         d, cond, rows, marg = density * norm, cond * norm, rows * norm[:, :, 0], marg * norm[:, :, 0]
-        # one row per patch (j, i): density at its 4 corners, the conditional CDF at its
+        # per patch (j, i), one row each: density at its 4 corners, the conditional CDF at its
         # left edge on both rows, the two row totals and the marginal CDF at its bottom row
         cols = [
             d[:, :-1, :-1], d[:, :-1, 1:], d[:, 1:, :-1], d[:, 1:, 1:],
@@ -384,7 +405,7 @@ class _InverseWarp:
             np.broadcast_to(rows[:, 1:, None], (T, H - 1, W - 1)),
             np.broadcast_to(marg[:, :-1, None], (T, H - 1, W - 1)),
         ]  # fmt: skip
-        self._patches = np.stack(cols, axis=-1).reshape(-1, len(cols))
+        self._columns = _patch_columns(cols)
         self._slice = (H - 1) * (W - 1)
 
     def __call__(
@@ -393,13 +414,7 @@ class _InverseWarp:
         H, W = self.shape
         i, fx = _cells(x, W)
         j, fy = _cells(y, H)
-        lo, hi, w = param
-        cell = j * (W - 1) + i
-        p = self._patches[lo * self._slice + cell]
-        if np.any(w > 0):
-            p *= (1.0 - w)[:, None]
-            p += w[:, None] * self._patches[hi * self._slice + cell]
-        v00, v10, v01, v11, c0, c1, r0, r1, m0 = p.T
+        v00, v10, v01, v11, c0, c1, r0, r1, m0 = _gather(self._columns, self._slice, j * (W - 1) + i, param)
         left = v00 + (v01 - v00) * fy  # density along the patch's left and right edges at y
         right = v10 + (v11 - v10) * fy
         partial = fx * (left + (right - left) * (0.5 * fx)) / (W - 1)
