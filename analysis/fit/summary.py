@@ -29,7 +29,9 @@ MIN_BAND_SAMPLES = 10
 
 @dataclass(frozen=True)
 class BandError:
-    """Errors of the samples whose view elevation θ_o lies in [lo_deg, hi_deg)."""
+    """Errors of the samples whose view elevation θ_o lies in [lo_deg, hi_deg): a record of one
+    band's numbers (``n`` samples, ``rel_rms`` and ``log_rms`` of ``metrics.py``), not an exception
+    (nothing raises it)."""
 
     lo_deg: float
     hi_deg: float

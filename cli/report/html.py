@@ -22,9 +22,13 @@ from .markdown import LIVE_VIEW_MARK, fmt, report_sections
 
 __all__ = ["markdown_to_html", "report_html", "index_html", "data_uri"]
 
+#: The pages' style. Nothing may be wider than the window (1280 px and narrower): the page never
+#: scrolls sideways. A table scrolls inside its own box (``.wide`` in the report, ``.scroll`` on the
+#: index), code in a table cell and long words in text break where they must, images and the live
+#: view shrink to the column (``tests/cli/report/test_html_layout.py`` checks these rules).
 _STYLE = """
 body{font-family:system-ui,-apple-system,Segoe UI,Helvetica,Arial,sans-serif;margin:1.5em auto;
-max-width:1100px;color:#222;padding:0 1em}
+max-width:1100px;color:#222;padding:0 1em;overflow-wrap:break-word}
 h1{font-size:1.6em;border-bottom:2px solid #444}h2{font-size:1.2em;margin-top:1.6em;border-bottom:1px solid #ccc}
 table{border-collapse:collapse;margin:.6em 0;font-size:.88em}th,td{border:1px solid #ccc;padding:.25em .55em;
 text-align:right}th{background:#f0f0f0}td:first-child,th:first-child{text-align:left}
@@ -32,6 +36,7 @@ img{max-width:100%;border:1px solid #ddd;margin:.3em 0}code{background:#f4f4f4;p
 pre{background:#f4f4f4;padding:.6em;overflow:auto}.failed{color:#b00;font-weight:bold}.ok{color:#070}
 th.sortable{cursor:pointer}th.sortable:after{content:" \\2195";color:#999}
 .live-view{margin:.6em 0}.live-view .shrm-view{max-width:480px}.live-view .shrm-view img{border:0;margin:0}
+body.index{max-width:none}.wide{overflow-x:auto;max-width:100%}td code{overflow-wrap:anywhere}figure{margin:.6em 0}
 .scroll{overflow-x:auto;max-width:100%}.scroll th{white-space:normal;min-width:4.5em;vertical-align:bottom}
 .scroll td:first-child,.scroll th:first-child{position:sticky;left:0;background:#fff;z-index:1}
 .scroll th:first-child{background:#f0f0f0}img.thumb{width:48px;height:48px;border:0;margin:0;vertical-align:middle}
@@ -101,9 +106,11 @@ def markdown_to_html(text: str, images: Mapping[str, str] | None = None, raw: Ma
             while i < len(lines) and lines[i].startswith("| "):
                 rows.append(_cells(lines[i]))
                 i += 1
-            out.append("<table><thead><tr>" + "".join(f"<th>{_inline(h)}</th>" for h in header) + "</tr></thead><tbody>"
+            # in a box of its own that scrolls sideways when the table is wider than the page
+            out.append('<div class="wide"><table><thead><tr>' + "".join(f"<th>{_inline(h)}</th>" for h in header)
+                       + "</tr></thead><tbody>"
                        + "".join("<tr>" + "".join(f"<td>{_inline(c)}</td>" for c in r) + "</tr>" for r in rows)
-                       + "</tbody></table>")
+                       + "</tbody></table></div>")
         elif line.startswith("- "):
             items = []
             while i < len(lines) and lines[i].startswith("- "):
@@ -128,9 +135,10 @@ def markdown_to_html(text: str, images: Mapping[str, str] | None = None, raw: Ma
     return "\n".join(out)
 
 
-def _page(title: str, body: str, script: str = "") -> str:
+def _page(title: str, body: str, script: str = "", body_class: str = "") -> str:
+    opening = f'<body class="{body_class}">' if body_class else "<body>"
     return (f"<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{html.escape(title)}</title>"
-            f"<style>{_STYLE}</style></head><body>\n{body}\n"
+            f"<style>{_STYLE}</style></head>{opening}\n{body}\n"
             + (f"<script>{script}</script>" if script else "") + "</body></html>\n")
 
 
@@ -203,7 +211,8 @@ def index_html(columns: Sequence[str], rows: Sequence[Mapping[str, Any]], title:
     table scrolling sideways under a fixed name column, and a thumbnail per material where
     ``thumbnails`` maps its name to an image path relative to the page (the report's preview).
     The answer comes first (:func:`index_columns`): at 1280 px the first screen held only the
-    orders and the first fit's columns, the SHRM's measured error and times 15 columns further."""
+    orders and the first fit's columns, the SHRM's measured error and times 15 columns further.
+    The page takes the window's whole width (the report pages keep a 1100 px column of text)."""
     thumbnails = thumbnails or {}
     columns = index_columns(columns)
     head = "".join(f'<th title="{html.escape(c)}">{html.escape(column_label(c))}</th>' for c in columns)
@@ -227,4 +236,4 @@ def index_html(columns: Sequence[str], rows: Sequence[Mapping[str, Any]], title:
              f'<tbody>{"".join(body_rows)}</tbody></table></div>')
     note_html = "".join(f"<p>{html.escape(n)}</p>" for n in notes)
     return _page(title, f"<h1>{html.escape(title)}</h1>{note_html}{table}<p>Click a column header to sort.</p>",
-                 _SORT_JS)
+                 _SORT_JS, body_class="index")
