@@ -395,7 +395,9 @@ def prefilter(
     Returns
     -------
     SHRM
-        float32 global SHRM with orders, achieved errors, timings in ``meta``.
+        float32 global SHRM with orders and achieved errors; what the run did and states (window,
+        lights, budgets, per-band statement, timings) in ``meta``, typed as ``info``
+        (:class:`~shrmkit.analysis.records.PrefilterInfo`). The stages are ``analysis._prefilter``'s.
 
     Raises
     ------

@@ -242,28 +242,22 @@ class RenderMode:
 # ------------------------------------------------------------------------------------------
 
 
-#: ``BuiltModel.info`` keys copied from ``SHRM.meta`` (``data_specs/shrm_file.md``): the window
-#: and the Gibbs undershoot before and after it.
-WINDOW_INFO_KEYS = ("window", "window_requested", "window_strength", "window_reason", "negative_before",
-                    "negative_after", "negative_fraction_after")
-
-
 def lights_info(shrm: SHRM, *, per_pixel: bool = True) -> tuple[dict[str, Any], str]:
     """``BuiltModel.info["lights"]`` and the ``lights:`` line of an SHRM's explicit lights: the
     lights (``SHRM.meta["lights"]``), their sample count and how they are shaded: per pixel by the
     BRDF's GLSL (``render.brdf_glsl``; a measured BRDF's table with its measured error), or
     (``per_pixel=False``, rsibr) reflected into the mode's maps."""
-    meta = shrm.meta
-    requested = meta.get("lights_requested", "none")
+    described = shrm.info.lights
+    requested = described.requested if described.requested is not None else "none"
     if not shrm.has_lights:
         return ({"requested": requested, "count": 0, "samples": 0, "lights": []},
                 f"lights: none ({'none requested' if requested == 'none' else 'no compact bright region'})")
     assert shrm.lights is not None  # has_lights
-    lights = list(meta.get("lights", []))
-    share = meta.get("lights_flux_share") or 0.0
+    lights = list(described.lights)
+    share = described.flux_share or 0.0
     info: dict[str, Any] = {
         "requested": requested, "count": len(lights), "samples": len(shrm.lights), "flux_share": share,
-        "left_in_map": meta.get("lights_left_in_map"), "lights": lights,
+        "left_in_map": described.left_in_map, "lights": lights,
     }
     line = f"lights: {len(lights)} ({len(shrm.lights)} samples, {100 * share:.3g} % of the map's flux), "
     if not per_pixel:
@@ -294,15 +288,17 @@ def _prefiltered(
     shrm = build(env, brdf, **_shrm_settings(eps, options))
     seconds = time.perf_counter() - t0
     light_info, light_line = lights_info(shrm, per_pixel=per_pixel_lights)
+    stated, window = shrm.info, shrm.info.window
     info = {"F": shrm.F, "P": shrm.P, "height": shrm.height, "width": shrm.width, "eps": eps,
             "achieved_eps": dict(shrm.eps), "azimuth_free": azimuth_free, "prefilter_seconds": seconds,
-            "criterion": shrm.meta["criterion"], "max_view_deg": shrm.meta["max_view_deg"],
-            "view_bands": shrm.meta["view_bands"], **{key: shrm.meta[key] for key in WINDOW_INFO_KEYS},
-            "pixel_errors": shrm.meta["pixel_errors"], "pixel_rule": shrm.meta["pixel_rule"], "lights": light_info}
-    meta = shrm.meta
-    used = meta["window"] if meta["window"] == "none" else f"{meta['window']} x{meta['window_strength']:.3g}"
+            "criterion": stated.criterion, "max_view_deg": stated.max_view_deg, "view_bands": shrm.meta["view_bands"],
+            "window": window.used, "window_requested": window.requested, "window_strength": window.strength,
+            "window_reason": window.reason, "negative_before": window.negative_before,
+            "negative_after": window.negative_after,
+            "negative_fraction_after": window.negative_fraction_after,
+            "pixel_errors": stated.pixel_errors, "pixel_rule": stated.pixel_rule, "lights": light_info}
     lines = (f"SHRM F={shrm.F} P={shrm.P} on {shrm.height}x{shrm.width} ({stated_line(shrm, eps)})",
-             f"window: {used} ({meta['window_reason']})", pixel_line(meta),
+             f"window: {window.describe()} ({window.reason})", pixel_line(shrm.meta),
              light_line, f"prefilter: {seconds:.3f} s")
     return BuiltModel(shrm, info, lines)
 
@@ -311,13 +307,13 @@ def stated_line(shrm: SHRM, eps: float) -> str:
     """The SHRM's stated error as a user reads it: the worst view band inside the rule's view limit,
     predicted and bound, as relative RMS radiance errors (the units of a measured error), beside
     the tolerance and its √ε — not ε_B, an energy fraction over all views that reads like failure."""
-    bands = [b for b in shrm.meta.get("view_bands") or [] if b.get("inside", True)]
+    bands = shrm.info.bands_inside()
     if not bands:
         return f"eps {eps:g}, predicted eps_B {shrm.eps['reflected']:.3g} over all views"
-    worst = max(bands, key=lambda b: b["bound_rel_rms"])
-    predicted = max(b["predicted_rel_rms"] for b in bands)
-    return (f"eps {eps:g}: worst view band to {shrm.meta['max_view_deg']:g} deg, relative RMS predicted "
-            f"{predicted:.3g}, bound {worst['bound_rel_rms']:.3g}; sqrt(eps) {eps ** 0.5:.3g}")
+    worst = max(band.bound_rel_rms for band in bands)
+    predicted = max(band.predicted_rel_rms for band in bands)
+    return (f"eps {eps:g}: worst view band to {shrm.info.max_view_deg:g} deg, relative RMS predicted "
+            f"{predicted:.3g}, bound {worst:.3g}; sqrt(eps) {eps ** 0.5:.3g}")
 
 
 def build_shrm(env: EnvironmentMap, brdf: BRDF, mesh: Mesh, *, eps: float, options: RenderOptions) -> BuiltModel:

@@ -44,8 +44,9 @@ from ...analysis.fit.representation import choose_representation
 from ...analysis.lighting import lighting_coefficients
 from ...analysis.orders import OrderChoice, choose_orders_many
 from ...analysis.reciprocity import RECIPROCITY_TOLERANCE
+from ...analysis.records import PrefilterInfo
 from ...analysis.reference import reference_radiance
-from ...analysis.shrm import prefilter
+from ...analysis.shrm import SHRM, prefilter
 from ...analysis.view_bands import DEFAULT_BAND_EDGES_DEG, worst_inside
 from ...brdf_io.brdf import BRDF
 from ...brdf_io.errors import BadInputError
@@ -281,84 +282,62 @@ def _environments(brdf: BRDF, options: ReportOptions, choices: dict[float, Order
             err = relative_rms(shrm.radiance(R, V), reference)  # clamped at 0, as rendered
             bands = beside_measured(band_error(shrm.radiance(sample.R, sample.V), reference_b, sample),
                                     shrm.meta["view_bands"])
-            t = shrm.meta["timings"]
-            n_out = shrm.height * shrm.width
-            row = {
-                "env": env.name,
-                "tolerance": tol,
-                "F_rho": shrm.meta["F_rho"],
-                "P_rho": shrm.meta["P_rho"],
-                "F_L": shrm.meta["F_L"],
-                "F_B": shrm.F,
-                "P_B": shrm.P,
-                "size": [shrm.height, shrm.width],
-                "eps_brdf": shrm.eps["brdf"],
-                "eps_lighting": shrm.eps["lighting"],
-                "eps_B": shrm.eps["reflected"],
-                "bound": shrm.eps["bound"],
-                "sqrt_eps_B": math.sqrt(max(shrm.eps["reflected"], 0.0)),
-                "predicted_rel_rms": worst_inside(bands, "predicted_rel_rms"),
-                "bound_rel_rms": worst_inside(bands, "bound_rel_rms"),
-                "measured_rel_rms": err,
-                "view_bands": bands,
-                "criterion": shrm.meta["criterion"],
-                "window": shrm.meta["window"],
-                "window_strength": shrm.meta["window_strength"],
-                "window_reason": shrm.meta["window_reason"],
-                "eps_B_unwindowed": shrm.meta["eps_reflected_unwindowed"],
-                "negative_before": shrm.meta["negative_before"],
-                "negative_after": shrm.meta["negative_after"],
-                "negative_fraction_after": shrm.meta["negative_fraction_after"],
-                "prefilter_seconds": t["total"],
-                "orders_seconds": t["orders"],
-                "lighting_seconds": t["lighting"],
-                "synthesis_seconds": t["synthesis"],
-                "window_seconds": t["window"],
-                "lights": len(shrm.meta["lights"]),
-                "capped": bool(shrm.meta["capped"]),
-                "capped_by": list(shrm.meta["capped_by"]),
-                "map_budget": shrm.meta["map_budget"],  # uninformative bounds said so (analysis/map_budget.py)
-                # per direction (analysis/pixels.py): the estimate, and where the pixel rule took F_B from
-                "pixel_median": shrm.meta["pixel_errors"]["median"],
-                "pixel_p90": shrm.meta["pixel_errors"]["p90"],
-                "pixel_F_from": (shrm.meta["pixel_rule"] or {}).get("F_from"),
-                "pixels_seconds": t.get("pixels", 0.0),
-                # the angular reference for the same S x 2S output, extrapolated from the pairs
-                "reference_map_seconds": ref_seconds / options.n_pairs * n_out,
-            }
+            row = _speed_row(env.name, tol, shrm, bands, err, ref_seconds / options.n_pairs)
             speed_rows.append(row)
             if tol == options.eps:
-                entry.update({
-                    "tolerance": tol,
-                    "F_L": row["F_L"],
-                    "lighting_capped": bool(shrm.meta["lighting_capped"]),
-                    "F_B": row["F_B"],
-                    "P_B": row["P_B"],
-                    "bound": row["bound"],
-                    "eps_B": row["eps_B"],
-                    "predicted_rel_rms": row["predicted_rel_rms"],
-                    "bound_rel_rms": row["bound_rel_rms"],
-                    "view_bands": bands,
-                    "measured_rel_rms": err,
-                    "window": row["window"],
-                    "window_strength": row["window_strength"],
-                    "negative_after": row["negative_after"],
-                    "lights": list(shrm.meta["lights"]),
-                    "lights_flux_share": shrm.meta["lights_flux_share"],
-                    "capped": row["capped"],
-                    "capped_by": row["capped_by"],
-                    "map_budget": row["map_budget"],
-                    "pixel_errors": shrm.meta["pixel_errors"],
-                    "pixel_rule": shrm.meta["pixel_rule"],
-                    "n_pairs": options.n_pairs,
-                    "max_view_deg": options.max_view_deg,
-                })
+                entry.update(_main_entry(row, shrm.info, options))
                 main_shrms.append((env, shrm))
             del shrm
         speed_rows[rows_before:] = sorted(speed_rows[rows_before:],
                                           key=lambda r: options.all_tolerances.index(r["tolerance"]))
         env_entries.append(entry)
     return env_entries, speed_rows, main_shrms
+
+
+def _speed_row(env_name: str, tol: float, shrm: SHRM, bands: list[dict], err: float,
+               ref_seconds_per_pair: float) -> dict[str, Any]:
+    """One row of the speed and accuracy table: the SHRM's orders, errors, window, budgets and stage
+    timings (``SHRM.info``), beside the measured error ``err`` and the per-band records ``bands``."""
+    info, eps = shrm.info, shrm.eps
+    w, t = info.window, info.timings
+    return {
+        "env": env_name, "tolerance": tol, "F_rho": info.F_rho, "P_rho": info.P_rho, "F_L": info.F_L,
+        "F_B": shrm.F, "P_B": shrm.P, "size": [shrm.height, shrm.width],
+        "eps_brdf": eps["brdf"], "eps_lighting": eps["lighting"], "eps_B": eps["reflected"], "bound": eps["bound"],
+        "sqrt_eps_B": math.sqrt(max(eps["reflected"], 0.0)),
+        "predicted_rel_rms": worst_inside(bands, "predicted_rel_rms"),
+        "bound_rel_rms": worst_inside(bands, "bound_rel_rms"),
+        "measured_rel_rms": err, "view_bands": bands, "criterion": info.criterion,
+        "window": w.used, "window_strength": w.strength, "window_reason": w.reason,
+        "eps_B_unwindowed": w.eps_reflected_unwindowed, "negative_before": w.negative_before,
+        "negative_after": w.negative_after, "negative_fraction_after": w.negative_fraction_after,
+        "prefilter_seconds": t.total, "orders_seconds": t.orders, "lighting_seconds": t.lighting,
+        "synthesis_seconds": t.synthesis, "window_seconds": t.window,
+        "lights": len(info.lights), "capped": bool(info.capped), "capped_by": list(info.capped_by),
+        "map_budget": info.map_budget,  # uninformative bounds said so (analysis/map_budget.py)
+        # per direction (analysis/pixels.py): the estimate, and where the pixel rule took F_B from
+        "pixel_median": info.pixel_errors["median"], "pixel_p90": info.pixel_errors["p90"],
+        "pixel_F_from": (info.pixel_rule or {}).get("F_from"),
+        "pixels_seconds": t.pixels if t.pixels is not None else 0.0,
+        # the angular reference for the same S x 2S output, extrapolated from the pairs
+        "reference_map_seconds": ref_seconds_per_pair * (shrm.height * shrm.width),
+    }
+
+
+def _main_entry(row: dict[str, Any], info: PrefilterInfo, options: ReportOptions) -> dict[str, Any]:
+    """The environment's entry at the main tolerance: ``row`` (:func:`_speed_row`) with the lights and
+    the per-direction statement."""
+    def pick(*keys: str) -> dict[str, Any]:
+        return {key: row[key] for key in keys}
+
+    return {
+        **pick("tolerance", "F_L"), "lighting_capped": bool(info.lighting_capped),
+        **pick("F_B", "P_B", "bound", "eps_B", "predicted_rel_rms", "bound_rel_rms", "view_bands",
+               "measured_rel_rms", "window", "window_strength", "negative_after"),
+        "lights": list(info.lights.lights), "lights_flux_share": info.lights.flux_share,
+        **pick("capped", "capped_by", "map_budget"), "pixel_errors": info.pixel_errors,
+        "pixel_rule": info.pixel_rule, "n_pairs": options.n_pairs, "max_view_deg": options.max_view_deg,
+    }
 
 
 # ----------------------------------------------------------------------------- warnings
