@@ -3,8 +3,7 @@
 The text is built from ``report.json`` alone; :func:`report_sections` yields the
 (title, Markdown body) pairs that ``html.py`` renders too, so both say the same.
 
-Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
-SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
+Reference: [RH02] (``data_specs/bibliography.md``).
 """
 
 from __future__ import annotations
