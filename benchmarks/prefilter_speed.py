@@ -41,7 +41,9 @@ the machine. Nothing is read back from saved output, nothing is hard-coded.
     measured table (its reparameterization included), both on one core; the default prefilter
     within 3× of ``criterion="rh02", window="none"`` for builtin:sky + microfacet σ = 0.1 at
     ε = 0.03 and for venice_sunset at 1024 rows at ε = 0.01 (interleaved repeats, fastest of
-    each). Each row: measured, target, met / NO, and for a NO what the run measured that
+    each); ``shrm report --quick`` <= 3 s CPU for an analytic spec and <= 5 s for the sharpest RGL
+    file, <= 512 MiB peak (fresh processes, fastest of the repeats, beside the CPU of the imports
+    alone). Each row: measured, target, met / NO, and for a NO what the run measured that
     explains it.
 
 Run:  .venv/bin/python benchmarks/prefilter_speed.py [--quick] [--only speed sweep targets]
@@ -52,7 +54,11 @@ from __future__ import annotations
 import argparse
 import cProfile
 import inspect
+import os
 import pstats
+import subprocess
+import sys
+import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -91,6 +97,12 @@ BRDFS = ["microfacet:sigma=0.1", "microfacet:sigma=0.3", "phong:s=32", "phong:s=
          "cook-torrance:alpha=0.1,dist=ggx", "cook-torrance:alpha=0.3,dist=ggx"]
 QUICK_TASKS = [("sky", "microfacet:sigma=0.1"), ("sky", "phong:s=512"), ("venice", "cook-torrance:alpha=0.1,dist=ggx")]
 ANALYTIC_TARGET_S, RGL_TARGET_S, RATIO_TARGET = 0.3, 3.0, 3.0
+#: `shrm report --quick`: CPU seconds (analytic spec, measured table) and peak memory (issue 22)
+QUICK_ANALYTIC_S, QUICK_TABLE_S, QUICK_PEAK_MB = 3.0, 5.0, 512
+#: what every report loads before it computes anything (the floor under its CPU time)
+REPORT_IMPORTS = ("import shrmkit.cli.cmd_report, shrmkit.cli.report.collect, shrmkit.cli.report.writer, "
+                  "shrmkit.render.vtk_renderer, matplotlib.figure, matplotlib.backends.backend_agg, "
+                  "vtkmodules.vtkRenderingOpenGL2")
 
 console = Console(width=200, highlight=False)
 HAS_LIGHTS = "lights" in inspect.signature(prefilter).parameters  # light extraction (issue 23) is in the library
@@ -538,6 +550,42 @@ def target_ratio(env: EnvironmentMap, label: str, spec: str, eps: float, repeats
     return Target(what, measured, f"<= {RATIO_TARGET:g}×", met, expl, key=f"prefilter ratio {label.split()[0]}")
 
 
+#: run in a child: its own peak RSS (VmHWM of its address space; rusage's ru_maxrss of a child also
+#: counts the parent's size at fork) on stderr at exit
+_PEAK_AT_EXIT = ("import atexit, sys; atexit.register(lambda: sys.stderr.write(next(line for line in "
+                 "open('/proc/self/status') if line.startswith('VmHWM'))))")
+
+
+def _child_cost(code: str, *args: str) -> tuple[float, float]:
+    """(CPU seconds, peak RSS MiB) of ``python -c CODE ARGS`` in a fresh process (os.wait4)."""
+    proc = subprocess.Popen([sys.executable, "-c", f"{_PEAK_AT_EXIT}\n{code}", *args], stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, cwd=tempfile.gettempdir(), text=True)
+    assert proc.stderr is not None
+    err = proc.stderr.read()
+    _, status, usage = os.wait4(proc.pid, 0)
+    peak = [line.split()[1] for line in err.splitlines() if line.startswith("VmHWM")]
+    if status != 0 or not peak:
+        raise RuntimeError(f"{code} {' '.join(args)} failed with status {status}: {err[-500:]}")
+    return usage.ru_utime + usage.ru_stime, int(peak[-1]) / 1024.0
+
+
+def target_quick_report(spec: str, label: str, limit_s: float, repeats: int) -> Target:
+    """``shrm report --quick SPEC`` in a fresh process: min CPU (user + sys) and peak RSS over
+    ``repeats`` runs, beside the CPU of the imports alone (what no report can go below)."""
+    costs = []
+    for _ in range(repeats):
+        with tempfile.TemporaryDirectory() as out:
+            costs.append(_child_cost("from shrmkit.cli.main import main; sys.exit(main(sys.argv[1:]))", "report",
+                                     "--quick", spec, "--out", out, "-q", "--no-progress"))
+    cpu, peak = min(c[0] for c in costs), min(c[1] for c in costs)
+    imports = min(_child_cost(REPORT_IMPORTS)[0] for _ in range(repeats))
+    met = cpu <= limit_s and peak <= QUICK_PEAK_MB
+    return Target(f"shrm report --quick, {label}", f"{fmt_time(cpu)} CPU, {peak:.0f} MiB peak",
+                  f"<= {limit_s:g} s, <= {QUICK_PEAK_MB} MiB", met,
+                  f"of which the imports alone (report modules, matplotlib, VTK): {fmt_time(imports)} CPU",
+                  key=f"quick report {label.split()[0]}")
+
+
 def targets_table(args: argparse.Namespace) -> list[Target]:
     repeats = 2 if args.quick else 3
     rows: list[Target] = []
@@ -564,6 +612,13 @@ def targets_table(args: argparse.Namespace) -> list[Target]:
     else:
         rows.append(Target("default prefilter / rh02, venice_sunset", "not measured", f"<= {RATIO_TARGET:g}×", False,
                            f"{VENICE} not found"))
+    rows.append(target_quick_report("microfacet:sigma=0.1", "analytic microfacet:sigma=0.1", QUICK_ANALYTIC_S,
+                                    repeats))
+    console.print("  done quick report (analytic)", style="dim")
+    if files:
+        sharpest = next((f for f in files if f.name == SHARPEST_RGL), files[0])
+        rows.append(target_quick_report(str(sharpest), f"RGL table {sharpest.name}", QUICK_TABLE_S, repeats))
+        console.print("  done quick report (RGL)", style="dim")
     table = Table(title="(c) targets of issue 22 (measured in this run)", box=None, title_justify="left")
     for col in ("what", "measured", "target", "met", "why not (measured)"):
         table.add_column(col, justify="left", overflow="fold")
