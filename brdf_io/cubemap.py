@@ -1,49 +1,11 @@
 """Cube maps: the one table of the six faces, their texel geometry, and resampling to lat-long.
 
-The face table (OpenGL 4.6 specification §8.13, Table 8.19; Direct3D uses the same
-texel → direction table): six square faces in the order px, nx, py, ny, pz, nz
-(+X, −X, +Y, −Y, +Z, −Z). On a face of N texels the texel in row r, column c has face
-coordinates u = 2(c + ½)/N − 1 (columns, rightwards) and v = 2(r + ½)/N − 1 (rows,
-downwards) and looks along ``major + u·u_axis + v·v_axis`` (:data:`CUBE_FACE_AXES`):
-
-====  =======  ==================  ===============
-face  major    u_axis (columns →)  v_axis (rows ↓)
-====  =======  ==================  ===============
-px    +x       −z                  −y
-nx    −x       +z                  −y
-py    +y       +x                  +z
-ny    −y       +x                  −z
-pz    +z       +x                  −y
-nz    −z       −x                  −y
-====  =======  ==================  ===============
-
-The table is written in the *cube frame* (x, y, z) of whoever samples the cube. Two cube
-frames are in use in shrmkit, and both use this one table:
-
-1. **Cube-map files** (a folder of six faces, read by
-   :func:`~shrmkit.brdf_io.envmap.load_env`; Debevec's 1999 cubes, data_specs/environment_maps.md
-   §4): the cube frame (x_c, y_c, z_c) is y-up, left-handed as seen from inside, and maps
-   into the project frame (DESIGN §2, right-handed, z up) by :data:`CUBE_TO_PROJECT`:
-   X = z_c, Y = −x_c, Z = y_c. So face py is the zenith, face pz looks along project +X,
-   face px along project −Y.
-2. **SHRM cube maps** (:func:`shrmkit.analysis.shrm.cube_directions`,
-   data_specs/shrm_file.md): the cube frame *is* the project frame (the identity map),
-   so that a GLSL ``samplerCube`` looked up with a z-up project-frame direction finds the
-   right texel. There face pz (``+z``) is the zenith and face px (``+x``) looks along
-   project +X.
-
-The two are different orientations of the same table: six faces written from an SHRM
-cube and read back as a cube-map folder come out re-oriented by :data:`CUBE_TO_PROJECT`.
-
-Public objects: :data:`CUBE_FACES`, :data:`CUBE_FACE_AXES`, :data:`CUBE_TO_PROJECT`,
-:func:`face_coordinates`, :func:`cube_texel_directions`, :func:`cube_map_directions`,
-:func:`cube_texel_solid_angles`, :func:`cube_texel_index`, :func:`cube_to_latlong`.
-
-References
-----------
-- OpenGL 4.6 (Core Profile) specification, §8.13, Table 8.19 (cube-map face selection
-  and (s, t) per face).
-- Microsoft, "Cubic Environment Mapping (Direct3D 9)".
+Six square faces px, nx, py, ny, pz, nz (:data:`CUBE_FACES`); a texel at face coordinates (u, v)
+looks along ``major + u·u_axis + v·v_axis`` (:data:`CUBE_FACE_AXES`, the table of [GL46] §8.13,
+Table 8.19, which Direct3D shares [D3D9Cube]). The table is written in the *cube frame* of whoever
+samples the cube: cube-map files are y-up (:data:`CUBE_TO_PROJECT` turns them into the project
+frame), an SHRM's cube is in the project frame itself. :func:`cube_to_latlong` resamples a cube
+to lat-long (``data_specs/environment_maps.md`` §4).
 """
 
 from __future__ import annotations
@@ -66,10 +28,23 @@ __all__ = [
 
 CUBE_FACES = ("px", "nx", "py", "ny", "pz", "nz")
 
-# face -> (major axis, u axis (texel columns, rightwards), v axis (texel rows, downwards)),
-# in the cube frame; OpenGL Table 8.19 (the Direct3D layout is the same):
-#   +X: sc = -rz, tc = -ry    -X: sc = +rz, tc = -ry    +Y: sc = +rx, tc = +rz
-#   -Y: sc = +rx, tc = -rz    +Z: sc = +rx, tc = -ry    -Z: sc = -rx, tc = -ry
+#: face -> (major axis, u axis (texel columns, rightwards), v axis (texel rows, downwards)),
+#: in the cube frame; [GL46] Table 8.19 (the Direct3D layout is the same, [D3D9Cube]):
+#:   +X: sc = -rz, tc = -ry    -X: sc = +rz, tc = -ry    +Y: sc = +rx, tc = +rz
+#:   -Y: sc = +rx, tc = -rz    +Z: sc = +rx, tc = -ry    -Z: sc = -rx, tc = -ry
+#: On a face of N texels the texel in row r, column c has face coordinates u = 2(c + ½)/N − 1
+#: (columns, rightwards) and v = 2(r + ½)/N − 1 (rows, downwards) (:func:`face_coordinates`):
+#:
+#: ====  =======  ==================  ===============
+#: face  major    u_axis (columns →)  v_axis (rows ↓)
+#: ====  =======  ==================  ===============
+#: px    +x       −z                  −y
+#: nx    −x       +z                  −y
+#: py    +y       +x                  +z
+#: ny    −y       +x                  −z
+#: pz    +z       +x                  −y
+#: nz    −z       −x                  −y
+#: ====  =======  ==================  ===============
 CUBE_FACE_AXES: dict[str, tuple[tuple[int, int, int], tuple[int, int, int], tuple[int, int, int]]] = {
     "px": ((1, 0, 0), (0, 0, -1), (0, -1, 0)),
     "nx": ((-1, 0, 0), (0, 0, 1), (0, -1, 0)),
@@ -84,11 +59,23 @@ _AXES = np.array([CUBE_FACE_AXES[f] for f in CUBE_FACES])  # (6, 3, 3): major, u
 _COMPONENT = np.abs(_AXES).argmax(axis=-1)  # (6, 3)
 _SIGN = _AXES.sum(axis=-1).astype(np.float64)  # (6, 3), ±1
 
-# Cube-map files: project = CUBE_TO_PROJECT @ cube, X = z_c, Y = -x_c, Z = y_c. The file
-# cube frame is left-handed as seen from inside, so the map is a reflection (det = -1); it
-# keeps the faces unmirrored: looking along cube +z_c with y_c up, +x_c is on the right,
-# and looking along project +X with Z up, -Y is on the right. Chosen so that Debevec's
-# 1999 Grace cube and the shared Grace lat-long file agree (data_specs/environment_maps.md).
+#: Cube-map files: project = CUBE_TO_PROJECT @ cube, X = z_c, Y = -x_c, Z = y_c. The file
+#: cube frame is left-handed as seen from inside, so the map is a reflection (det = -1); it
+#: keeps the faces unmirrored: looking along cube +z_c with y_c up, +x_c is on the right,
+#: and looking along project +X with Z up, -Y is on the right. Chosen so that Debevec's
+#: 1999 Grace cube [DebevecProbes] and the shared Grace lat-long file agree
+#: (data_specs/environment_maps.md §4). Face py is then the zenith, face pz looks along
+#: project +X, face px along project −Y.
+#:
+#: Two cube frames are in use in shrmkit, and both use the one table :data:`CUBE_FACE_AXES`:
+#: (1) cube-map files (a folder of six faces, read by :func:`~shrmkit.brdf_io.envmap.load_env`),
+#: in the y-up frame this matrix maps into the project frame (DESIGN §2, right-handed, z up);
+#: (2) SHRM cube maps (:func:`shrmkit.analysis.shrm.cube_directions`, data_specs/shrm_file.md),
+#: whose cube frame *is* the project frame (the identity map), so that a GLSL ``samplerCube``
+#: looked up with a z-up project-frame direction finds the right texel: there face pz (+z) is
+#: the zenith and face px (+x) looks along project +X. They are different orientations of the
+#: same table: six faces written from an SHRM cube and read back as a cube-map folder come out
+#: re-oriented by this matrix.
 CUBE_TO_PROJECT = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 
 

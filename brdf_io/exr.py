@@ -1,43 +1,11 @@
-"""OpenEXR reader and writer (through the ``OpenEXR`` 3.x Python bindings).
+"""OpenEXR reader and writer (through the ``OpenEXR`` 3.x Python bindings) [OpenEXR].
 
-:func:`read_exr_image` reads the colour of one part and one layer of a scanline or tiled
-OpenEXR file (single- or multi-part, any resolution level mode: level 0 is read) and
-returns an :class:`ExrImage`: ``(H, W, 3)`` float32 linear RGB placed on the display
-window, the data-window pixels, the windows, the standard ``envmap`` attribute and notes.
-:func:`read_exr` is the thin wrapper that returns the display-window pixels only.
-:func:`write_exr` writes a ZIP scanline file atomically. The rules are written down in
-data_specs/environment_maps.md §2.1:
-
-- **Part** (multi-part files): ``part=`` (name, or index) picks one; otherwise the one part
-  that holds colour channels (R, G, B or Y, plain or in a layer) is read; several such
-  parts are refused, naming them. Deep parts (``deepscanline``/``deeptile``) are refused.
-- **Layer** (channel-name prefix ``layer.R``): ``layer=`` picks one (``""``: the
-  unprefixed channels); otherwise the plain (unprefixed) R, G, B are read when present, else
-  the one layer with colour; several such layers are refused, naming them.
-- **Colour**: R, G, B (any pixel type; A and other channels ignored); or luminance/chroma
-  Y, RY, BY (OpenEXR's RGBA-YCA encoding, ImfRgbaYca.cpp), converted with the file's
-  ``chromaticities`` (Rec. 709 / D65 when absent), chroma subsampled 2 × 2 reconstructed
-  with OpenEXR's own 27-tap interpolation filter; or Y alone, read as grey.
-- **Windows**: the data window is placed inside the display window (pixels outside the
-  data window are 0, as OpenEXR defines; data outside the display window is cropped);
-  negative origins are allowed.
-
-Every problem raises :class:`BadInputError` naming the file; the OpenEXR C library's own
-messages (written straight to file descriptor 2, sometimes by the hundred for a truncated
-file) are captured and only their first line is kept in the error. Before any pixel is
-read the file must be a regular file (:func:`~shrmkit.brdf_io.limits.regular_file`) with
-the OpenEXR magic number, and every declared size is checked from the header alone
-(:func:`~shrmkit.brdf_io.limits.check_pixels`, :func:`~shrmkit.brdf_io.limits.check_elements`,
-and a lower bound on the bytes its chunk table and chunks need).
-
-References
-----------
-- OpenEXR file layout, https://openexr.com/en/latest/OpenEXRFileLayout.html
-- OpenEXR "Technical Introduction": data and display windows, multi-part and deep files,
-  luminance/chroma images, https://openexr.com/en/latest/TechnicalIntroduction.html
-- OpenEXR source, ``src/lib/OpenEXR/ImfRgbaYca.cpp`` (computeYw, YCAtoRGBA,
-  reconstructChromaHoriz/Vert), ``ImfRgbaFile.cpp`` (edge padding of the chroma filter),
-  ``ImfEnvmap.h`` (the ``envmap`` attribute).
+:func:`read_exr_image` reads the colour of one part and one layer of a scanline or tiled OpenEXR
+file (single- or multi-part, any resolution level mode: level 0 is read) as an :class:`ExrImage`
+on the display window, refusing what it cannot read with one :class:`BadInputError` line naming
+the file; :func:`read_exr` returns the pixels only; :func:`write_exr` writes a ZIP scanline file
+atomically. The rules (part, layer, colour, windows, size checks before any pixel is read):
+``data_specs/environment_maps.md`` §2.1.
 """
 
 from __future__ import annotations
@@ -499,8 +467,32 @@ def read_exr_image(
     part: int | str | None = None,
     check_windows: Callable[[tuple[int, int], tuple[int, int], str | None], None] | None = None,
 ) -> ExrImage:
-    """Read the colour of one part and layer of an OpenEXR file (the rules: module docstring
-    and data_specs/environment_maps.md §2.1).
+    """Read the colour of one part and layer of an OpenEXR file (the rules in full:
+    data_specs/environment_maps.md §2.1).
+
+    - **Part** (multi-part files): ``part=`` (name, or index) picks one; otherwise the one part
+      that holds colour channels (R, G, B or Y, plain or in a layer) is read; several such
+      parts are refused, naming them. Deep parts (``deepscanline``/``deeptile``) are refused.
+    - **Layer** (channel-name prefix ``layer.R``): ``layer=`` picks one (``""``: the
+      unprefixed channels); otherwise the plain (unprefixed) R, G, B are read when present, else
+      the one layer with colour; several such layers are refused, naming them.
+    - **Colour**: R, G, B (any pixel type; A and other channels ignored); or luminance/chroma
+      Y, RY, BY (OpenEXR's RGBA-YCA encoding, [OpenEXR] ``ImfRgbaYca.cpp``: computeYw, YCAtoRGBA,
+      reconstructChromaHoriz/Vert; ``ImfRgbaFile.cpp``: edge padding of the chroma filter),
+      converted with the file's ``chromaticities`` (Rec. 709 / D65 when absent), chroma
+      subsampled 2 × 2 reconstructed with OpenEXR's own 27-tap interpolation filter; or Y alone,
+      read as grey.
+    - **Windows**: the data window is placed inside the display window (pixels outside the
+      data window are 0, as OpenEXR defines; data outside the display window is cropped);
+      negative origins are allowed. The ``envmap`` attribute is read as ``ImfEnvmap.h`` defines it.
+
+    Before any pixel is read the file must be a regular file
+    (:func:`~shrmkit.brdf_io.limits.regular_file`) with the OpenEXR magic number, and every
+    declared size is checked from the header alone (:func:`~shrmkit.brdf_io.limits.check_pixels`,
+    :func:`~shrmkit.brdf_io.limits.check_elements`, and a lower bound on the bytes its chunk table
+    and chunks need). The OpenEXR C library's own messages (written straight to file descriptor 2,
+    sometimes by the hundred for a truncated file) are captured and only their first line is
+    kept in the error.
 
     Parameters
     ----------

@@ -1,50 +1,11 @@
-"""Gonioreflectometer CSV files (NIST-style Mueller-matrix BRDF tables), input.
+"""Gonioreflectometer CSV files (NIST-style Mueller-matrix BRDF tables, [Germer17]), input.
 
-Format (``data_specs/gonio_csv.md``): comma-separated text, one header line naming the
-columns, then one measurement per line. The columns this reader uses, found by name (case and
-surrounding spaces ignored; any other columns, such as the 15 normalized Mueller elements
-``f_r12/f_r11`` … ``f_r44/f_r11``, are ignored):
-
-==========  ==================================  ==============================
-column      meaning                             unit
-==========  ==================================  ==============================
-``lambda``  wavelength                          µm
-``thetai``  incidence polar angle θ_i (signed)  degrees
-``phi``     incidence azimuth φ_i (or ``phii``)  degrees
-``thetar``  scattering polar angle θ_r          degrees
-``phir``    scattering azimuth φ_r              degrees
-``f_r11``   the unpolarised BRDF (Mueller m11)  1/sr
-==========  ==================================  ==============================
-
-Directions: ω = (sin θ cos φ, sin θ sin φ, cos θ) for both, pointing away from the surface
-(L toward the source, V toward the detector), evaluated with the *signed* θ as written. A
-negative θ_i therefore means the source at |θ_i| on the opposite azimuth, φ_i + 180° — the
-convention of NIST's regular PTFE set, which writes θ_i = 0, −15, …, −75° with φ_i = 0: its
-forward-scattering peaks then sit at the mirror direction (θ_r ≈ |θ_i|, φ_r ≈ 0), and no
-detector position coincides with the source (closest 5.7°), whereas reading |θ_i| at φ_i = 0
-would put the detector on the source in some rows. The random set (positive θ_i, arbitrary
-φ_i) reads with the same formula (closest approach to the source 5.0°). |θ| <= 90° is
-required; negative θ_r is read with the same rule.
-
-Wavelength: a file may hold several (the regular PTFE set: 351, 532, 633, 1064 nm). With one
-wavelength it is used; with several, ``wavelength_nm`` must choose one (rows within 0.5 nm);
-otherwise :class:`BadInputError` lists them. The BRDF is monochrome, so ``rgb`` repeats
-f_r11; ``spectral`` is f_r11 as (n, 1) and ``wavelengths`` the chosen one (nm).
-
-Negative f_r11 (detector noise on dark samples) are clamped to 0 and counted in
-``n_clipped`` (3 per value, the RGB components); a row with another number of fields than
-the header (a truncated file), or NaN, infinite or non-numeric entries in a used column, are
-errors naming the line.
-
-Public objects: :func:`read_gonio_csv`, :func:`gonio_wavelengths`, :data:`GONIO_COLUMNS`.
-
-References
-----------
-T. A. Germer, "Full four-dimensional and reciprocal Mueller matrix bidirectional reflectance
-distribution function of sintered polytetrafluoroethylene", Applied Optics 56(33), 9333–9340,
-2017, doi:10.1364/AO.56.009333 (the PTFE data, NIST).
-F. E. Nicodemus et al., "Geometrical Considerations and Nomenclature for Reflectance", NBS
-Monograph 160, 1977 (BRDF definition, f_r).
+:func:`read_gonio_csv` reads the unpolarised BRDF f_r11 ([Nic77]; the other Mueller elements
+are ignored) of one wavelength (:func:`gonio_wavelengths` lists them) as a :class:`ScatteredBRDF`,
+its columns found by name (:data:`GONIO_COLUMNS`). Both directions point away from the surface,
+evaluated with the *signed* θ as written: a negative θ_i is the source at |θ_i| on the opposite
+azimuth (NIST's convention, checked on the data). Columns, conventions, wavelengths and errors:
+``data_specs/gonio_csv.md``.
 """
 
 from __future__ import annotations
@@ -194,7 +155,8 @@ def read_gonio_csv(path: str | os.PathLike[str], wavelength_nm: float | str | No
     -------
     ScatteredBRDF
         ``L`` (n, 3) toward the source, ``V`` (n, 3) toward the detector (unit vectors,
-        normal +z, signed-θ convention of the module docstring), ``rgb`` (n, 3) f_r11 in 1/sr
+        normal +z, ω = (sin θ cos φ, sin θ sin φ, cos θ) with θ as
+        signed in the file: ``data_specs/gonio_csv.md``), ``rgb`` (n, 3) f_r11 in 1/sr
         repeated (negative values clamped to 0, ``n_clipped`` = 3 × their number),
         ``spectral`` (n, 1) f_r11, ``wavelengths`` [λ in nm], ``name`` ``<stem>@<λ>nm``.
 

@@ -1,81 +1,12 @@
-"""Koenderink's reciprocal isotropic Zernike-basis BRDF representation (the model; its fit is
-``analysis/fit/zernike.py``).
+"""Koenderink's reciprocal isotropic Zernike-basis BRDF representation [Koe96] (the model; its fit
+is ``analysis/fit/zernike.py``).
 
-Koenderink, van Doorn & Stavridi (1996) expand a BRDF over the product of the incident and
-the exit hemisphere in products of Zernike polynomials, after mapping each hemisphere onto
-the unit disc; CURET published its BRDF fits in this basis (Dana et al. 1999, with 5 and 55
-coefficients) and [RH02] (Fig. 8) analysed those fits.
-
-Hemisphere → disc
------------------
-Each direction (θ, φ) of the upper hemisphere goes to the point (ρ, φ) of the unit disc with
-
-    ρ = √2 sin(θ/2) = √(1 − cos θ),
-
-the area-preserving (Lambert azimuthal equal-area) map Koenderink et al. use: ρ dρ dφ =
-½ sin θ dθ dφ, so the hemisphere (solid angle 2π) covers the disc (area π) evenly, the
-horizon θ = 90° is the rim ρ = 1, and orthogonality on the disc is orthogonality on the
-hemisphere.
-
-Zernike polynomials
--------------------
-Z_n^m(ρ, φ) = N_n^m R_n^|m|(ρ) cos(mφ) (m >= 0) or N_n^m R_n^|m|(ρ) sin(|m|φ) (m < 0), with
-0 <= |m| <= n, n − |m| even, the radial polynomial (Born & Wolf, *Principles of Optics*,
-App. VII)
-
-    R_n^m(ρ) = Σ_{k=0}^{(n−m)/2} (−1)^k (n−k)! / (k! ((n+m)/2 − k)! ((n−m)/2 − k)!) ρ^{n−2k}
-             = (−1)^{(n−m)/2} ρ^m P_{(n−m)/2}^{(m,0)}(1 − 2ρ²)        (Jacobi form, used here),
-
-and N_n^m = √(2(n+1)/π) (m ≠ 0), √((n+1)/π) (m = 0), which makes them orthonormal on the unit
-disc: ∫₀¹∫₀^{2π} Z_n^m Z_n'^m' ρ dρ dφ = δ_nn' δ_mm' (:func:`zernike`).
-
-The reciprocal isotropic basis
-------------------------------
-A BRDF that depends on the azimuths only through φ_i − φ_o (isotropy) and is even in it
-(bilateral symmetry, which every isotropic BRDF of this toolkit has: [RH02] eq. 13 uses
-cos(qφ') only) has, in the products Z_n^m(ρ_i, φ_i) Z_n'^m'(ρ_o, φ_o), only the combinations
-m' = m with Z_n^m Z_n'^m + Z_n^{−m} Z_n'^{−m} ∝ R_n^m(ρ_i) R_n'^m(ρ_o) cos(m(φ_i − φ_o)).
-Reciprocity, ρ(L, V) = ρ(V, L), pairs (n, n') with (n', n). The basis functions are, for
-m >= 0 and m <= n <= n' <= n_max with n ≡ n' ≡ m (mod 2),
-
-    B_{m,n,n'}(L, V) = c N_n^m N_n'^m [R_n^m(ρ_i) R_n'^m(ρ_o) + R_n'^m(ρ_i) R_n^m(ρ_o)] / (1 + δ_nn')
-                       · cos(m(φ_i − φ_o)),
-
-with c chosen so that they are orthonormal over the product of hemispheres:
-∫∫ B_a B_b dω_i dω_o = δ_ab (c = 1 / √(4 (1 + [m > 0]) (1 + [n ≠ n']))); ρ = Σ_a c_a B_a.
-They are zero when either direction is below the surface. Reciprocity and isotropy hold
-exactly, term by term, whatever the coefficients. The sin(m(φ_i − φ_o)) combinations (odd in
-φ_i − φ_o, allowed by isotropy alone and made reciprocal by antisymmetry in (n, n')) are left
-out; with them order 8 would have 73 terms instead of CURET's 55.
-
-Terms per order (``n_max`` = largest Zernike degree of either factor): with
-k_m = ⌊(n_max − m)/2⌋ + 1 radial degrees for each m, the count is Σ_{m=0}^{n_max} k_m(k_m + 1)/2:
-
-=======  ===  ===  ===  ===  ===  ===  ===  ===  ===  ===  ===
-n_max     0    1    2    3    4    5    6    7    8    9   10
-terms     1    2    5    8   14   20   30   40   55   70   91
-=======  ===  ===  ===  ===  ===  ===  ===  ===  ===  ===  ===
-
-so CURET's 5- and 55-coefficient fits are ``n_max`` = 2 and 8 (:data:`TERMS_PER_ORDER`,
-:func:`basis_count`, :func:`order_for_count`). The terms are ordered by max(n, n'), so the
-basis of order N is the first ``basis_count(N)`` terms of any higher order.
-
-Spec string
------------
-``zernike:n_max=N,c0=r/g/b,c1=r/g/b,...`` with exactly ``basis_count(N)`` coefficients ``c<a>``
-(1/sr, each a number or r/g/b triple, |c| <= :data:`MAX_ZERNIKE_COEFF`) in the order of
-:func:`basis_terms` (``data_specs/spec_strings.md``); :meth:`ZernikeBRDF.to_spec` writes it at
-full precision, so a fit document's ``model_spec`` loads back with ``load_brdf``.
-
-References
-----------
-J. J. Koenderink, A. J. van Doorn, M. Stavridi, "Bidirectional reflection distribution
-function expressed in terms of surface scattering modes", ECCV 1996, LNCS 1065, pp. 28–39,
-doi:10.1007/3-540-61123-1_125.
-K. J. Dana, B. van Ginneken, S. K. Nayar, J. J. Koenderink, "Reflectance and texture of
-real-world surfaces", ACM Trans. Graph. 18(1), 1999, doi:10.1145/300776.300778 (CURET).
-M. Born, E. Wolf, *Principles of Optics*, Appendix VII (Zernike circle polynomials).
-[RH02], Fig. 8.
+A BRDF is expanded over the product of the incident and the exit hemisphere, each mapped onto the
+unit disc (:func:`disc_radius`), in products of Zernike polynomials (:func:`zernike`, [BornWolf99])
+combined into the reciprocal isotropic basis (:func:`zernike_basis`, :func:`basis_terms`);
+:class:`ZernikeBRDF` is ρ = Σ_a c_a B_a, written as a spec string by :meth:`ZernikeBRDF.to_spec`.
+CURET published its BRDF fits in this basis ([CURET99], 5 and 55 coefficients: orders 2 and 8,
+:func:`basis_count`) and [RH02] Fig. 8 analysed those fits.
 """
 
 from __future__ import annotations
@@ -112,7 +43,18 @@ MAX_ZERNIKE_COEFF = 1e9
 
 
 def basis_count(n_max: int) -> int:
-    """Number of reciprocal isotropic basis functions of order ``n_max`` (module table).
+    """Number of reciprocal isotropic basis functions of order ``n_max``.
+
+    With k_m = ⌊(n_max − m)/2⌋ + 1 radial degrees for each m, the count is
+    Σ_{m=0}^{n_max} k_m(k_m + 1)/2:
+
+    =======  ===  ===  ===  ===  ===  ===  ===  ===  ===  ===  ===
+    n_max     0    1    2    3    4    5    6    7    8    9   10
+    terms     1    2    5    8   14   20   30   40   55   70   91
+    =======  ===  ===  ===  ===  ===  ===  ===  ===  ===  ===  ===
+
+    so CURET's 5- and 55-coefficient fits [CURET99] are ``n_max`` = 2 and 8
+    (:data:`TERMS_PER_ORDER`, :func:`order_for_count`).
 
     Parameters
     ----------
@@ -163,7 +105,8 @@ def order_for_count(n_coeffs: int) -> int:
 def basis_terms(n_max: int) -> tuple[tuple[int, int, int], ...]:
     """The (m, n, n') of each basis function of order ``n_max``, in coefficient order.
 
-    Ordered by max(n, n'), then m, then n: the terms of a lower order come first.
+    Ordered by max(n, n'), then m, then n: the terms of a lower order come first, so the basis of
+    order N is the first ``basis_count(N)`` terms of any higher order.
 
     Returns
     -------
@@ -181,6 +124,11 @@ def basis_terms(n_max: int) -> tuple[tuple[int, int, int], ...]:
 
 def disc_radius(cos_theta: np.ndarray) -> np.ndarray:
     """Koenderink's hemisphere-to-disc radius ρ = √2 sin(θ/2) = √(1 − cos θ) (area-preserving).
+
+    Each direction (θ, φ) of the upper hemisphere goes to the point (ρ, φ) of the unit disc by the
+    Lambert azimuthal equal-area map [Koe96] uses: ρ dρ dφ = ½ sin θ dθ dφ, so the hemisphere
+    (solid angle 2π) covers the disc (area π) evenly, the horizon θ = 90° is the rim ρ = 1, and
+    orthogonality on the disc is orthogonality on the hemisphere.
 
     Parameters
     ----------
@@ -201,7 +149,10 @@ def _check_nm(n: int, m: int) -> None:
 
 
 def zernike_radial(n: int, m: int, rho: np.ndarray) -> np.ndarray:
-    """The Zernike radial polynomial R_n^|m|(ρ) (module docstring; R_n^m(1) = 1).
+    """The Zernike radial polynomial R_n^|m|(ρ) ([BornWolf99] App. VII; R_n^m(1) = 1):
+
+        R_n^m(ρ) = Σ_{k=0}^{(n−m)/2} (−1)^k (n−k)! / (k! ((n+m)/2 − k)! ((n−m)/2 − k)!) ρ^{n−2k}
+                 = (−1)^{(n−m)/2} ρ^m P_{(n−m)/2}^{(m,0)}(1 − 2ρ²)        (Jacobi form, used here).
 
     Parameters
     ----------
@@ -229,7 +180,8 @@ def _norm(n: int, m: int) -> float:
 
 
 def zernike(n: int, m: int, rho: np.ndarray, phi: np.ndarray) -> np.ndarray:
-    """Zernike polynomial Z_n^m(ρ, φ), orthonormal on the unit disc (measure ρ dρ dφ).
+    """Zernike polynomial Z_n^m(ρ, φ), orthonormal on the unit disc (measure ρ dρ dφ):
+    ∫₀¹∫₀^{2π} Z_n^m Z_n'^m' ρ dρ dφ = δ_nn' δ_mm', for 0 <= |m| <= n, n − |m| even.
 
     Parameters
     ----------
@@ -254,7 +206,7 @@ def zernike(n: int, m: int, rho: np.ndarray, phi: np.ndarray) -> np.ndarray:
 
 
 def _term_scale(m: int, n: int, n2: int) -> float:
-    """N_n^m N_n'^m c / (1 + δ_nn') of the module docstring."""
+    """N_n^m N_n'^m c / (1 + δ_nn') of :func:`zernike_basis`."""
     c = 1.0 / np.sqrt(4.0 * (2.0 if m > 0 else 1.0) * (2.0 if n != n2 else 1.0))
     return _norm(n, m) * _norm(n2, m) * c / (2.0 if n == n2 else 1.0)
 
@@ -306,13 +258,30 @@ def _term_values(
 def zernike_basis(L: np.ndarray, V: np.ndarray, n_max: int) -> np.ndarray:
     """The basis functions B_a(L, V) of order ``n_max`` at direction pairs.
 
+    A BRDF that depends on the azimuths only through φ_i − φ_o (isotropy) and is even in it
+    (bilateral symmetry, which every isotropic BRDF of this toolkit has: [RH02] eq. 13 uses
+    cos(qφ') only) has, in the products Z_n^m(ρ_i, φ_i) Z_n'^m'(ρ_o, φ_o), only the combinations
+    m' = m with Z_n^m Z_n'^m + Z_n^{−m} Z_n'^{−m} ∝ R_n^m(ρ_i) R_n'^m(ρ_o) cos(m(φ_i − φ_o)).
+    Reciprocity, ρ(L, V) = ρ(V, L), pairs (n, n') with (n', n). The basis functions are, for
+    m >= 0 and m <= n <= n' <= n_max with n ≡ n' ≡ m (mod 2),
+
+        B_{m,n,n'}(L, V) = c N_n^m N_n'^m [R_n^m(ρ_i) R_n'^m(ρ_o) + R_n'^m(ρ_i) R_n^m(ρ_o)] / (1 + δ_nn')
+                           · cos(m(φ_i − φ_o)),
+
+    with ρ_i, ρ_o from :func:`disc_radius`, N_n^m of :func:`zernike`, and c chosen so that they are
+    orthonormal over the product of hemispheres: ∫∫ B_a B_b dω_i dω_o = δ_ab
+    (c = 1 / √(4 (1 + [m > 0]) (1 + [n ≠ n']))). Reciprocity and isotropy hold exactly, term by
+    term, whatever the coefficients. The sin(m(φ_i − φ_o)) combinations (odd in φ_i − φ_o, allowed
+    by isotropy alone and made reciprocal by antisymmetry in (n, n')) are left out; with them
+    order 8 would have 73 terms instead of CURET's 55.
+
     Parameters
     ----------
     L, V
         Unit directions (..., 3) in the local frame (normal +z), both away from the surface;
         broadcast together.
     n_max
-        Order (module table: ``basis_count(n_max)`` functions).
+        Order (``basis_count(n_max)`` functions).
 
     Returns
     -------
@@ -339,7 +308,8 @@ def zernike_basis(L: np.ndarray, V: np.ndarray, n_max: int) -> np.ndarray:
 
 
 class ZernikeBRDF(BRDF):
-    """A BRDF given by Koenderink's reciprocal isotropic Zernike expansion (module docstring).
+    """A BRDF given by Koenderink's reciprocal isotropic Zernike expansion, ρ = Σ_a c_a B_a
+    (:func:`zernike_basis`).
 
     Parameters
     ----------
@@ -448,7 +418,10 @@ class ZernikeBRDF(BRDF):
         }
 
     def to_spec(self) -> str:
-        """``zernike:n_max=N,c0=r/g/b,...`` at full precision (module docstring, "Spec string")."""
+        """``zernike:n_max=N,c0=r/g/b,c1=r/g/b,...`` at full precision: exactly ``basis_count(N)``
+    coefficients ``c<a>`` (1/sr, each a number or r/g/b triple, |c| <= :data:`MAX_ZERNIKE_COEFF`) in
+    the order of :func:`basis_terms` (``data_specs/spec_strings.md``), so a fit document's
+    ``model_spec`` loads back with ``load_brdf``."""
         items = [f"n_max={self.n_max}"]
         for a, c in enumerate(self.coefficients):
             items.append(f"c{a}=" + ("/".join(f"{v:.17g}" for v in c) if np.ptp(c) > 0 else f"{c[0]:.17g}"))
