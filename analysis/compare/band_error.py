@@ -1,6 +1,6 @@
 """Per-view-band relative RMS error with a standard error that means what it says (issue 29).
 
-The quantity measured, per band [a, b) of the view elevation θ_v (DESIGN §4):
+Per band [a, b) of the view elevation θ_v (DESIGN §4) the quantity measured is
 
     r² = E[ |B(R, V) − B_ref(R, V)|² ] / E[ |B_ref(R, V)|² ],
 
@@ -8,50 +8,9 @@ the expectations over R uniform on the sphere, θ_v uniform in angle on [a, b) a
 from R with uniform azimuth ψ (the law of :func:`~.pairs.sample_pairs` restricted to the band),
 |·|² summed over RGB. B_ref is the angular-domain reference (:mod:`shrmkit.analysis.reference`),
 an exact sum over every pixel of the map: the only randomness is that of the pairs.
-
-**Sampler** (:func:`band_sample`). Under a real HDR map (a light probe at full resolution) both
-sums live where R sees the few bright pixels; uniform R, or caps about the 16 brightest pixels
-(:func:`~.pairs.band_pairs`), miss most of the bright windows in most seeds, so the estimate
-jumps and its i.i.d. standard error (computed from the same unlucky sample) is too small: 8 seeds
-of Grace at 512 rows spread 2.2× the stated s.e. Here R is drawn from a density q that is
-piecewise constant on the map's pixels, a defensive mixture
-
-    q = u/(4π) + (1 − u)/|S| Σ_{s∈S} q_s,        q_s(pixel) ∝ Ω_pixel · (largest mean of |L| over
-                                                   the block of angular size s holding it and the
-                                                   8 blocks around that one)²,
-
-u = :data:`DEFAULT_UNIFORM` = 0.2, |L| the RGB norm, S = :data:`DEFAULT_SCALES_DEG` = 0° (the
-pixel itself: |L|², the mirror's B²; no neighbours), 3°, 10°, 30° (smoother lobes), so every
-bright region is sampled at the width of the lobes that reflect it, on both sides of it. (With the
-block's own mean only, a direction 9° from Grace's windows but across a 10° and a 30° block edge
-from them got the uniform density alone: weight 4.1, one pair holding 40 % of a band's reference
-energy for GGX α = 0.1 at 30–45°, the band whose spread was 1.7× its stated s.e.) The pair's
-weight is (1/4π)/q(R) (exact: the pixel of R is known). Inside a band the draws are stratified:
-the k-th of n pairs takes its R-selector from [k/n, (k + 1)/n) of q's cumulative distribution
-(pixels ordered along a Z-order curve, so a stratum is a compact patch of the sphere) and its
-θ_v from a randomly permuted stratum of [a, b); ψ and the point inside the pixel are uniform.
-
-**Standard error.** The ratio is linearized (delta method): z_k = w_k (a_k − r² b_k) / B̄, and
-the variance of the stratified mean is estimated by successive differences over the strata,
-v = Σ_k (z_{k+1} − z_k)² / (2 n (n − 1)) (the successive-difference estimator of systematic
-sampling, [Wolter07]; conservative when neighbouring strata differ in mean), then
-s.e.(r) = √(v · ν/(ν − 2)) / (2r). The factor ν/(ν − 2) is the variance of Student's t with ν
-degrees of freedom: v is itself estimated from the same n pairs, and near grazing a few pairs hold
-20–45 % of a band's error energy, so seeds that miss them state too little. ν = 2 / (2/(n − 1) + κ/n)
-is the effective degrees of freedom of v (Satterthwaite: 2 E[v]²/Var[v], with Var[s²]/σ⁴ ≈
-2/(n − 1) + κ/n for the excess kurtosis κ ≥ 0 of the z_k), floored at 3: the factor is ≈ 1.04 for
-well-behaved bands of 60 pairs and up to 3 (s.e. × 1.7) for heavy-tailed ones. Measured
-(``benchmarks/band_error_spread.py --estimator grid new``, Grace at 128 rows, 8 seeds, 60 pairs per
-band, one run): spread / stated s.e. per band 0.69–1.25 (microfacet σ 0.05), 0.40–1.57 (GGX α 0.1;
-0.74–1.19 over 24 seeds), 0.67–1.32 (GGX α 0.3), 0.26–0.83 (Phong 512), against 0.65–1.54,
-0.69–1.98, 0.90–2.08 and 0.55–1.25 for the grid-only density with the plain delta-method s.e.
-``tests/analysis/compare/test_band_error.py`` checks it against closed forms and that spread.
-
-**A render's band** (:func:`pixels_statement`). The statement of an SHRM, like this measurement, is
-over all reflection directions; a render's band shows only the R its pixels reflect.
-:func:`pixels_statement` carries the band's statement to those pixels (the larger of the relative
-statement and the band's absolute error over the pixels' own RMS), which is what a comparison with
-another renderer per band of one image can be held to (``benchmarks/mitsuba_bands.py``).
+:func:`band_sample` draws them (R importance-sampled from :func:`pixel_density`, stratified),
+:func:`band_error` estimates r and its standard error ([Wolter07]), and :func:`pixels_statement`
+carries a band's statement to the pixels of one render.
 """
 
 from __future__ import annotations
@@ -136,8 +95,30 @@ def pixel_density(
     radiance: np.ndarray, *, scales_deg: Sequence[float] = DEFAULT_SCALES_DEG, uniform: float = DEFAULT_UNIFORM,
     neighbours: bool = True,
 ) -> np.ndarray:
-    """The probability of each pixel of an (H, W, 3) lat-long map under the sampler's density q
-    (module docstring): (H, W) float64, summing to 1, every entry > 0.
+    """The probability of each pixel of an (H, W, 3) lat-long map under the sampler's density q:
+    (H, W) float64, summing to 1, every entry > 0.
+
+    Under a real HDR map (a light probe at full resolution) both
+    sums live where R sees the few bright pixels; uniform R, or caps about the 16 brightest pixels
+    (:func:`~.pairs.band_pairs`), miss most of the bright windows in most seeds, so the estimate
+    jumps and its i.i.d. standard error (computed from the same unlucky sample) is too small: 8 seeds
+    of Grace at 512 rows spread 2.2× the stated s.e. Here R is drawn from a density q that is
+    piecewise constant on the map's pixels, a defensive mixture
+
+        q = u/(4π) + (1 − u)/|S| Σ_{s∈S} q_s,        q_s(pixel) ∝ Ω_pixel · (largest mean of |L| over
+                                                       the block of angular size s holding it and the
+                                                       8 blocks around that one)²,
+
+    u = :data:`DEFAULT_UNIFORM` = 0.2, |L| the RGB norm, S = :data:`DEFAULT_SCALES_DEG` = 0° (the
+    pixel itself: |L|², the mirror's B²; no neighbours), 3°, 10°, 30° (smoother lobes), so every
+    bright region is sampled at the width of the lobes that reflect it, on both sides of it. (With the
+    block's own mean only, a direction 9° from Grace's windows but across a 10° and a 30° block edge
+    from them got the uniform density alone: weight 4.1, one pair holding 40 % of a band's reference
+    energy for GGX α = 0.1 at 30–45°, the band whose spread was 1.7× its stated s.e.) The pair's
+    weight is (1/4π)/q(R) (exact: the pixel of R is known). Inside a band the draws are stratified:
+    the k-th of n pairs takes its R-selector from [k/n, (k + 1)/n) of q's cumulative distribution
+    (pixels ordered along a Z-order curve, so a stratum is a compact patch of the sphere) and its
+    θ_v from a randomly permuted stratum of [a, b); ψ and the point inside the pixel are uniform.
 
     ``neighbours`` False takes each block's own mean only (the density before the neighbours were
     added, kept for ``benchmarks/band_error_spread.py --estimator grid``).
@@ -194,7 +175,8 @@ def band_sample(
     neighbours: bool = True,
 ) -> BandSample:
     """``per_band`` (R, V) pairs in each band of ``edges_deg``, R importance-sampled from the
-    map's pixel density (:func:`pixel_density`) and stratified (module docstring).
+    map's pixel density (:func:`pixel_density`, where the weights and the strata are described)
+    and stratified.
 
     Parameters
     ----------
@@ -276,7 +258,23 @@ def _t_variance_factor(z: np.ndarray) -> float:
 def band_error(value: np.ndarray, reference: np.ndarray, sample: BandSample, *, stratified: bool = True,
                studentized: bool = True) -> list[dict]:
     """Relative RMS of ``value`` against ``reference`` per band of ``sample``, with its standard
-    error (module docstring): the records of :func:`~.metrics.band_relative_rms`.
+    error: the records of :func:`~.metrics.band_relative_rms`.
+
+    The ratio is linearized (delta method): z_k = w_k (a_k − r² b_k) / B̄, and
+    the variance of the stratified mean is estimated by successive differences over the strata,
+    v = Σ_k (z_{k+1} − z_k)² / (2 n (n − 1)) (the successive-difference estimator of systematic
+    sampling, [Wolter07]; conservative when neighbouring strata differ in mean), then
+    s.e.(r) = √(v · ν/(ν − 2)) / (2r). The factor ν/(ν − 2) is the variance of Student's t with ν
+    degrees of freedom: v is itself estimated from the same n pairs, and near grazing a few pairs hold
+    20–45 % of a band's error energy, so seeds that miss them state too little. ν = 2 / (2/(n − 1) + κ/n)
+    is the effective degrees of freedom of v (Satterthwaite: 2 E[v]²/Var[v], with Var[s²]/σ⁴ ≈
+    2/(n − 1) + κ/n for the excess kurtosis κ ≥ 0 of the z_k), floored at 3: the factor is ≈ 1.04 for
+    well-behaved bands of 60 pairs and up to 3 (s.e. × 1.7) for heavy-tailed ones. Measured
+    (``benchmarks/band_error_spread.py --estimator grid new``, Grace at 128 rows, 8 seeds, 60 pairs per
+    band, one run): spread / stated s.e. per band 0.69–1.25 (microfacet σ 0.05), 0.40–1.57 (GGX α 0.1;
+    0.74–1.19 over 24 seeds), 0.67–1.32 (GGX α 0.3), 0.26–0.83 (Phong 512), against 0.65–1.54,
+    0.69–1.98, 0.90–2.08 and 0.55–1.25 for the grid-only density with the plain delta-method s.e.
+    ``tests/analysis/compare/test_band_error.py`` checks it against closed forms and that spread.
 
     Parameters
     ----------
@@ -289,7 +287,7 @@ def band_error(value: np.ndarray, reference: np.ndarray, sample: BandSample, *, 
         i.i.d. delta-method variance.
     studentized
         Scale the standard error by √(ν/(ν − 2)), ν the effective degrees of freedom of the
-        variance estimate (module docstring); False gives the plain delta-method value (the
+        variance estimate (above); False gives the plain delta-method value (the
         estimator before, for ``benchmarks/band_error_spread.py --estimator grid``).
 
     Returns
@@ -335,10 +333,12 @@ def band_error(value: np.ndarray, reference: np.ndarray, sample: BandSample, *, 
 
 
 def pixels_statement(shrm, values: np.ndarray, theta_v_deg: np.ndarray, *, signal=None) -> list[dict]:
-    """The per-band statement of an SHRM carried to the pixels of one render (issue 29).
+    """The per-band statement of an SHRM carried to the pixels of one render (issue 29): what a
+    comparison with another renderer per band of one image can be held to
+    (``benchmarks/mitsuba_bands.py``).
 
     ``SHRM.meta["view_bands"]`` states r = √(E[|e|²] / E[|B|²]) per band, both expectations over
-    *all* reflection directions R (module docstring). A render's band shows only the R its pixels
+    *all* reflection directions R (like :func:`band_error`'s measurement). A render's band shows only the R its pixels
     reflect, whose signal may be far below the band's average (a sphere's ring of R that misses a
     map's bright windows), and truncation error does not follow the signal into the dark: it rings
     around the bright features over the whole sphere. Two limiting models: the error is
