@@ -16,6 +16,24 @@ import shrmkit
 from shrmkit.analysis.records import PrefilterInfo, Timings, ViewBand, WindowInfo
 from shrmkit.analysis.shrm import SHRM, load_shrm
 
+#: ``SHRM.meta``'s keys in order, as ``prefilter`` wrote them before the records (commit ed8dae9,
+#: ``shrm prefilter --env builtin:sky --brdf microfacet:sigma=0.1 --json``): the file format.
+META_KEYS = [
+    "brdf", "environment", "environment_source", "lights_requested", "lights", "lights_flux_share",
+    "lights_threshold", "lights_left_in_map", "lights_brdf", "statement_signal", "F_rho", "P_rho", "F_L",
+    "lighting_capped", "orders_message", "orders_asked", "timings", "shrmkit_version", "frame", "azimuth_free",
+    "window", "window_requested", "window_strength", "window_reason", "window_threshold", "window_cost",
+    "eps_reflected_unwindowed", "negative_before", "negative_after", "negative_fraction_after",
+    "negative_max_view_deg", "negative_sample_pairs", "window_capped", "criterion", "max_view_deg", "scene_capped",
+    "capped", "capped_by", "pixel_rule", "pixel_errors", "view_bands", "map_budget", "extrapolated_samples",
+]
+#: One band of that run's ``meta["view_bands"]`` (its sun taken out as a light).
+BAND_KEYS = [
+    "theta_v_deg", "predicted_rel_rms", "bound_rel_rms", "truncation_rel_rms", "map_rel_rms", "inside",
+    "extrapolated_samples", "bound_holds", "lights_rel_rms", "lights_rel_rms_residual", "predicted_rel_rms_residual",
+    "bound_rel_rms_residual", "bound_informative", "map_bound_cost", "bound_rel_rms_exact_lookup",
+]
+
 
 @pytest.fixture(scope="module")
 def with_lights() -> SHRM:
@@ -34,6 +52,7 @@ def test_meta_is_the_record_written_back(with_lights: SHRM) -> None:
     keys in the same order at every depth; the typed fields read the same numbers."""
     meta = with_lights.meta
     info = with_lights.info
+    assert list(meta) == META_KEYS and all(list(band) == BAND_KEYS for band in meta["view_bands"])
     assert _same(info.to_meta(), meta)
     assert list(meta["timings"]) == ["orders", "lights", "lighting", "window", "pixels", "map size", "synthesis",
                                      "cube", "errors", "total"]
@@ -49,7 +68,8 @@ def test_rh02_without_window_or_lights() -> None:
     """The rh02 rule, no window, no lights: no pixel rule (null), no pixels timing, window 'none'."""
     m = shrmkit.prefilter("builtin:constant,height=16", "lambert:albedo=0.5", criterion="rh02", window="none",
                           lights="none")
-    assert _same(m.info.to_meta(), m.meta)
+    assert _same(m.info.to_meta(), m.meta) and list(m.meta) == META_KEYS
+    assert [list(band) for band in m.meta["view_bands"]] == [BAND_KEYS[:8] + BAND_KEYS[12:]] * len(m.info.view_bands)
     assert m.info.pixel_rule is None and m.info.timings.pixels is None and "pixels" not in m.meta["timings"]
     assert m.info.window.used == "none" and m.info.window.describe() == "none"
     assert m.info.lights.brdf is None and len(m.info.lights) == 0
