@@ -1,35 +1,12 @@
 """A census of a BRDF library: accuracy at given orders, orders needed, the fit, and why each miss.
 
-[RH02] Fig. 8 asks of a whole library (the 61 CURET surfaces) how much of each BRDF's energy a
-fixed number of coefficients captures: the accuracy 1 − ε(F, P) at F = 30 and P = 0…5. This
-module answers that, and more, for any library ``report`` accepts, one :class:`CensusRow` per
-material:
-
-- **representation**: scattered measurements (CURET, Cornell, gonioreflectometer CSV) go
-  through the representation with the smallest held-out worst-view-band error
-  (:func:`~shrmkit.analysis.fit.representation.choose_representation`); tables and models are
-  analysed as they are;
-- **accuracy at (F, P)**: on one quadrature grid sized for (F, P)
-  (:func:`~shrmkit.analysis.orders.orders_on_grid_for`), 1 − ε(F, p) for p = 0…P by [RH02]'s
-  criterion (energy over all views, [RH02] §5.1: what Fig. 8 plots) and by the bands criterion
-  (the worst θ_v band inside the view limit under a point light, ``analysis/view_bands.py``);
-- **orders needed** at a tolerance (:func:`~shrmkit.analysis.orders.choose_orders`);
-- **grazing share**: the share of the energy missed at (F, P) (bands criterion, per band
-  ε_b × the band's energy of ρ̂) that lies in the view bands beyond the view limit;
-- **reasons** for every row that misses the threshold or fails (:data:`REASONS`).
-
-A file that cannot be read or analysed is one failed row (its message kept), never an aborted
-census. ``workers`` > 1 computes the rows in that many spawned processes (one BLAS and one ducc0
-thread each); the rows are the same numbers as a serial census (each row depends only on its
-source and the settings), in the order given; a source whose process dies (killed for memory, a
-crash) is retried alone in a fresh process, and is one failed row if that one dies too.
-
-Public objects: :func:`run_census`, :func:`census_sources`, :class:`Census`, :class:`CensusRow`,
-:data:`REASONS`, :data:`CSV_COLUMNS`, and the defaults :data:`DEFAULT_F`, :data:`DEFAULT_P`,
-:data:`DEFAULT_THRESHOLD`.
-
-References: [RH02] §5.1 (ε(F, P)), §6.2 and Fig. 8 (CURET: 56 of 61 BRDFs above 90 % accuracy
-at F = 30, P = 5; the surfaces their fits could not represent are anisotropic); [CURET99].
+[RH02] Fig. 8 asks of a whole library (the 61 CURET surfaces, [CURET99]) how much of each BRDF's
+energy a fixed number of coefficients captures: the accuracy 1 − ε(F, P) at F = 30 and P = 0…5
+([RH02] §5.1, §6.2: 56 of 61 BRDFs above 90 % at F = 30, P = 5; the surfaces their fits could not
+represent are anisotropic). :func:`run_census` answers that, and more, for any library ``report``
+accepts: one :class:`CensusRow` per material (representation, accuracy at (F, P) by both order
+criteria, orders needed, grazing share, :data:`REASONS` for a miss); a file that cannot be read or
+analysed is one failed row (its message kept), never an aborted census.
 """
 
 from __future__ import annotations
@@ -118,7 +95,20 @@ CSV_COLUMNS = (
 
 @dataclass(frozen=True)
 class CensusRow:
-    """One material of a census.
+    """One material of a census. What it holds:
+
+    - **representation**: scattered measurements (CURET, Cornell, gonioreflectometer CSV) go
+      through the representation with the smallest held-out worst-view-band error
+      (:func:`~shrmkit.analysis.fit.representation.choose_representation`); tables and models are
+      analysed as they are;
+    - **accuracy at (F, P)**: on one quadrature grid sized for (F, P)
+      (:func:`~shrmkit.analysis.orders.orders_on_grid_for`), 1 − ε(F, p) for p = 0…P by [RH02]'s
+      criterion (energy over all views, [RH02] §5.1: what Fig. 8 plots) and by the bands criterion
+      (the worst θ_v band inside the view limit under a point light, ``analysis/view_bands.py``);
+    - **orders needed** at a tolerance (:func:`~shrmkit.analysis.orders.choose_orders`);
+    - **grazing share**: the share of the energy missed at (F, P) (bands criterion, per band
+      ε_b × the band's energy of ρ̂) that lies in the view bands beyond the view limit;
+    - **reasons** for every row that misses the threshold or fails (:data:`REASONS`).
 
     Attributes
     ----------
@@ -532,7 +522,12 @@ def run_census(
     represent: tuple[str, Callable[[BRDF], BRDF]] | None = None,
     workers: int = 1,
 ) -> Census:
-    """Tabulate a BRDF library (module docstring): one :class:`CensusRow` per source.
+    """Tabulate a BRDF library: one :class:`CensusRow` per source.
+
+    ``workers`` > 1 computes the rows in that many spawned processes (one BLAS and one ducc0
+    thread each); the rows are the same numbers as a serial census (each row depends only on its
+    source and the settings), in the order given; a source whose process dies (killed for memory, a
+    crash) is retried alone in a fresh process, and is one failed row if that one dies too.
 
     Parameters
     ----------
@@ -561,7 +556,7 @@ def run_census(
         Processes computing the rows (1..:data:`MAX_WORKERS`; default 1: in this process).
         With more, ``load`` and ``represent`` must be picklable (module-level functions or
         ``functools.partial`` of them); the rows are the serial census' numbers, in the order of
-        ``sources`` (module docstring).
+        ``sources`` (above).
 
     Returns
     -------

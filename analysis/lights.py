@@ -1,37 +1,12 @@
 """Bright lights as lights: compact bright regions of an environment map taken out as explicit
-lights, the smooth rest left for the SHRM (DESIGN §5a).
+lights, the smooth rest left for the SHRM [RH02] (DESIGN §5a).
 
 A truncated SH expansion of a map holding a sun, lamps or windows beside a smooth rest needs
-orders in the hundreds and rings (Gibbs). Here the map is split once, before prefiltering:
-
-    L(ω) = L_res(ω) + Σ_k E_k δ(ω − ω_k),
-
-where the samples (ω_k, E_k) of the lights are the excess radiance of the bright pixels over
-their surroundings times each pixel's exact solid angle, at the pixel centres — exactly how the
-angular reference (``analysis.reference``) reads a pixel — and the residual L_res holds, in each
-light's pixels, the mean radiance of the ring of pixels around it (never more than the pixel
-held). Per pixel light + residual = original, so the flux ∫ L dω is conserved to rounding.
-The reflected radiance is then B = B_SHRM[L_res](R, V) + Σ_k ρ̂(ω_k; V, N) E_k with
+orders in the hundreds and rings (Gibbs). :func:`extract_lights` splits the map once, before
+prefiltering, into light samples and a residual, L(ω) = L_res(ω) + Σ_k E_k δ(ω − ω_k), conserving
+the flux; the reflected radiance is then B = B_SHRM[L_res](R, V) + Σ_k ρ̂(ω_k; V, N) E_k with
 N = normalize(R + V): the residual through the SHRM, the lights exactly (:meth:`LightSet.radiance`).
-
-**Which regions** (``lights="auto"``, documented in ``data_specs/lights.md``): pixels whose
-luminance (Rec. 709) exceeds :data:`LIGHT_CONTRAST` × the solid-angle-weighted median luminance
-of the map (at least 10⁻³ × its maximum) form connected regions (8-neighbours, across the
-φ seam and around the poles); a region is a light when it fits in a cap of
-:data:`MAX_LIGHT_RADIUS_DEG` about its flux-weighted centre — larger bright regions are smooth
-enough for the SHRM and stay in the map. At most :data:`MAX_LIGHTS` lights, the brightest
-(by flux) first; ``lights=N`` takes at most N of them, ``"none"`` none. What that saves: the
-one-pixel sun of ``builtin:sun`` holds all of the map's high-order energy (a flat spectrum up to
-any order); taken out, the residual is a smooth sky whose SHRM needs low orders and no window.
-
-**Samples.** A light of up to :data:`MAX_SAMPLES_PER_LIGHT` pixels is one sample per pixel
-(exact, as the reference); a larger one is cut into that many groups by median cut (split the
-group of largest angular extent at its flux median along its longest axis, [Debevec05]), each group one
-sample at its flux-weighted direction carrying its total RGB power. The merge moves flux by at
-most the group's angular radius, stated per light (``merge_deg``) and counted in the error
-statements of :func:`~shrmkit.analysis.shrm.prefilter`.
-
-References: [RH02]; [Debevec05] (the split rule of the samples).
+Large lights are cut into samples by median cut [Debevec05]. Rules: ``data_specs/lights.md``.
 """
 
 from __future__ import annotations
@@ -231,7 +206,33 @@ class Extraction:
 
 
 def extract_lights(env: EnvironmentMap, mode: str | int = DEFAULT_LIGHTS) -> Extraction:
-    """Split ``env`` into explicit lights and a residual map (module docs).
+    """Split ``env`` into explicit lights and a residual map.
+
+    L(ω) = L_res(ω) + Σ_k E_k δ(ω − ω_k), where the samples (ω_k, E_k) of the lights are the excess
+    radiance of the bright pixels over their surroundings times each pixel's exact solid angle, at
+    the pixel centres — exactly how the angular reference (``analysis.reference``) reads a pixel —
+    and the residual L_res holds, in each light's pixels, the mean radiance of the ring of pixels
+    around it (never more than the pixel held). Per pixel light + residual = original, so the flux ∫
+    L dω is conserved to rounding. The reflected radiance is then B = B_SHRM[L_res](R, V) + Σ_k
+    ρ̂(ω_k; V, N) E_k with N = normalize(R + V): the residual through the SHRM, the lights exactly
+    (:meth:`LightSet.radiance`).
+
+    **Which regions** (``lights="auto"``, documented in ``data_specs/lights.md``): pixels whose
+    luminance (Rec. 709) exceeds :data:`LIGHT_CONTRAST` × the solid-angle-weighted median luminance
+    of the map (at least 10⁻³ × its maximum) form connected regions (8-neighbours, across the
+    φ seam and around the poles); a region is a light when it fits in a cap of
+    :data:`MAX_LIGHT_RADIUS_DEG` about its flux-weighted centre — larger bright regions are smooth
+    enough for the SHRM and stay in the map. At most :data:`MAX_LIGHTS` lights, the brightest
+    (by flux) first; ``lights=N`` takes at most N of them, ``"none"`` none. What that saves: the
+    one-pixel sun of ``builtin:sun`` holds all of the map's high-order energy (a flat spectrum up to
+    any order); taken out, the residual is a smooth sky whose SHRM needs low orders and no window.
+
+    **Samples.** A light of up to :data:`MAX_SAMPLES_PER_LIGHT` pixels is one sample per pixel
+    (exact, as the reference); a larger one is cut into that many groups by median cut (split the
+    group of largest angular extent at its flux median along its longest axis, [Debevec05]), each group one
+    sample at its flux-weighted direction carrying its total RGB power. The merge moves flux by at
+    most the group's angular radius, stated per light (``merge_deg``) and counted in the error
+    statements of :func:`~shrmkit.analysis.shrm.prefilter`.
 
     Parameters
     ----------

@@ -1,46 +1,11 @@
 """How far scattered measurements are from isotropic: the held-out energy of the φ-dependent part.
 
-An isotropic BRDF depends on the azimuths only through φ_i − φ_o: it is unchanged when light
-and view turn together about the normal. Measurements that hold both azimuths (CURET's 205
-geometries: the sample is turned on its stage, so each geometry has its own φ_i) can test
-that. CURET has no two geometries that isotropy makes equal (none within 2° in θ_i, θ_o and
-|φ_i − φ_o|), so the comparison goes through two fits to the same samples:
-
-* the isotropic model: Koenderink's reciprocal isotropic Zernike expansion of order N
-  (``brdf_io/zernike.py``), every term a function of (ρ_i, ρ_o, φ_i − φ_o);
-* the same plus **anisotropic terms**: products of Zernike radial polynomials and
-  cos/sin(a φ_i + b φ_o) with total azimuthal frequency a + b ≠ 0 — exactly the products
-  Z_n^a(ρ_i, φ_i) Z_n'^b(ρ_o, φ_o) that change under a common rotation φ → φ + α — made
-  reciprocal by adding the same with i ↔ o, up to degree n, n' <= :data:`ANISO_ORDER`.
-
-Both are scored by held-out error (``crossval.py``; the ridge of each chosen from the same
-grid). Extra terms also add plain flexibility: on a scattered geometry set the absolute azimuths
-correlate with the invariants, so φ-dependent terms can fit part of an isotropic model's misfit.
-The **control** measures that: the same terms evaluated at the geometries turned by random
-common angles about the normal (an isotropic BRDF has exactly the data's values there; an
-anisotropic one loses its pattern), averaged over ``n_null`` turns. With e the held-out
-cosine-weighted relative RMS over all samples (``metrics.rel_rms``; e_turned² the control's mean):
-
-    anisotropy      A = max(0, e_turned² − e_aniso²)    a fraction of Σ w (ρ cos θ_i)², the energy
-                                                         that only the true azimuths predict;
-    residual share  S = A / e_turned²                   the share of the isotropic misfit that is
-                                                         φ-dependent.
-
-The material is called anisotropic when S > :data:`ANISOTROPIC_ABOVE` and A exceeds three
-standard deviations of the control's spread. Measured at CURET's geometries
-(tests/analysis/fit/test_isotropy.py): synthetic isotropic lobes give S <= 0.2, a Lambertian
-surface with a grain ρ = kd/π (1 + ½ sin²θ_h cos 2φ_h) gives S = 0.99; the real felt 0.13,
-corduroy 0.74. A is a lower bound on the φ-dependent energy: what the low-order terms cannot hold
-(a sharp anisotropic Ward lobe, α = 0.3 × 0.8, is mostly missed: S = 0.26) and what the
-geometries cannot tell apart is not counted. When the isotropic model itself fails (held-out
-relative RMS above 0.5) its misfit dominates and ``judged`` is False.
-
-Public objects: :func:`anisotropic_basis`, :func:`measure_isotropy`, :class:`Isotropy`,
-:data:`ANISO_ORDER`, :data:`ANISOTROPIC_ABOVE`.
-
-References: [Koe96] (the Zernike products; the isotropic subset keeps m' = m with
-cos m(φ_i − φ_o)); [CURET99] (CURET's geometries); [RH02] §6.2 (the CURET surfaces their
-isotropic fits could not represent).
+:func:`measure_isotropy` fits the isotropic Zernike expansion ([Koe96]; the isotropic subset keeps
+m' = m with cos m(φ_i − φ_o)) and the same plus reciprocal anisotropic terms
+(:func:`anisotropic_basis`) to the same samples, scores both by held-out error, and measures how
+much of the isotropic misfit only the true azimuths predict, against a control at turned
+geometries (:class:`Isotropy`). Made for CURET's 205 geometries ([CURET99]; [RH02] §6.2: the
+CURET surfaces their isotropic fits could not represent).
 """
 
 from __future__ import annotations
@@ -81,7 +46,7 @@ def _aniso_terms(n_max: int) -> list[tuple[int, int, int, int, str]]:
 
 
 def anisotropic_basis(L: np.ndarray, V: np.ndarray, n_max: int = ANISO_ORDER) -> np.ndarray:
-    """The reciprocal anisotropic terms (module docstring) at direction pairs.
+    """The reciprocal anisotropic terms (:func:`measure_isotropy`) at direction pairs.
 
     Parameters
     ----------
@@ -189,7 +154,42 @@ def measure_isotropy(
     seed: int = 0,
     n_null: int = 8,
 ) -> Isotropy:
-    """How far scattered measurements are from isotropic (module docstring).
+    """How far scattered measurements are from isotropic.
+
+    An isotropic BRDF depends on the azimuths only through φ_i − φ_o: it is unchanged when light
+    and view turn together about the normal. Measurements that hold both azimuths (CURET's 205
+    geometries: the sample is turned on its stage, so each geometry has its own φ_i) can test
+    that. CURET has no two geometries that isotropy makes equal (none within 2° in θ_i, θ_o and
+    |φ_i − φ_o|), so the comparison goes through two fits to the same samples:
+
+    * the isotropic model: Koenderink's reciprocal isotropic Zernike expansion of order N
+      (``brdf_io/zernike.py``), every term a function of (ρ_i, ρ_o, φ_i − φ_o);
+    * the same plus **anisotropic terms**: products of Zernike radial polynomials and
+      cos/sin(a φ_i + b φ_o) with total azimuthal frequency a + b ≠ 0 — exactly the products
+      Z_n^a(ρ_i, φ_i) Z_n'^b(ρ_o, φ_o) that change under a common rotation φ → φ + α — made
+      reciprocal by adding the same with i ↔ o, up to degree n, n' <= :data:`ANISO_ORDER`.
+
+    Both are scored by held-out error (``crossval.py``; the ridge of each chosen from the same
+    grid). Extra terms also add plain flexibility: on a scattered geometry set the absolute azimuths
+    correlate with the invariants, so φ-dependent terms can fit part of an isotropic model's misfit.
+    The **control** measures that: the same terms evaluated at the geometries turned by random
+    common angles about the normal (an isotropic BRDF has exactly the data's values there; an
+    anisotropic one loses its pattern), averaged over ``n_null`` turns. With e the held-out
+    cosine-weighted relative RMS over all samples (``metrics.rel_rms``; e_turned² the control's mean):
+
+        anisotropy      A = max(0, e_turned² − e_aniso²)    a fraction of Σ w (ρ cos θ_i)², the energy
+                                                             that only the true azimuths predict;
+        residual share  S = A / e_turned²                   the share of the isotropic misfit that is
+                                                             φ-dependent.
+
+    The material is called anisotropic when S > :data:`ANISOTROPIC_ABOVE` and A exceeds three
+    standard deviations of the control's spread. Measured at CURET's geometries
+    (tests/analysis/fit/test_isotropy.py): synthetic isotropic lobes give S <= 0.2, a Lambertian
+    surface with a grain ρ = kd/π (1 + ½ sin²θ_h cos 2φ_h) gives S = 0.99; the real felt 0.13,
+    corduroy 0.74. A is a lower bound on the φ-dependent energy: what the low-order terms cannot hold
+    (a sharp anisotropic Ward lobe, α = 0.3 × 0.8, is mostly missed: S = 0.26) and what the
+    geometries cannot tell apart is not counted. When the isotropic model itself fails (held-out
+    relative RMS above 0.5) its misfit dominates and ``judged`` is False.
 
     Parameters
     ----------

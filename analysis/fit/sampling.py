@@ -1,36 +1,11 @@
 """Direction samples a model is fitted to, with their quadrature weights.
 
-A fit compares a model with a BRDF on a finite set of direction pairs (L, V). This module
-builds that set:
-
-* **analytic and tabulated BRDFs** are sampled in Rusinkiewicz half/difference angles [Rus98]
-  with a randomly shifted Kronecker (R_d) low-discrepancy sequence [Roberts18] (:func:`kronecker_points`,
-  deterministic given ``seed``):
-  θ_h = (π/2) u₀² (the square-root scale of MERL's θ_h axis: dense near the specular
-  peak, so even lobes with exponents ~10⁴ get thousands of samples), θ_d = (π/2) u₁,
-  φ_d = π u₂ (φ_d and φ_d + π are the same pair by reciprocity). The BRDF is evaluated
-  with its data mask (``eval_masked`` where it has one, else ``eval``); points without
-  data (missing measurements, non-finite values) are dropped.
-* **MERL tables**: the same samples are snapped to the nearest table node (θ_h, θ_d, φ_d
-  of ``merl_sample_angles``), so the fit compares the model with the stored measurements
-  rather than with trilinear interpolations between them (which flatten sharp peaks).
-  The points are uniform in MERL index space, so every node is equally likely.
-* **scattered BRDFs** (Cornell measurements) contribute their own (L, V, rgb) samples.
-
-Weighting
----------
-Each sample carries a quadrature weight ``w`` such that Σ w g ≈ ∫∫ g dω_i dω_o over the
-pairs kept, so a weighted squared error is an estimate of the L² error of ρ·cos θ_i that
-[RH02] uses. With dω_i dω_o = 4 cos θ_d dω_h dω_d ([Rus98]) and the sampling
-density p(θ_h, θ_d, φ_d) = (2π θ_h)^(−1/2) · (2/π) · (1/π),
-
-    w = 2π (φ_h) · 2 (φ_d ≡ φ_d + π) · 4 cos θ_d sin θ_h sin θ_d / p / n.
-
-Grazing angles are handled in two documented ways: pairs with θ_i or θ_o above
-``max_theta_deg`` (default 80°, the cut of [Ngan05] — MERL and Cornell data are
-unreliable and enormous there) are not used, and the residual is taken on ρ·cos θ_i, whose
-cosine damps grazing incidence. Scattered samples all get weight 1 (the Cornell gantry
-spreads them roughly evenly over its angle range).
+A fit compares a model with a BRDF on a finite set of direction pairs (L, V):
+:func:`collect_samples` builds that set (:class:`FitSamples`) — analytic and tabulated BRDFs on
+half/difference angles [Rus98] drawn by a shifted Kronecker sequence [Roberts18]
+(:func:`kronecker_points`), MERL tables snapped to their nodes [MERL03], scattered measurements as
+they are — with quadrature weights that make a weighted squared error an estimate of the L² error
+of ρ·cos θ_i that [RH02] uses, pairs beyond the grazing cut of [Ngan05] left out.
 """
 
 from __future__ import annotations
@@ -63,7 +38,7 @@ class FitSamples:
     rho
         Measured rho (n, 3) in 1/sr (no cosine).
     weight
-        Quadrature weights (n,), see the module docstring.
+        Quadrature weights (n,), see :func:`collect_samples`.
     n_dropped
         Sampled points dropped for lack of data (missing measurements, non-finite values).
     source
@@ -176,7 +151,34 @@ def sample_halfdiff(
 def collect_samples(
     brdf: BRDF, *, n_samples: int = 32768, seed: int = 0, max_theta_deg: float = 80.0
 ) -> FitSamples:
-    """The samples a fit of ``brdf`` uses (module docstring: sampling and weighting).
+    """The samples a fit of ``brdf`` uses.
+
+    * **analytic and tabulated BRDFs** are sampled in Rusinkiewicz half/difference angles [Rus98]
+      with a randomly shifted Kronecker (R_d) low-discrepancy sequence [Roberts18] (:func:`kronecker_points`,
+      deterministic given ``seed``):
+      θ_h = (π/2) u₀² (the square-root scale of MERL's θ_h axis: dense near the specular
+      peak, so even lobes with exponents ~10⁴ get thousands of samples), θ_d = (π/2) u₁,
+      φ_d = π u₂ (φ_d and φ_d + π are the same pair by reciprocity). The BRDF is evaluated
+      with its data mask (``eval_masked`` where it has one, else ``eval``); points without
+      data (missing measurements, non-finite values) are dropped.
+    * **MERL tables**: the same samples are snapped to the nearest table node (θ_h, θ_d, φ_d
+      of ``merl_sample_angles``), so the fit compares the model with the stored measurements
+      rather than with trilinear interpolations between them (which flatten sharp peaks).
+      The points are uniform in MERL index space, so every node is equally likely.
+    * **scattered BRDFs** (Cornell measurements) contribute their own (L, V, rgb) samples.
+
+    Each sample carries a quadrature weight ``w`` such that Σ w g ≈ ∫∫ g dω_i dω_o over the
+    pairs kept, so a weighted squared error is an estimate of the L² error of ρ·cos θ_i that
+    [RH02] uses. With dω_i dω_o = 4 cos θ_d dω_h dω_d ([Rus98]) and the sampling
+    density p(θ_h, θ_d, φ_d) = (2π θ_h)^(−1/2) · (2/π) · (1/π),
+
+        w = 2π (φ_h) · 2 (φ_d ≡ φ_d + π) · 4 cos θ_d sin θ_h sin θ_d / p / n.
+
+    Grazing angles are handled in two documented ways: pairs with θ_i or θ_o above
+    ``max_theta_deg`` (default 80°, the cut of [Ngan05] — MERL and Cornell data are
+    unreliable and enormous there) are not used, and the residual is taken on ρ·cos θ_i, whose
+    cosine damps grazing incidence. Scattered samples all get weight 1 (the Cornell gantry
+    spreads them roughly evenly over its angle range).
 
     Raises
     ------
