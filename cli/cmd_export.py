@@ -30,7 +30,6 @@ from rich.table import Table
 from ..analysis.material_export import closest_shared_model, export_material
 from ..analysis.prefiltered_cube import ggx_cube_chain, material_lod
 from ..brdf_io.atomic import atomic_paths, check_writable
-from ..brdf_io.dds import write_dds_cube
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.export_formats import export_format
 from ..brdf_io.export_material import material_text, write_material
@@ -61,9 +60,9 @@ def run(args: argparse.Namespace) -> int:
     if fmt.kind != "cube-mip-chain":
         for option, value in (("--env", args.env), ("--levels", args.levels)):
             if value is not None:
-                raise BadInputError(None, f"{option} is for --to dds, not {fmt.name}")
+                raise BadInputError(None, f"{option} is for --to dds or ktx2, not {fmt.name}")
     elif args.env is None:
-        raise BadInputError(None, "--to dds needs --env (the environment to prefilter)")
+        raise BadInputError(None, f"--to {fmt.name} needs --env (the environment to prefilter)")
     check_writable(out)
     representation = None
     if fmt.kind == "brdf-table":  # a table needs values everywhere: scattered data through their representation
@@ -151,7 +150,7 @@ def _export_dds(args: argparse.Namespace, out: Path, brdf: Any) -> dict[str, Any
     if alpha is not None and alpha > 1.0:
         doc["brdf_note"] = f"alpha {alpha:.3g} is rougher than the last level (alpha 1): it reads level {n - 1}"
     with atomic_paths([out, sidecar]) as (tmp, tmp_json):
-        write_dds_cube(tmp, chain.levels, fmt=args.dds_format)
+        export_format(args.to, out).write_cube(tmp, chain.levels, fmt=args.dds_format)  # DDS or KTX2
         tmp_json.write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
     if not args.json:
         if note:

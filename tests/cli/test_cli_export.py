@@ -1,9 +1,10 @@
-"""``shrm export``: material snippets, MERL tables, DDS cube mip chains, bad input (exit 2, nothing written).
+"""``shrm export``: material snippets, MERL tables, DDS and KTX2 cube mip chains, bad input (exit 2, nothing written).
 
 References: the MERL file read back by an independent transcription of MERL's ``BRDFRead.cpp``
 (its half/difference construction by ``rotate_vector``, floor lookup and channel scales) and
 compared with the analytic BRDF evaluated directly; the DDS header parsed by the layout of
-Microsoft's DDS programming guide; the snippet re-parsed as XML.
+Microsoft's DDS programming guide; the KTX2 level index parsed by the KTX 2.0 spec's layout
+and its texels compared with the DDS file's; the snippet re-parsed as XML.
 """
 
 from __future__ import annotations
@@ -100,11 +101,27 @@ def test_dds_chain_and_sidecar(tmp_path, capsys):
     raw = out.read_bytes()
     assert raw[:4] == b"DDS " and struct.unpack_from("<I", raw, 28)[0] == 4 and raw[84:88] == b"DX10"
     assert len(raw) == 148 + 6 * (64 + 16 + 4 + 1) * 8
+    # the same chain as KTX 2.0 (picked by the suffix): each level's index entry (KTX spec: byte 80,
+    # 24 bytes a level, largest first) points at the DDS file's surfaces of that level, face by face
+    ktx = tmp_path / "sky.ktx2"
+    assert main(["export", CT, "--env", "builtin:sky", "-o", str(ktx), "--face-size", "8", "-q"]) == 0
+    data = ktx.read_bytes()
+    assert data[:12] == b"\xabKTX 20\xbb\r\n\x1a\n" and struct.unpack_from("<I", data, 12)[0] == 97
+    at = 148
+    for face in range(6):
+        for level, s in enumerate((8, 4, 2, 1)):
+            offset = struct.unpack_from("<Q", data, 80 + 24 * level)[0] + face * s * s * 8
+            assert data[offset : offset + s * s * 8] == raw[at : at + s * s * 8]
+            at += s * s * 8
+    ktx_sidecar = json.loads((tmp_path / "sky.ktx2.json").read_text())
+    assert {k: v for k, v in ktx_sidecar.items() if k not in ("file", "seconds")} == {
+        k: v for k, v in sidecar.items() if k not in ("file", "seconds")}
 
 
 @pytest.mark.parametrize(("args", "message"), [
     (["lambert:albedo=0.5", "-o", "x.png"], "suffix '.png' is not a format written"),
     (["lambert:albedo=0.5", "-o", "x.dds"], "--to dds needs --env"),
+    (["lambert:albedo=0.5", "-o", "x.ktx2"], "--to ktx2 needs --env"),
     (["lambert:albedo=0.5", "-o", "x.xml", "--env", "builtin:sky"], "--env is for --to dds"),
     (["lambert:albedo=0.5", "-o", "x.dds", "--env", "builtin:sky", "--face-size", "12"], "power of two"),
     (["lambert:albedo=7", "-o", "x.xml"], "albedo=7 outside"),
