@@ -50,6 +50,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ..analysis.components import connected_labels
 from ..brdf_io.env_rotation import check_env_rotation, to_map_frame
 from .camera import Camera, orbit_camera
 from .glsl import TO_MAP_UNIFORM, Shading, gbuffer_fragment_replacements, vertex_replacements
@@ -165,33 +166,6 @@ def _polydata(mesh: Mesh, attributes: dict[str, np.ndarray]):
     return poly
 
 
-def vertex_components(a: np.ndarray, b: np.ndarray, n: int) -> np.ndarray:
-    """Connected components of the undirected graph on vertices 0..n−1 with edges (a_k, b_k):
-    each vertex's label (n,), components numbered 0, 1, … in the order of their smallest vertex
-    (SciPy's numbering).
-
-    Minimum-label propagation along the edges with pointer jumping (label ← label[label]): a few
-    rounds for a mesh, O(log n) for a long chain. The same partition as SciPy's
-    ``csgraph.connected_components`` (tested), without importing ``scipy.sparse.linalg`` and
-    ``scipy.linalg`` (~0.4 s of every render's start-up) for one labelling.
-    """
-    label = np.arange(n)
-    a, b = np.asarray(a, dtype=np.intp), np.asarray(b, dtype=np.intp)
-    while True:
-        low = np.minimum(label[a], label[b])
-        new = label.copy()
-        np.minimum.at(new, label[a], low)  # the roots of both ends take the edge's smaller label
-        np.minimum.at(new, label[b], low)
-        while True:  # pointer jumping: every vertex to its root
-            jumped = new[new]
-            if np.array_equal(jumped, new):
-                break
-            new = jumped
-        if np.array_equal(new, label):
-            return np.unique(label, return_inverse=True)[1].reshape(n)
-        label = new
-
-
 def closed_outward(mesh: Mesh) -> bool:
     """Whether ``mesh`` is a closed surface whose faces all wind counter-clockwise seen from outside.
 
@@ -210,7 +184,7 @@ def closed_outward(mesh: Mesh) -> bool:
     directed = np.sort(a * n + b)
     if np.any(directed[1:] == directed[:-1]) or not np.array_equal(directed, np.sort(b * n + a)):
         return False
-    label = vertex_components(a, b, n)
+    label = connected_labels(a, b, n)
     v = mesh.vertices
     volume6 = np.einsum("ij,ij->i", v[faces[:, 0]], np.cross(v[faces[:, 1]], v[faces[:, 2]]))
     return bool(np.all(np.bincount(label[faces[:, 0]], weights=volume6) > 0.0))

@@ -153,22 +153,8 @@ def test_packed_atlas_sums_every_coefficient_and_channel(offscreen, atlas_sphere
     np.testing.assert_allclose(res.radiance[m], want, rtol=2e-4, atol=1e-4)
 
 
-def test_vertex_components_are_scipys() -> None:
-    """The numpy labelling against SciPy's connected_components on random graphs (isolated vertices,
-    chains, a long path that needs many jumps) and on a mesh with a stray vertex."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
 
-    from shrmkit.render.vtk_renderer import vertex_components
-
-    rng = np.random.default_rng(3)
-    cases = [(rng.integers(0, 50, 30), rng.integers(0, 50, 30), 60) for _ in range(20)]
-    perm = rng.permutation(2000)
-    cases.append((perm[:-1], perm[1:], 2000))  # one shuffled path
-    cases.append((np.array([], dtype=int), np.array([], dtype=int), 5))
-    for a, b, n in cases:
-        _, want = connected_components(coo_matrix((np.ones(a.size), (a, b)), shape=(n, n)), directed=False)
-        np.testing.assert_array_equal(vertex_components(a, b, n), want)
+def test_stray_vertices_do_not_change_closed_outward() -> None:
     sphere = load_mesh("builtin:sphere")
     stray = make_mesh(np.vstack([sphere.vertices[:1] * 0.0, sphere.vertices]), sphere.faces + 1, normalize=False)
-    assert closed_outward(stray) == closed_outward(sphere)
+    assert closed_outward(stray) and closed_outward(sphere)
