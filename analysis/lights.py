@@ -15,13 +15,13 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy import ndimage
 
 from ..brdf_io.brdf import BRDF
 from ..brdf_io.envmap import EnvironmentMap
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.exr import luminance_weights
 from ..brdf_io.latlong import row_solid_angles
+from .components import grid_labels
 from .pairs import sample_pairs_focused
 from .reference import local_frames
 
@@ -437,7 +437,7 @@ def _ring(rows: np.ndarray, cols: np.ndarray, height: int, width: int) -> tuple[
 def _components(mask: np.ndarray) -> tuple[np.ndarray, int]:
     """Connected regions of a lat-long mask, 8-neighbours, joined across the φ seam and, for regions
     touching the first or last row, around the pole. Labels 1..n."""
-    labels, n = ndimage.label(mask, structure=np.ones((3, 3), dtype=bool))
+    labels, n = grid_labels(mask)
     if n == 0:
         return labels, 0
     parent = np.arange(n + 1)

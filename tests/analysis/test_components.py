@@ -6,6 +6,7 @@ from scipy import ndimage
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
+from shrmkit.analysis import components
 from shrmkit.analysis.components import connected_labels, grid_labels
 
 
@@ -22,9 +23,12 @@ def test_graph_labels_are_scipys() -> None:
         np.testing.assert_array_equal(connected_labels(a, b, n), want)
 
 
+@pytest.mark.parametrize("numpy_max", [10**9, 100])
 @pytest.mark.parametrize("density", [0.0, 0.05, 0.3, 0.55, 1.0])
-def test_grid_labels_are_ndimage_labels(density: float) -> None:
-    """8-neighbour regions of random masks (and a spiral, one long region) number as ndimage does."""
+def test_grid_labels_are_ndimage_labels(density: float, numpy_max: int, monkeypatch) -> None:
+    """8-neighbour regions of random masks (and a spiral, one long region) number as ndimage does,
+    labelled in numpy (every mask under the size limit) or handed to ndimage (over it)."""
+    monkeypatch.setattr(components, "NUMPY_GRID_MAX_PIXELS", numpy_max)
     rng = np.random.default_rng(int(density * 100))
     masks = [rng.random((37, 64)) < density for _ in range(3)]
     spiral = np.zeros((21, 21), dtype=bool)
