@@ -29,6 +29,12 @@ from ..brdf_io.brdf import BRDF
 from ..brdf_io.curet import read_curet_all
 from ..brdf_io.errors import BadInputError, ShrmError
 from ..brdf_io.specs import BRDF_FILE_TYPES, brdf_sources, load_brdf
+from .defaults import CENSUS_F as DEFAULT_F  # numpy-free home, for the CLI's parsers
+from .defaults import CENSUS_MAX_F_LIMIT as MAX_F_LIMIT
+from .defaults import CENSUS_MAX_P_LIMIT as MAX_P_LIMIT
+from .defaults import CENSUS_MAX_WORKERS as MAX_WORKERS
+from .defaults import CENSUS_P as DEFAULT_P
+from .defaults import CENSUS_THRESHOLD as DEFAULT_THRESHOLD
 from .fit.crossval import DEFAULT_FOLDS
 from .fit.representation import CANDIDATES, RepresentationChoice, choose_representation
 from .fit.summary import FIT_FAIL_BAND_REL_RMS
@@ -55,15 +61,6 @@ __all__ = [
     "run_census",
 ]
 
-#: RH02 Fig. 8's orders: lighting order F = 30, view orders P = 0…5.
-DEFAULT_F = 30
-DEFAULT_P = 5
-#: The caps ``choose_orders`` accepts on the orders needed (checked once, before any row).
-MAX_F_LIMIT, MAX_P_LIMIT = 2000, 64
-#: Most worker processes ``run_census`` starts.
-MAX_WORKERS = 64
-#: RH02 Fig. 8's mark: 90 % of the energy captured.
-DEFAULT_THRESHOLD = 0.9
 #: A miss is put down to grazing energy when more than this share of the energy missed at (F, P)
 #: lies in the view bands beyond the view limit.
 GRAZING_SHARE = 0.5

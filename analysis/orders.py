@@ -45,6 +45,7 @@ from ..brdf_io.errors import BadInputError
 from ..brdf_io.reparam import ReparamBRDF, ReparamGrid, reparameterize
 from ..brdf_io.specs import load_brdf
 from .brdf_coeffs import BRDFCoefficients, rho_lpq
+from .defaults import DEFAULT_MAX_F, DEFAULT_MAX_P  # numpy-free home, for the CLI's parsers
 from .notebook import order_choice_html
 from .threads import single_threaded_blas
 from .tolerance import DEFAULT_EPS, check_eps
@@ -75,9 +76,6 @@ __all__ = [
     "DEFAULT_MAX_F",
     "DEFAULT_MAX_P",
 ]
-
-DEFAULT_MAX_F = 512
-DEFAULT_MAX_P = 20
 
 
 class OrdersClampedWarning(UserWarning):

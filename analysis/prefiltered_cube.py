@@ -33,11 +33,9 @@ from ..brdf_io.cubemap import CUBE_TO_PROJECT, cube_map_directions
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.latlong import bilinear_lookup
 from .baselines.split_sum import ggx_prefiltered
+from .defaults import MAX_CUBE_FACE_SIZE as MAX_FACE_SIZE  # numpy-free home, for the CLI's parsers
 
 __all__ = ["CubeChain", "ggx_cube_chain", "chain_roughness", "material_lod", "MAX_FACE_SIZE"]
-
-#: Largest face size accepted (texels).
-MAX_FACE_SIZE = 2048
 
 
 @dataclass(frozen=True, eq=False)

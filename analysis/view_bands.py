@@ -63,6 +63,7 @@ from ..brdf_io.errors import BadInputError
 from ..brdf_io.quadrature import gauss_legendre
 from ..brdf_io.reparam import ReparamGrid, sample_rho_hat_half
 from .brdf_coeffs import BRDFCoefficients, weighted_legendre
+from .defaults import CRITERIA, DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG  # numpy-free home, for the CLI's parsers
 from .sh import Lambda, legendre_f
 
 __all__ = [
@@ -74,12 +75,6 @@ __all__ = [
 
 #: Band edges of θ_v in degrees: 15° wide up to 60°, then 10° and 5° toward grazing.
 DEFAULT_BAND_EDGES_DEG = (0.0, 15.0, 30.0, 45.0, 60.0, 70.0, 75.0, 80.0, 85.0, 90.0)
-#: Default view limit: the order rule meets the tolerance in every band that starts below it.
-DEFAULT_MAX_VIEW_DEG = 80.0
-#: Order rules: ``"bands"`` (every band inside the view limit meets ε) and ``"rh02"``
-#: (RH02 §5.1: the unweighted energy over all views, and F_B = min(F_ρ, F_L) for a scene).
-CRITERIA = ("bands", "rh02")
-DEFAULT_CRITERION = "bands"
 
 _FLOAT32_REL = 2.0**-24
 #: Relative margin of every bound over its computed value: covers the Gauss–Legendre

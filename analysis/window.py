@@ -35,6 +35,12 @@ import numpy as np
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.latlong import pixel_angles, pixel_directions
 from .brdf_coeffs import BRDFCoefficients
+from .defaults import (  # numpy-free home, for the CLI's parsers
+    DEFAULT_WINDOW,
+    WINDOW_BUDGET_EPS,
+    WINDOW_THRESHOLD,
+    WINDOWS,
+)
 from .lighting import LightingCoefficients
 from .scene import lanczos_sigma, reflected_error_parts
 from .sh import real_sph_harm
@@ -47,18 +53,6 @@ __all__ = [
     "choose_window",
 ]
 
-#: The windows of :func:`prefilter` and of every verb that prefilters (``--window``);
-#: :func:`check_window` is their one validator.
-WINDOWS = ("none", "lanczos", "auto")
-DEFAULT_WINDOW = "auto"
-#: ``auto`` windows when the undershoot (most negative sampled radiance over the largest,
-#: worst channel; :func:`undershoot`) exceeds this fraction. Chosen from renders of the Grace
-#: probe with Phong s = 32: black blotches are visible (+4 stops) at 0.4 % of the peak, barely
-#: at 0.15 %, not at 0.03 % (README, accuracy).
-WINDOW_THRESHOLD = 1e-3
-#: ``auto``'s window may add at most this many ε of error energy to ε_B (worst channel): with
-#: the truncation's own ≲ ε, √ε_B stays inside the tested 2√ε + 1 % relative RMS.
-WINDOW_BUDGET_EPS = 2.0
 #: Largest view angle θ_v = angle(N, V) of the full-map undershoot sample (:func:`undershoot_samples`).
 UNDERSHOOT_MAX_VIEW_DEG = 85.0
 
@@ -212,8 +206,6 @@ def _strength_for(before: np.ndarray, full: np.ndarray, threshold: float, t_max:
         else:
             lo = mid
     return hi
-
-
 
 
 @dataclass(frozen=True)

@@ -22,10 +22,10 @@ import zlib
 import numpy as np
 
 from .colour import REC709_LUMA
+from .names import TONE_MAP_NAMES as TONE_MAPS  # numpy-free home, for the CLI's parsers
 
 __all__ = ["TONE_MAPS", "tone_map", "srgb_encode", "to_8bit", "middle_grey_exposure", "encode_png"]
 
-TONE_MAPS = ("srgb", "filmic")
 #: Exposures :func:`middle_grey_exposure` returns stay within ± this many stops.
 MAX_AUTO_STOPS = 20.0
 

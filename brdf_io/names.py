@@ -1,13 +1,14 @@
 """Numpy-free names of brdf_io's registries, for what must start fast (``shrm VERB --help`` and
 usage errors: issue 26).
 
-The registries themselves import the readers and writers (numpy): the BRDF file types
+The one home of the tone curves' names (:data:`~shrmkit.brdf_io.display.TONE_MAPS`) and of the
+largest Zernike order (:data:`~shrmkit.brdf_io.zernike.MAX_ORDER`). The registries hold readers
+and writers (numpy), so their names are mirrored here, in their order: the BRDF file types
 (:data:`~shrmkit.brdf_io.specs.BRDF_FILE_TYPES`), the RGL incident directions
 (:data:`~shrmkit.brdf_io.rgl.RGL_INCIDENT`), the export formats
 (:data:`~shrmkit.brdf_io.export_formats.EXPORT_FORMATS`), the DDS texel formats
-(:data:`~shrmkit.brdf_io.dds.DDS_FORMATS`) and the tone curves
-(:data:`~shrmkit.brdf_io.display.TONE_MAPS`). The names here are theirs, in their order;
-``tests/cli/test_cli_startup.py`` checks that both agree. Internal module.
+(:data:`~shrmkit.brdf_io.dds.DDS_FORMATS`); ``tests/cli/test_cli_startup.py`` checks that both
+agree. Internal module.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ __all__ = [
     "EXPORT_FORMAT_SUFFIXES",
     "DDS_FORMAT_NAMES",
     "TONE_MAP_NAMES",
+    "ZERNIKE_MAX_ORDER",
 ]
 
 #: The BRDF file suffixes ``load_brdf`` reads (the keys of ``specs.BRDF_FILE_TYPES``).
@@ -45,3 +47,5 @@ EXPORT_FORMAT_SUFFIXES = {
 DDS_FORMAT_NAMES = ("rgba16f", "rgba32f", "rgba8")
 #: The tone curves of ``display.tone_map`` (``display.TONE_MAPS``).
 TONE_MAP_NAMES = ("srgb", "filmic")
+#: Largest supported Zernike order (506 terms); the limit keeps basis matrices small (``zernike.MAX_ORDER``).
+ZERNIKE_MAX_ORDER = 20

@@ -18,6 +18,7 @@ import numpy as np
 
 from .brdf import BRDF, Kind, as_directions
 from .errors import BadInputError
+from .names import ZERNIKE_MAX_ORDER as MAX_ORDER  # numpy-free home, for the CLI's parsers
 
 __all__ = [
     "TERMS_PER_ORDER",
@@ -34,8 +35,6 @@ __all__ = [
     "check_order",
 ]
 
-#: Largest supported order (506 terms); the limit keeps basis matrices small.
-MAX_ORDER = 20
 #: Direction pairs evaluated at once by :meth:`ZernikeBRDF.eval` (bounds its temporary memory).
 EVAL_BLOCK = 32768
 #: Largest |coefficient| a spec string may give, 1/sr (keeps every evaluation finite).

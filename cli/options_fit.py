@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from ..analysis.defaults import DEFAULT_FOLDS, FIT_METRICS, FIT_MODELS, ZERNIKE_MAX_ORDER
+from ..analysis.defaults import DEFAULT_FOLDS, FIT_METRICS, FIT_MODELS
+from ..brdf_io.names import ZERNIKE_MAX_ORDER
 from .options import add_rgl_incident, brdf_help, number_in
 
 __all__ = ["HELP", "MODEL_CHOICES", "model_arg", "add_arguments"]

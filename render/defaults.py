@@ -1,12 +1,12 @@
 """Numpy-free names, defaults and help of render, for what must start fast (``shrm VERB --help``
 and usage errors: issue 26).
 
-The modules that use them import numpy, scipy and VTK; the values here are theirs
-(``tests/cli/test_cli_startup.py`` checks that both agree): the render-mode table
-(:data:`~shrmkit.render.modes.RENDER_MODES`), the backgrounds
-(:data:`~shrmkit.render.pipeline.BACKGROUNDS`), the error image's help
-(:data:`~shrmkit.render.error_image.ERROR_IMAGE_HELP`) and the live view's defaults
-(:mod:`~shrmkit.render.webgl_page`). Internal module.
+The one home of the backgrounds (:data:`~shrmkit.render.pipeline.BACKGROUNDS`) and of the live
+view's defaults (:mod:`~shrmkit.render.webgl_page`). Mirrored from modules that import numpy,
+scipy and VTK (``tests/cli/test_cli_startup.py`` checks that both agree): the render-mode table's
+names, help, default, self-shadow and lobe-option modes (:data:`~shrmkit.render.modes.RENDER_MODES`;
+a new mode adds its line here), and the error image's help
+(:data:`~shrmkit.render.error_image.ERROR_IMAGE_HELP`). Internal module.
 """
 
 from __future__ import annotations
@@ -38,13 +38,16 @@ ERROR_IMAGE_HELP = (
     "the value in R, G and B, NaN outside the object; from each pixel's R and V and the per-band "
     "statements, capped at 10; modes distant, perpixel, kautz-mccool; data_specs/render_outputs.md)"
 )
-#: The live view's render modes (``webgl_page.VIEW_MODES``).
+#: The render modes the live view's page draws (``render.modes`` names; ``webgl_page.VIEW_MODES``).
 VIEW_MODES = ("distant", "perpixel")
-#: The live view's mesh when none is given (``webgl_page.DEFAULT_MESH``).
+#: The live view's mesh when none is given: an icosphere of 5120 triangles (92 KB of vertex data;
+#: ``webgl_page.DEFAULT_MESH``).
 DEFAULT_VIEW_MESH = "builtin:sphere:subdivisions=4"
-#: The live view's starting camera: degrees, and zoom (``webgl_page.DEFAULT_VIEW``).
+#: The live view's initial view: degrees about z from +x, degrees above the xy plane, zoom factor
+#: (``webgl_page.DEFAULT_VIEW``).
 DEFAULT_VIEW = {"azimuth": 30.0, "elevation": 20.0, "zoom": 1.0}
-#: The renderers of the live view's still image (``webgl_page.STILL_RENDERERS``).
+#: ``build_view(still=...)``: how the still image for browsers without WebGL2 is rendered
+#: (``webgl_page.STILL_RENDERERS``).
 STILL_RENDERERS = ("auto", "cpu", "gl", "none")
 #: The live view page's size budget in bytes (``webgl_page.ViewBudget().page_bytes``).
 DEFAULT_PAGE_BYTES = 8 << 20

@@ -18,14 +18,13 @@ from numpy.typing import ArrayLike
 
 from ..brdf_io.env_rotation import check_env_rotation, rotation_about_z
 from .camera import Camera, orbit_camera
+from .defaults import BACKGROUNDS  # numpy-free home, for the CLI's parsers
 from .mesh import Mesh
 from .modes import DEFAULT_MODE
 from .output import composite, environment_background
 from .vtk_renderer import SHRMRenderer
 
 __all__ = ["Frame", "FrameTimings", "BACKGROUNDS", "turntable_cameras", "light_turntable_rotations", "render_frames"]
-
-BACKGROUNDS = ("env", "black", "transparent")
 
 
 @dataclass(frozen=True, eq=False)

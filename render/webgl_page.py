@@ -36,6 +36,8 @@ from ..brdf_io.latlong import bilinear_corners, bilinear_lookup, row_edges_cos
 from .brdf_glsl import TABLE_SHADER, BrdfTable, brdf_shader_for, choose_table, light_shading, lights_glsl_parts
 from .camera import Camera, orthonormal_frame
 from .cpu_reference import shade, sphere_geometry
+from .defaults import DEFAULT_PAGE_BYTES, DEFAULT_VIEW, STILL_RENDERERS, VIEW_MODES  # numpy-free home (CLI parsers)
+from .defaults import DEFAULT_VIEW_MESH as DEFAULT_MESH
 from .mesh import Mesh, load_mesh, make_mesh
 from .offscreen import probe_offscreen
 from .output import TONE_MAPS, composite, environment_background, to_8bit
@@ -65,18 +67,10 @@ __all__ = [
     "stored_lights",
 ]
 
-#: The render modes the page draws (``render.modes`` names).
-VIEW_MODES = ("distant", "perpixel")
-#: The mesh when none is given: an icosphere of 5120 triangles (92 KB of vertex data).
-DEFAULT_MESH = "builtin:sphere:subdivisions=4"
-#: The initial view: degrees about z from +x, degrees above the xy plane, zoom factor.
-DEFAULT_VIEW = {"azimuth": 30.0, "elevation": 20.0, "zoom": 1.0}
 #: The camera: eye at this distance from the origin (the mesh is in the unit sphere) ...
 CAMERA_DISTANCE = 3.0
 #: ... and at zoom 1 the vertical field of view is tangent to a sphere of this radius.
 CAMERA_MARGIN = 1.15
-#: ``build_view(still=...)``: how the still image for browsers without WebGL2 is rendered.
-STILL_RENDERERS = ("auto", "cpu", "gl", "none")
 #: Elevations are clamped to ±this (the image up is +z).
 MAX_ELEVATION = 89.0
 #: Half floats: coefficients are multiplied by a power of two that brings their largest
@@ -114,7 +108,7 @@ class ViewBudget:
         the target, or the coarsest (``render.brdf_glsl.choose_table``).
     """
 
-    page_bytes: int = 8 << 20
+    page_bytes: int = DEFAULT_PAGE_BYTES
     mesh_bytes: int = 1 << 20
     env_rows: int = 256
     still_size: int = 384

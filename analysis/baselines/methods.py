@@ -41,6 +41,11 @@ from typing import Any
 import numpy as np
 
 from ...brdf_io.errors import BadInputError
+from ..defaults import (  # (default, lo, hi)
+    GAUSSIAN_ELEVATIONS_LIMITS,
+    GAUSSIAN_LOBES_LIMITS,
+    RSIBR_REFERENCE_HEIGHT_LIMITS,
+)
 from ..lights import DEFAULT_LIGHTS
 from ..orders import OrderChoice
 from ..shrm import DEFAULT_WINDOW, SHRM, prefilter
@@ -201,7 +206,7 @@ def kautz_mccool_model(
 
 
 #: Rows of the reference maps of ``rsibr_model(source="reference")`` (the original method's cost).
-RSIBR_REFERENCE_HEIGHT = Setting("reference_height", 32, 2, 512,
+RSIBR_REFERENCE_HEIGHT = Setting("reference_height", *RSIBR_REFERENCE_HEIGHT_LIMITS,
                                  "rows of the twelve maps computed by the angular integral (source 'reference')")
 
 
@@ -231,8 +236,8 @@ def rsibr_model(
 
 
 #: The Gaussian-lobe fit's settings (their limits: ``data_specs/methods.md``).
-GAUSSIAN_LOBES = Setting("lobes", 3, 1, 8, "lobes per view elevation K")
-GAUSSIAN_ELEVATIONS = Setting("elevations", 15, 1, 64, f"fitted view elevations, evenly on [0, "
+GAUSSIAN_LOBES = Setting("lobes", *GAUSSIAN_LOBES_LIMITS, "lobes per view elevation K")
+GAUSSIAN_ELEVATIONS = Setting("elevations", *GAUSSIAN_ELEVATIONS_LIMITS, f"fitted view elevations, evenly on [0, "
                               f"{GAUSSIAN_MAX_VIEW_DEG:g}] deg")
 
 

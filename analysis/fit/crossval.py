@@ -20,13 +20,10 @@ from collections.abc import Callable
 import numpy as np
 
 from ...brdf_io.errors import BadInputError
+from ..defaults import DEFAULT_FOLDS  # numpy-free home, for the CLI's parsers
 from .sampling import FitSamples
 
 __all__ = ["DEFAULT_FOLDS", "fold_of", "subset", "held_out"]
-
-#: Folds of the cross-validation (Hastie et al. §7.10: 5 or 10; 5 keeps 80 % of CURET's 205
-#: geometries, 164, for each training fit — more than the 91 terms of a Zernike order 10).
-DEFAULT_FOLDS = 5
 
 
 def fold_of(n: int, folds: int = DEFAULT_FOLDS, *, seed: int = 0) -> np.ndarray:

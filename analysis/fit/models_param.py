@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 
 from ...brdf_io.models import AnalyticModel, CookTorrance, Lafortune, LafortuneLobe, SimplifiedMicrofacet, rgb
+from ..defaults import FIT_MODELS as MODELS  # numpy-free home, for the CLI's parsers
 from .sampling import FitSamples
 
 __all__ = [
@@ -46,8 +47,6 @@ __all__ = [
     "make_param",
     "MODELS",
 ]
-
-MODELS = ("lafortune", "cook-torrance", "microfacet")
 
 
 @dataclass(frozen=True, eq=False)

@@ -38,6 +38,7 @@ from ...brdf_io.errors import BadInputError
 from ...brdf_io.models import AnalyticModel
 from ...brdf_io.specs import load_brdf
 from ...brdf_io.zernike import ZernikeBRDF
+from ..defaults import REPRESENTATION_CANDIDATES as CANDIDATES  # numpy-free home, for the CLI's parsers
 from ..threads import single_threaded_blas
 from .crossval import DEFAULT_FOLDS, held_out
 from .isotropy import Isotropy, measure_isotropy
@@ -50,8 +51,6 @@ from .zernike import fit_zernike_cv
 __all__ = ["CANDIDATES", "CandidateError", "RepresentationChoice", "choose_representation",
            "incident_azimuths_vary"]
 
-#: The representations tried, in this order (a tie goes to the earlier one).
-CANDIDATES = ("lafortune", "cook-torrance", "zernike")
 #: Local runs of each fold's nlopt fit (then the polish). The fold's starting points are the
 #: fit to all samples' optimum and its global stage's seeds (``fit_brdf(start=...)``), ranked on
 #: the fold's own samples. Against the per-fold global stage and 2 runs this replaces, on the 61

@@ -96,9 +96,9 @@ def test_the_light_names_are_the_registries():
         assert _outcome(defaults.check_lights, value) == expected, value
     assert (defaults.CRITERIA, defaults.DEFAULT_CRITERION, defaults.DEFAULT_MAX_VIEW_DEG) == (
         view_bands.CRITERIA, view_bands.DEFAULT_CRITERION, view_bands.DEFAULT_MAX_VIEW_DEG)
-    assert (defaults.FIT_MODELS, defaults.FIT_METRICS, defaults.DEFAULT_FOLDS, defaults.ZERNIKE_MAX_ORDER,
-            defaults.REPRESENTATION_CANDIDATES) == (models_param.MODELS, metrics.METRICS, crossval.DEFAULT_FOLDS,
-                                                    zernike.MAX_ORDER, representation.CANDIDATES)
+    assert names.ZERNIKE_MAX_ORDER == zernike.MAX_ORDER
+    assert (defaults.FIT_MODELS, defaults.FIT_METRICS, defaults.DEFAULT_FOLDS, defaults.REPRESENTATION_CANDIDATES) == (
+        models_param.MODELS, metrics.METRICS, crossval.DEFAULT_FOLDS, representation.CANDIDATES)
     assert (defaults.CENSUS_F, defaults.CENSUS_P, defaults.CENSUS_THRESHOLD, defaults.CENSUS_MAX_F_LIMIT,
             defaults.CENSUS_MAX_P_LIMIT, defaults.CENSUS_MAX_WORKERS) == (
         census.DEFAULT_F, census.DEFAULT_P, census.DEFAULT_THRESHOLD, census.MAX_F_LIMIT, census.MAX_P_LIMIT,
