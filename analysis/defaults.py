@@ -6,10 +6,10 @@ The one home of: the order caps (:mod:`~shrmkit.analysis.orders`), the window
 models, metrics, folds and candidates (:mod:`~shrmkit.analysis.fit`), the census's orders and caps
 (:mod:`~shrmkit.analysis.census`), the published methods' settings
 (:mod:`~shrmkit.analysis.baselines.methods`) and the prefiltered cube's largest face
-(:mod:`~shrmkit.analysis.prefiltered_cube`): those modules import them from here, under their
-own names. Mirrored here from modules that import numpy (``tests/cli/test_cli_startup.py`` checks
-that both agree): the explicit lights' constants and validator (:mod:`~shrmkit.analysis.lights`)
-and ``CompareOptions()``'s defaults (:mod:`~shrmkit.analysis.compare`). Internal module.
+(:mod:`~shrmkit.analysis.prefiltered_cube`) and the explicit lights' constants and validator
+(:mod:`~shrmkit.analysis.lights`): those modules import them from here, under their own names.
+Mirrored here (``tests/cli/test_cli_startup.py`` checks that both agree): ``CompareOptions()``'s
+defaults (:mod:`~shrmkit.analysis.compare`). Internal module.
 """
 
 from __future__ import annotations
@@ -47,21 +47,21 @@ WINDOW_THRESHOLD = 1e-3
 #: the truncation's own ≲ ε, √ε_B stays inside the tested 2√ε + 1 % relative RMS.
 WINDOW_BUDGET_EPS = 2.0
 
-#: ``lights=``: the named modes (or a number N) and the default (``lights.LIGHT_MODES``, ``DEFAULT_LIGHTS``).
+#: ``--lights``: ``auto`` (default), ``none``, or a number N (at most N lights).
 LIGHT_MODES = ("auto", "none")
 DEFAULT_LIGHTS = "auto"
-#: A light is this many times brighter than the map's median (``lights.LIGHT_CONTRAST``) ...
+#: A pixel can belong to a light when its luminance is this many times the map's solid-angle-weighted
+#: median (the sky, the room): the sun of ``builtin:sky`` is 10⁴×, Grace's windows 10²–10⁴×.
 LIGHT_CONTRAST = 100.0
-#: ... within a cap of this radius in degrees (``lights.MAX_LIGHT_RADIUS_DEG``) ...
+#: A bright region is a light when it fits in a cap of this angular radius about its centre.
 MAX_LIGHT_RADIUS_DEG = 5.0
-#: ... and at most this many per map (``lights.MAX_LIGHTS``).
+#: At most this many lights per map (the brightest by flux).
 MAX_LIGHTS = 8
 
 
 def check_lights(value: Any) -> str | int:
-    """``lights=``/``--lights`` checked as :func:`shrmkit.analysis.lights.check_lights` does it
-    (``"auto"``, ``"none"`` or an integer N in [0, :data:`MAX_LIGHTS`], 0 read as ``"none"``),
-    without numpy.
+    """The one validator of ``lights=``/``--lights`` (:mod:`~shrmkit.analysis.lights`): ``"auto"``,
+    ``"none"`` or an integer N in [0, :data:`MAX_LIGHTS`] (0 is ``"none"``; numpy integers count).
 
     Raises
     ------

@@ -22,6 +22,14 @@ from ..brdf_io.errors import BadInputError
 from ..brdf_io.exr import luminance_weights
 from ..brdf_io.latlong import row_solid_angles
 from .components import grid_labels
+from .defaults import (  # numpy-free home: the CLI's parsers check --lights without numpy
+    DEFAULT_LIGHTS,
+    LIGHT_CONTRAST,
+    LIGHT_MODES,
+    MAX_LIGHT_RADIUS_DEG,
+    MAX_LIGHTS,
+    check_lights,
+)
 from .pairs import sample_pairs_focused
 from .reference import local_frames
 
@@ -31,35 +39,8 @@ __all__ = [
     "merge_error_by_band", "MERGE_PAIRS_PER_BAND", "MERGE_ERROR_PAIRS_PER_BAND",
 ]
 
-#: ``--lights``: ``auto`` (default), ``none``, or a number N (at most N lights).
-LIGHT_MODES = ("auto", "none")
-DEFAULT_LIGHTS = "auto"
-#: A pixel can belong to a light when its luminance is this many times the map's solid-angle-weighted
-#: median (the sky, the room): the sun of ``builtin:sky`` is 10⁴×, Grace's windows 10²–10⁴×.
-LIGHT_CONTRAST = 100.0
-#: A bright region is a light when it fits in a cap of this angular radius about its centre.
-MAX_LIGHT_RADIUS_DEG = 5.0
-#: At most this many lights per map (the brightest by flux).
-MAX_LIGHTS = 8
 #: Samples per light: one per pixel up to this count, median-cut groups beyond.
 MAX_SAMPLES_PER_LIGHT = 16
-
-
-def check_lights(value: Any) -> str | int:
-    """The one validator of ``lights=``/``--lights``: ``"auto"``, ``"none"`` or an integer N in
-    [0, :data:`MAX_LIGHTS`] (0 is ``"none"``); BadInputError otherwise."""
-    if isinstance(value, str):
-        text = value.strip().lower()
-        if text in LIGHT_MODES:
-            return text
-        try:
-            value = int(text)
-        except ValueError:
-            raise BadInputError(None, f"lights={value!r}: choose auto, none or a number of lights "
-                                      f"0..{MAX_LIGHTS}") from None
-    if isinstance(value, bool) or not isinstance(value, int | np.integer) or not 0 <= int(value) <= MAX_LIGHTS:
-        raise BadInputError(None, f"lights={value!r}: choose auto, none or a number of lights 0..{MAX_LIGHTS}")
-    return "none" if int(value) == 0 else int(value)
 
 
 @dataclass(frozen=True)
