@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from scipy.special import sph_harm_y
+from scipy.special import roots_legendre, sph_harm_y
 
 from shrmkit.analysis.sh import (
     LEGENDRE_TESTED_LMAX,
@@ -87,9 +87,12 @@ def test_wigner_unitary_high_degree():
 
 def test_legendre_orthonormal_at_the_tested_limit():
     """At l = LEGENDRE_TESTED_LMAX the f_lm stay orthonormal under Gauss–Legendre quadrature
-    (exact for these polynomial degrees): 2π Σ_k w_k f_lm(x_k) f_l'm(x_k) = δ_ll'."""
+    (exact for these polynomial degrees): 2π Σ_k w_k f_lm(x_k) f_l'm(x_k) = δ_ll'. The nodes and
+    weights are SciPy's ``roots_legendre`` (asymptotic expansions, 0.2 s), not NumPy's ``leggauss``
+    (a 2002 × 2002 companion-matrix eigenproblem, 5.5 s CPU): the same nodes to 1e-16 and weights to
+    1e-10 relative; the Gram matrix is within 1.6e-10 of the identity with either."""
     L = LEGENDRE_TESTED_LMAX
-    x, w = np.polynomial.legendre.leggauss(L + 2)
+    x, w = roots_legendre(L + 2)
     f = legendre_f(L, 8, x)
     for m in (0, 4, 8):
         gram = 2.0 * np.pi * (f[m:, m, :] * w) @ f[m:, m, :].T
