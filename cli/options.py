@@ -97,13 +97,14 @@ def brdf_help(*, many: bool = False) -> str:
 
 def add_env_orientation(parser: argparse.ArgumentParser) -> None:
     """``--env-up``, ``--env-flip``, ``--env-azimuth``: how a lat-long *file* is oriented
-    (data_specs/environment_maps.md; the shared Grace probe needs ``--env-up y --env-flip``);
+    (data_specs/environment_maps.md; ``load_env`` reads lat-long files y-up by default);
     ``--env-layer``, ``--env-part``: which layer/part of an OpenEXR file holds the map (§2.1)."""
     group = parser.add_argument_group(
         "environment orientation (--env-up/--env-flip: map files only, refused for builtin: maps; "
         "--env-azimuth: any map)")
     group.add_argument("--env-up", choices=("z", "y"), default=None,
-                       help="lat-long file convention: z (top row = zenith, default) or y (y-up files)")
+                       help="lat-long file convention: y (default: y-up, as Blender, three.js and Mitsuba 3 place "
+                       "panoramas) or z (top row = zenith, the file read as stored)")
     group.add_argument("--env-flip", action="store_true", help="reverse the rows of a lat-long file first")
     group.add_argument("--env-azimuth", type=float, default=0.0, metavar="DEG",
                        help="rotate the map about the up axis by this many degrees")

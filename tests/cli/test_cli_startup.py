@@ -129,3 +129,17 @@ def test_the_light_names_are_the_registries():
         webgl_page.VIEW_MODES, webgl_page.DEFAULT_MESH, webgl_page.DEFAULT_VIEW, webgl_page.STILL_RENDERERS,
         webgl_page.ViewBudget().page_bytes)
 
+
+
+def test_env_up_help_names_the_default_load_env_applies():
+    """``--env-up``'s help names the orientation a lat-long file is read with when it is not given."""
+    from pathlib import Path
+
+    from shrmkit.brdf_io.envmap import load_env
+    from shrmkit.cli.main import build_parser
+
+    env = load_env(Path(__file__).parents[1] / "resources" / "tiny_4x8.hdr")
+    default = "y" if "[latlong, up=y" in env.source else "z"
+    orders = build_parser()._subparsers._group_actions[0].choices["orders"]
+    up = next(a for a in orders._actions if "--env-up" in a.option_strings)
+    assert up.default is None and up.help.startswith(f"lat-long file convention: {default} (default")
