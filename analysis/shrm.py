@@ -420,7 +420,7 @@ def prefilter(
     array([[0.5, 0.5, 0.5],
            [0.5, 0.5, 0.5]])
 
-    A file works the same way (a 4 × 8 Radiance ``.hdr``, z-up lat-long):
+    A file works the same way (a 4 × 8 Radiance ``.hdr``, a lat-long file read y-up by default):
 
     >>> m = prefilter("tests/resources/tiny_4x8.hdr", "phong:s=8", eps=0.1)
     >>> m.P, m.F <= 3   # Phong needs no view dependence; the 4-row map resolves l <= 3
