@@ -24,6 +24,7 @@ from ..brdf_io.errors import BadInputError
 from ..brdf_io.specs import brdf_sources
 from ..render.mesh import load_mesh
 from .common import (
+    orientation_note,
     print_json,
     rgl_brdf_arg,
     stderr,
@@ -81,7 +82,7 @@ def say(text: str) -> None:
 
 def run(args: argparse.Namespace) -> int:
     options = options_from_args(args)
-    _check_shared_inputs(options)
+    _check_shared_inputs(options, show=not args.json)
     _check_brdf_files(args.brdfs)
     # a whole multi-BRDF file (the 61 CURET samples, a CSV's wavelengths) is one report per member
     sources = [rgl_brdf_arg(member, args) for source in args.brdfs for member in brdf_sources(source)]
@@ -147,11 +148,14 @@ def _check_brdf_files(sources: list[str]) -> None:
             raise BadInputError(path, "no such BRDF file")
 
 
-def _check_shared_inputs(options) -> None:
+def _check_shared_inputs(options, show: bool = True) -> None:
     """Inputs every BRDF of the batch uses (environments, mesh) are checked once, up front:
-    a bad one is a usage error (exit 2), not one failure per BRDF."""
-
+    a bad one is a usage error (exit 2), not one failure per BRDF. A lat-long map file read with
+    the default orientation says so (``orientation_note``), as every other verb does."""
+    orientation = argparse.Namespace(env_up=options.env_up, env_flip=options.env_flip, env_azimuth=options.env_azimuth)
     for spec in options.envs:
-        load_report_env(spec, options)
+        note = orientation_note(load_report_env(spec, options), orientation)
+        if note and show:
+            say(note)
     if options.mesh:
         load_mesh(options.mesh)

@@ -171,3 +171,18 @@ def test_default_orientation_of_a_lat_long_file_is_never_silent(tmp_path, capsys
     assert main(["prefilter", "--env", hdr, "--brdf", "phong:s=8", "--eps", "0.1", "--json",
                  "-o", str(tmp_path / "c.npz")]) == 0
     json.loads(capsys.readouterr().out)  # the JSON alone
+
+
+def test_report_states_the_default_orientation_of_its_map_files(capsys):
+    """shrm report checks its maps once before the batch and, like every verb, names the y-up
+    reading of a lat-long file (not with --json, nor for an explicit --env-up)."""
+    from shrmkit.cli.cmd_report import _check_shared_inputs
+    from shrmkit.cli.report.options import profile
+
+    hdr = str(Path(__file__).parents[1] / "resources" / "tiny_4x8.hdr")
+    _check_shared_inputs(profile("quick", envs=(hdr, "builtin:sky")), show=True)
+    out = capsys.readouterr().out.splitlines()
+    assert len(out) == 1 and out[0].startswith("environment tiny_4x8: a lat-long file read y-up")
+    _check_shared_inputs(profile("quick", envs=(hdr,)), show=False)
+    _check_shared_inputs(profile("quick", envs=(hdr,), env_up="z"), show=True)
+    assert capsys.readouterr().out == ""
