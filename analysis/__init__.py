@@ -5,7 +5,9 @@ angular-domain reference (DESIGN §4–6). Imports only :mod:`shrmkit.brdf_io`.
 Public API — the names in ``__all__``, importable from ``shrmkit.analysis``:
 
 - The SHRM: :func:`prefilter` (environment × BRDF → :class:`SHRM`, [RH02] §4–5),
-  :func:`load_shrm` (``data_specs/shrm_file.md``).
+  :func:`load_shrm` (``data_specs/shrm_file.md``); what a prefilter states, typed (``SHRM.info``):
+  :class:`PrefilterInfo` with :class:`WindowInfo`, :class:`LightsInfo`, :class:`Timings`,
+  :class:`ViewBand`.
 - Orders: :func:`choose_orders` and :func:`choose_orders_many` ([RH02] §5.1) returning
   :class:`OrderChoice`; the defaults :data:`DEFAULT_EPS`, :data:`DEFAULT_MAX_VIEW_DEG` and the
   rules :data:`CRITERIA`; :class:`BandStatement`, one view band's stated error
@@ -40,6 +42,11 @@ _LAZY = {
     "SHRM": "shrmkit.analysis.shrm",
     "prefilter": "shrmkit.analysis.shrm",
     "load_shrm": "shrmkit.analysis.shrm",
+    "PrefilterInfo": "shrmkit.analysis.records",
+    "WindowInfo": "shrmkit.analysis.records",
+    "LightsInfo": "shrmkit.analysis.records",
+    "Timings": "shrmkit.analysis.records",
+    "ViewBand": "shrmkit.analysis.records",
     "OrderChoice": "shrmkit.analysis.orders",
     "choose_orders": "shrmkit.analysis.orders",
     "choose_orders_many": "shrmkit.analysis.orders",
