@@ -1,4 +1,4 @@
-"""Accuracy table ε(F, P) and the error-driven choice of orders (RH02 §5.1, Appendix C).
+"""Accuracy table ε(F, P) and the error-driven choice of orders ([RH02] §5.1, Appendix C).
 
     A(F, P) = Σ_{l<=F, p<=P, |q|<=min(l,p)} ρ̂_{lq,pq}² / ∫∫ ρ̂² dω_i dω_o,   ε = 1 − A,
 
@@ -6,7 +6,7 @@ with the total energy computed independently by quadrature of ρ̂² (not by sum
 coefficients). RGB: ε is computed per channel and the *worst* channel is reported (a
 material is as hard as its sharpest channel); channels with no energy are ignored.
 
-Choice rule (RH02 §5.1): with (F0, P0) large enough that ε(F0, P0) <= tol,
+Choice rule ([RH02] §5.1): with (F0, P0) large enough that ε(F0, P0) <= tol,
 P = min{p : ε(F0, p) <= tol}, then F = min{f : ε(f, P) <= tol}.
 
 Two tables ε(F, P) feed that rule (``criterion``):
@@ -16,8 +16,8 @@ Two tables ε(F, P) feed that rule (``criterion``):
   with the view dependence fitted to those views
   (:func:`~shrmkit.analysis.view_bands.fit_view_coefficients`) — every band the user looks
   at meets the tolerance, grazing views included;
-- ``"rh02"``: RH02's unweighted energy over all views, with the projected coefficients
-  (reproduces RH02 Table 5 and the Phong closed form F ≈ sqrt(−s ln ε)).
+- ``"rh02"``: [RH02]'s unweighted energy over all views, with the projected coefficients
+  (reproduces [RH02] Table 5 and the Phong closed form F ≈ sqrt(−s ln ε)).
 
 (F0, P0) are the full capacity of the quadrature grid (every order the grid integrates
 orthonormally), so the rule sees all the energy the samples hold. When ε(F0, P0) > tol
@@ -25,8 +25,7 @@ the grid is refined (doubled) until the tolerance is met or the caps ``max_F``/`
 are hit; then the result says so (``capped``) instead of looping. The choice is
 re-checked on a 1.5× finer grid (``converged``).
 
-Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
-SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
+Reference: [RH02] (``data_specs/bibliography.md``).
 """
 
 from __future__ import annotations

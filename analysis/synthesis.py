@@ -1,11 +1,10 @@
-"""Synthesis of the local and global SHRM from lighting and BRDF coefficients (RH02 §4–5,
+"""Synthesis of the local and global SHRM from lighting and BRDF coefficients ([RH02] §4–5,
 eqs. 5–8; DESIGN §5–6): one spin-weighted spherical-harmonic synthesis (ducc0) per view order p,
 azimuthal order |q| and channel, the rotation of the local SHRM into the global one, a slow
 direct path (explicit Wigner-d sums) as the reference, and the reflected field at fixed local
 views on a coarse grid (the undershoot sample of :mod:`~shrmkit.analysis.window`).
 
-Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
-SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
+Reference: [RH02] (``data_specs/bibliography.md``).
 """
 
 from __future__ import annotations

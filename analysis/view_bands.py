@@ -1,13 +1,13 @@
 """Error by view band: how accurate a truncated BRDF or SHRM is at each view elevation θ_v.
 
-RH02's ε is one number, an energy average over all views, and hides where the error lives:
+[RH02]'s ε is one number, an energy average over all views, and hides where the error lives:
 physically based lobes put most of their ρ̂ energy at grazing views and are poorly
 represented exactly there (DESIGN §4). This module states the error per band of the view
 elevation θ_v = θ_o'/2 (the angle between the view and the normal N = normalize(R + V'),
-RH02 §3.1), from the coefficients alone — no brute force.
+[RH02] §3.1), from the coefficients alone — no brute force.
 
 **The identity.** Let T_lq(θ_o') = 2π ∫∫ ρ̂(θ_i', θ_o', φ') f_lq(θ_i') cos(qφ') sin θ_i' dθ_i' dφ'
-(the first and last passes of RH02 Appendix C, without the θ_o' pass), so that
+(the first and last passes of [RH02] Appendix C, without the θ_o' pass), so that
 T_lq(θ_o') = 2π Σ_p ρ̂_lpq f_pq(θ_o'). For the reflected field B = Σ L_lm ρ̂_lpq 𝒟^l_mq Y_pq
 (DESIGN §5), orthogonality of 𝒟^l_mq over R (∫|𝒟^l_mq|² dΩ = Λ_l²) and of e^{iqφ_o'}
 gives, at a fixed θ_o', the mean square over all reflection directions R and view azimuths
@@ -46,8 +46,7 @@ prediction adds energies and includes the estimated tail. Measured against brute
 (``tests/analysis/test_view_bands.py``, ``benchmarks/view_bands.py``) the prediction agrees
 with the measured relative RMS to its Monte Carlo error.
 
-Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
-SIGGRAPH 2002 (RH02), §3.1, §5.1 and Appendices B–C, doi:10.1145/566654.566611.
+Reference: [RH02] §3.1, §5.1 and Appendices B–C (``data_specs/bibliography.md``).
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Reparameterization of an isotropic BRDF by the reflection vector (RH02 §3.1, DESIGN §3).
+"""Reparameterization of an isotropic BRDF by the reflection vector ([RH02] §3.1, DESIGN §3).
 
 In a frame where the reflection direction R is +z, the outgoing (view) direction is
 V' = (θ_o', φ_o') and the incident direction L' = (θ_i', φ_i'). The surface normal is the
@@ -9,13 +9,10 @@ surface), and
 
 with ρ evaluated in its own normal-based frame. For an isotropic ρ the result depends
 only on (θ_i', θ_o', φ') and is even in φ'. The grid is a quadrature grid for the
-transform of RH02 eq. 13: Gauss–Legendre in cos θ_i' and cos θ_o' (nodes strictly inside
+transform of [RH02] eq. 13: Gauss–Legendre in cos θ_i' and cos θ_o' (nodes strictly inside
 (0, π): the grazing singularity θ_o' = π is never sampled) and uniform in φ'.
 
-References
-----------
-R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering", SIGGRAPH 2002
-(RH02), ACM Trans. Graph. 21(3), doi:10.1145/566654.566611.
+Reference: [RH02] (``data_specs/bibliography.md``).
 """
 
 from __future__ import annotations

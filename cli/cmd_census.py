@@ -1,12 +1,12 @@
-"""``shrm census``: a BRDF library tabulated as RH02 Fig. 8 does, with the orders, fits and reasons.
+"""``shrm census``: a BRDF library tabulated as [RH02] Fig. 8 does, with the orders, fits and reasons.
 
 For every material of the arguments (files, folders of BRDF files, whole multi-BRDF files such as
 CURET's ``abrdf.dat``: ``analysis.census.census_sources``) one row (``analysis.census``): the
-accuracy 1 − ε(F, p) for p = 0…P (RH02's energy over all views and the worst view band), the
+accuracy 1 − ε(F, p) for p = 0…P ([RH02]'s energy over all views and the worst view band), the
 orders needed at ``--eps``, the representation analysed and its held-out worst view band, the
 anisotropy, and the reason for every miss or failure. Written to ``--out``: ``census.csv``,
 ``census.json`` (``data_specs/census_json.md``) and ``census.png`` (accuracy against P per
-material, RH02 Fig. 8's layout; matplotlib, 100 dpi). The last line counts the materials above
+material, [RH02] Fig. 8's layout; matplotlib, 100 dpi). The last line counts the materials above
 the threshold at (F, P), with the fit settings. ``--workers N`` computes the rows in N spawned
 processes (the same numbers as one); progress goes to stderr (a live bar on a terminal, else one
 line per row).
@@ -15,8 +15,7 @@ Exit status: 0 when every row was analysed, 1 when some could not be (each is a 
 its error, in the table and the files), 2 for bad usage (unknown options, bad values, a named
 file that does not exist, an output folder that cannot be written: nothing is written).
 
-Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
-SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611, Fig. 8.
+Reference: [RH02] Fig. 8 (``data_specs/bibliography.md``).
 """
 
 from __future__ import annotations

@@ -12,8 +12,7 @@
 Formats and mappings: ``data_specs/export.md``. Every file is written atomically; errors are
 one line, exit status 2, nothing written.
 
-Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
-SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
+Reference: [RH02] (``data_specs/bibliography.md``).
 """
 
 from __future__ import annotations

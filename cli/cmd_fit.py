@@ -1,4 +1,4 @@
-"""``shrm fit``: fit a Lafortune, Cook–Torrance or RH02 microfacet model to a BRDF (nlopt), or
+"""``shrm fit``: fit a Lafortune, Cook–Torrance or [RH02] microfacet model to a BRDF (nlopt), or
 Koenderink's reciprocal isotropic Zernike expansion (``--model zernike[:order=N][,ridge=R]``:
 linear least squares, order and ridge chosen by k-fold cross-validation over the samples, the
 held-out errors reported as the fit's errors).
@@ -10,8 +10,7 @@ Progress of the multi-start fit goes to stderr. Exit status: 0 when the fit succ
 view band's relative RMS at most 0.5; held out for Zernike), 1 when it failed (the result is
 still printed and written), 2 on bad input.
 
-Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
-SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
+Reference: [RH02] (``data_specs/bibliography.md``).
 """
 
 from __future__ import annotations

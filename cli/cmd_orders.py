@@ -1,12 +1,11 @@
-"""``shrm orders``: how many coefficients a BRDF needs (RH02 §5.1); its parser is ``options_orders.py``.
+"""``shrm orders``: how many coefficients a BRDF needs ([RH02] §5.1); its parser is ``options_orders.py``.
 
 Scattered measurements (CURET, Cornell, gonioreflectometer CSV) are analysed through the
 representation with the smallest held-out worst-view-band error (``cli.common.load_analysis_brdf``,
 ``data_specs/representation_json.md``); its line is printed before the orders and ``--json``
 carries it as ``representation``.
 
-Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
-SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
+Reference: [RH02] (``data_specs/bibliography.md``).
 """
 
 from __future__ import annotations

@@ -1,7 +1,6 @@
-"""``shrm prefilter``: environment + BRDF -> global SHRM file (RH02 §4–5).
+"""``shrm prefilter``: environment + BRDF -> global SHRM file ([RH02] §4–5).
 
-Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
-SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
+Reference: [RH02] (``data_specs/bibliography.md``).
 """
 
 from __future__ import annotations

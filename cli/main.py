@@ -13,8 +13,7 @@ when the arguments parsed and the verb runs. ``shrm --help`` lists every verb wi
 line read from the parser module's source, ``shrm --version`` imports no verb at all;
 ``shrm VERB --help`` and a verb's usage errors import no numpy (issue 26, benchmarks/startup.py).
 
-Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
-SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
+Reference: [RH02] (``data_specs/bibliography.md``).
 """
 
 from __future__ import annotations

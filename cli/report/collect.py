@@ -5,13 +5,13 @@ Stages (each reported to the optional ``progress(stage)`` callback):
 1. ``load``: ``shrmkit.load_brdf``.
 2. ``fits``: ``shrmkit.fit_brdf`` for each model; errors per view-elevation band and
    measured-vs-fitted slices in the plane of incidence.
-3. ``orders``: ``choose_orders`` at each tolerance (RH02 §5.1) and the ε(F, P) table.
+3. ``orders``: ``choose_orders`` at each tolerance ([RH02] §5.1) and the ε(F, P) table.
    Scattered measurements cannot be evaluated everywhere: the orders, SHRMs and previews
    of a scattered BRDF use its best successful fit (the report says which).
 4. ``prefilter``: for each environment and tolerance, ``prefilter`` (orders, lighting SHT,
    SHRM synthesis, the window ``options.window`` against Gibbs ringing) and the relative RMS
    error of :meth:`SHRM.radiance` (clamped at 0, as rendered) against the
-   angular-domain reference (``analysis.reference``, RH02 eq. 2) on seeded random (R, V)
+   angular-domain reference (``analysis.reference``, [RH02] eq. 2) on seeded random (R, V)
    pairs; the environment's F_L, the scene orders F_B, P_B and the residual bound
    (``analysis.scene``).
 5. ``checks``: missing and clamped data, reciprocity, directional albedo (``checks.py``).
@@ -22,8 +22,7 @@ to 10 significant digits, and every field that depends on the machine's speed ha
 ending in ``_seconds`` (:func:`strip_timings` removes them), so the same inputs give the
 same ``report.json`` apart from those keys.
 
-Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
-SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
+Reference: [RH02] (``data_specs/bibliography.md``).
 """
 
 from __future__ import annotations

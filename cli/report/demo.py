@@ -3,7 +3,7 @@
 1. Two analytic materials (Lafortune lobes: a red plastic and a gold-like metal) are
    tabulated at MERL resolution and written as MERL ``.binary`` files
    (``brdf_io.merl.write_merl``) — from then on they are measured data like any other;
-2. orders (F, P) of the plastic at the default ε (RH02 §5.1);
+2. orders (F, P) of the plastic at the default ε ([RH02] §5.1);
 3. a one-lobe Lafortune fit of the plastic, written as a fit JSON (``data_specs/fit_json.md``);
 4. the SHRM of the built-in studio environment and the plastic, saved as ``.shrm.npz``;
 5. a preview render of a built-in mesh (torus knot with OpenGL; the CPU reference renders
@@ -12,8 +12,7 @@
    each ``report.html`` holds a live WebGL2 preview of the SHRM that works from ``file://``
    (``explorer.live_views``) and BRDF Explorer's views of the table next to its fits.
 
-Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
-SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
+Reference: [RH02] (``data_specs/bibliography.md``).
 """
 
 from __future__ import annotations

@@ -6,21 +6,20 @@ font caches) is still shared by the whole process, so :func:`make_plots` draws u
 ``shared_state.MATPLOTLIB_LOCK``: safe from the threads of a Dask worker.
 
 - ``energy``: captured energy 1 − ε(F, P) against F for each P, with the environments'
-  1 − ε_L(F) (RH02 Fig. 6 style) and the chosen (F, P) at each tolerance;
+  1 − ε_L(F) ([RH02] Fig. 6 style) and the chosen (F, P) at each tolerance;
 - ``accuracy_by_p``: ε(F, P) against P (log scale) at the largest tabulated F and at the chosen F
-  (RH02 Fig. 8 style: how much P buys);
+  ([RH02] Fig. 8 style: how much P buys);
 - ``speed_error``: measured SHRM error against prefilter time per tolerance (and √ε_B);
 - ``fit_slices``: measured vs fitted ρ in the plane of incidence at a few view angles;
-- ``fit_bands``: fit error by view-elevation band (Green et al. 2007 Fig. 4 style);
-- BRDF Explorer's views (``explorer.py``, Burley 2012): ``explorer_slice`` (θ_h × θ_d image
+- ``fit_bands``: fit error by view-elevation band ([Green07] Fig. 4 style);
+- BRDF Explorer's views (``explorer.py``, [Burley12]): ``explorer_slice`` (θ_h × θ_d image
   slice at one φ_d, log colour scale, missing cells marked) or ``explorer_samples``
   (scattered measurements near the plane of incidence), ``explorer_polar`` (polar plots of
   the plane of incidence, measured vs each fit) and ``explorer_albedo`` (directional albedo
   against θ_v with the energy-conservation line at 1); :func:`image_row_plot` lays out the
   lit spheres ``explorer.py`` renders.
 
-Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
-SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
+Reference: [RH02] (``data_specs/bibliography.md``).
 """
 
 from __future__ import annotations
