@@ -1,15 +1,14 @@
-"""The Spherical Harmonic Reflection Map (RH02 §4, eqs. 8, 12) and its prefiltering.
+"""The Spherical Harmonic Reflection Map ([RH02] §4, eqs. 8, 12) and its prefiltering.
 
 An :class:`SHRM` stores the *global* SHRM B̃_pq(α, β): for each reflection direction
 (α, β) on a lat-long grid, the real-basis coefficients of the reflected radiance as a
 function of the global view direction V,
 
-    B(R, V) = Σ_{p≤P, |q|≤p} B̃_pq(R) Y^r_pq(V)                (RH02 eq. 8)
+    B(R, V) = Σ_{p≤P, |q|≤p} B̃_pq(R) Y^r_pq(V)                ([RH02] eq. 8)
 
 with the real basis of ``analysis.sh`` at flat index p² + p + q.
 
-Reference: R. Ramamoorthi, P. Hanrahan, "Frequency Space Environment Map Rendering",
-SIGGRAPH 2002 (RH02), doi:10.1145/566654.566611.
+Reference: [RH02] (``data_specs/bibliography.md``).
 """
 
 from __future__ import annotations

@@ -16,8 +16,8 @@ shaded once, ``vtk_renderer`` module docstring), forward on a GPU — and by the
 - **what each frame spends** (milliseconds, each frame synchronized with glFinish, the
   minimum over rounds): ``py`` the Python/VTK work of ``draw`` before VTK's first Render starts
   (camera, uniforms, culling decision), without the map; ``map`` the distant-mode map
-  Σ B̃_pq Y^r_pq(Ṽ) evaluated on the CPU (RH02 eq. 12; RH02 = Ramamoorthi & Hanrahan 2002,
-  doi:10.1145/566654.566611); ``upload`` its texture upload (GL time of frames with the map
+  Σ B̃_pq Y^r_pq(Ṽ) evaluated on the CPU ([RH02] eq. 12, ``data_specs/bibliography.md``); ``upload`` its
+  texture upload (GL time of frames with the map
   updated minus frames without); ``gl`` the first Render() through glFinish with nothing
   updated (the GL draw itself; both passes when deferred);
 - **floors** measured in the same run: ``empty`` an empty frame (clear, VTK's traversal,

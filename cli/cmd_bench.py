@@ -2,10 +2,9 @@
 
 The benchmark scripts live in the source tree's ``benchmarks/`` folder (they are not part
 of the installed package): ``prefilter_speed.py`` (shrmkit's prefiltering, order choice
-included, against the best angular methods — RH02 Table 4's lobe-truncated sum and the
+included, against the best angular methods — [RH02] Table 4's lobe-truncated sum and the
 engines' split sum — each time beside its measured error and the stated one, and the current
-targets of issue 22 marked met / NO with what explains a NO; RH02 = Ramamoorthi & Hanrahan
-2002, doi:10.1145/566654.566611), ``fit_speed.py`` (fit times and errors) and
+targets of issue 22 marked met / NO with what explains a NO), ``fit_speed.py`` (fit times and errors) and
 ``render_speed.py`` (frames per second; needs an offscreen OpenGL context and is skipped
 without one). Each is loaded from its file and its ``main`` called with ``--quick`` when
 asked; a benchmark that fails is reported and the others still run (exit status 1 if any
