@@ -10,7 +10,8 @@ from .options import add_env_orientation, add_rgl_incident, brdf_help, number_in
 
 __all__ = ["HELP", "add_arguments"]
 
-HELP = "export a BRDF as a Mitsuba 3 / pbrt-v4 / MaterialX material or a MERL table, or a prefiltered cube map (DDS)"
+HELP = ("export a BRDF as a Mitsuba 3 / pbrt-v4 / MaterialX material or a MERL table, or a prefiltered cube map "
+        "(DDS or KTX2)")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -23,13 +24,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="format to write (default: from the output suffix)")
     parser.add_argument("--name", default=None,
                         help="material name in the snippet (default: the output file's stem)")
-    parser.add_argument("--env", default=None, help="dds: the environment (builtin:sky, builtin:studio or a map file)")
+    parser.add_argument("--env", default=None,
+                        help="dds, ktx2: the environment (builtin:sky, builtin:studio or a map file)")
     parser.add_argument("--face-size", type=number_in(1, MAX_CUBE_FACE_SIZE, integer=True), default=128,
-                        help="dds: texels along a face of mip level 0, a power of two (default 128)")
+                        help="dds, ktx2: texels along a face of mip level 0, a power of two (default 128)")
     parser.add_argument("--levels", type=number_in(1, 12, integer=True), default=None,
-                        help="dds: mip levels N (default log2(face size) + 1); level m holds roughness m/(N-1)")
+                        help="dds, ktx2: mip levels N (default log2(face size) + 1); level m holds roughness m/(N-1)")
     parser.add_argument("--dds-format", choices=DDS_FORMAT_NAMES, default="rgba16f",
-                        help="dds: texel format (default rgba16f, the engines' HDR format)")
+                        help="dds, ktx2: texel format (default rgba16f, the engines' HDR format)")
     parser.add_argument("--json", action="store_true", help="print one JSON object describing what was written")
     add_env_orientation(parser)
     add_rgl_incident(parser)
