@@ -1,42 +1,20 @@
-"""pbrt-v4's ``coateddiffuse`` material: a rough dielectric coat over a Lambertian base,
-evaluated as pbrt-v4 defines it, and the mapping of a Cook–Torrance model onto it.
+"""pbrt-v4's ``coateddiffuse`` material ([PBRT4] §14.3): a rough dielectric coat over a Lambertian
+base, evaluated as pbrt-v4 defines it, and the mapping of a Cook–Torrance model onto it.
 
-pbrt-v4 (``CoatedDiffuseMaterial``, ``LayeredBxDF<DielectricBxDF, DiffuseBxDF>``) estimates the
-layered BSDF by a random walk. With no medium in the layer (``albedo`` 0, the default) and a thin
-layer (transmittance exp(−thickness/|cos|) ≈ 1), the walk's expectation has a closed form,
-because a Lambertian base forgets the direction light arrived from:
+With no medium in the layer (``albedo`` 0, the default) and a thin layer (transmittance
+exp(−thickness/|cos|) ≈ 1), the expectation of pbrt-v4's random walk has a closed form, because a
+Lambertian base forgets the direction light arrived from:
 
     f(ω_i, ω_o) = f_top(ω_i, ω_o) + T(θ_i) T(θ_o) R / (π η² (1 − R ρ))
 
-* f_top — the coat's own reflection, pbrt's rough ``DielectricBxDF``: Trowbridge–Reitz (GGX) D of
-  width α, height-correlated Smith G = 1/(1 + Λ(ω_i) + Λ(ω_o)), the exact unpolarized dielectric
-  Fresnel of index η (``FrDielectric``), D G F/(4 cos θ_i cos θ_o);
-* T(θ) — the share of the flux arriving from θ outside that the rough coat transmits into the
-  layer (single scattering, as pbrt's BTDF: the flux lost to masking is lost),
-  T(θ) = ∫ (ω·m) D(m) (1 − F(ω·m)) G(ω, ω_t(m)) / cos θ dm over microfacet normals m, ω_t the
-  refracted direction (counted only when it points into the layer); leaving the layer, radiance
-  is divided by η² (pbrt's radiance-mode BTDF, reciprocity);
-* ρ — the coat's internal reflectance seen by the base's cosine-distributed light
-  (F of index 1/η, total internal reflection included), averaged with weight 2 cos θ;
-* R — the base's ``reflectance``; the series Σ (R ρ)^k is the walk's repeated bounces.
+with f_top the coat's own reflection, T(θ) its transmittance (:func:`coat_transmittance`), ρ its
+internal reflectance (:func:`coat_internal_reflectance`) and R the base's ``reflectance``; in the
+limit α → 0, T → 1 − F(θ) and this is the smooth-coat formula of [WW07].
+:class:`DielectricCoat` evaluates it, :func:`coated_diffuse_from_cook_torrance` maps a Cook–Torrance
+model onto it; the mapping, its checks and its error: ``data_specs/export.md`` §1.1.
 
-In the limit α → 0, T → 1 − F(θ) and this is the smooth-coat formula of Weidlich & Wilkie
-(2007). pbrt truncates the walk after ``maxdepth`` interface events (the base is hit at events
-0, 2, 4, …): the written ``maxdepth`` makes the missing share (R ρ)^⌈maxdepth/2⌉ ≤ 10⁻³.
-
-Public objects: :class:`DielectricCoat`, :func:`fresnel_dielectric`, :func:`coat_transmittance`,
-:func:`coat_internal_reflectance`, :func:`fit_dielectric_eta`, :func:`coated_diffuse_from_cook_torrance`.
-
-References
-----------
-M. Pharr, W. Jakob, G. Humphreys, *Physically Based Rendering*, 4th ed., §9.5 (``FrDielectric``),
-§9.6 (Trowbridge–Reitz D, Λ, height-correlated G), §9.7 (rough dielectric BSDF), §14.3
-(``LayeredBxDF``, ``CoatedDiffuseBxDF``); pbrt-v4 ``src/pbrt/materials.cpp``
-(``CoatedDiffuseMaterial::Create``: defaults ``roughness`` 0, ``thickness`` 0.01, ``eta`` 1.5,
-``maxdepth`` 10, ``nsamples`` 1, ``albedo`` 0, ``remaproughness`` true, and
-``TrowbridgeReitzDistribution::RoughnessToAlpha(r) = √r``). B. Walter et al., "Microfacet Models
-for Refraction through Rough Surfaces", EGSR 2007. A. Weidlich, A. Wilkie, "Arbitrarily Layered
-Micro-Facet Surfaces", GRAPHITE 2007.
+References: [PBRT4] §9.5–9.7, §14.3 and pbrt-v4's ``src/pbrt/materials.cpp``; [Walter07]; [WW07]
+(``data_specs/bibliography.md``).
 """
 
 from __future__ import annotations
@@ -111,8 +89,9 @@ def _normals(alpha: float) -> tuple[np.ndarray, np.ndarray]:
 def coat_transmittance(cos_t: np.ndarray, alpha: float, eta: float) -> np.ndarray:
     """T(θ): the share of the flux arriving from direction θ (outside, cos θ = ``cos_t`` > 0)
     that pbrt-v4's rough dielectric (GGX α, index η) transmits below the surface, single
-    scattering: ∫ (ω·m) D(m) (1 − F(ω·m)) G₂(ω, ω_t) / cos θ dm, ω_t = ω refracted about m
-    (Walter et al. 2007), counted where ω_t points down. Same shape as ``cos_t``; 0 at grazing."""
+    scattering (what masking removes is lost, as in pbrt's BTDF):
+    ∫ (ω·m) D(m) (1 − F(ω·m)) G₂(ω, ω_t) / cos θ dm, ω_t = ω refracted about m
+    ([Walter07]), counted where ω_t points down. Same shape as ``cos_t``; 0 at grazing."""
     c = np.clip(np.asarray(cos_t, dtype=np.float64), 1e-6, 1.0)
     m, w = _normals(alpha)
     wo = np.stack([np.sqrt(1.0 - c * c), np.zeros_like(c), c], axis=-1)  # (..., 3)
@@ -129,8 +108,8 @@ def coat_transmittance(cos_t: np.ndarray, alpha: float, eta: float) -> np.ndarra
 def coat_internal_reflectance(alpha: float, eta: float, n_cos: int = 48) -> float:
     """ρ: the share of the flux a cosine-distributed source below the coat (the Lambertian base)
     sends back down by reflecting off the coat's inside (Fresnel of index 1/η, total internal
-    reflection included; single scattering, G₂ as pbrt), ∫₀¹ ρ(c) 2c dc on ``n_cos``
-    Gauss–Legendre nodes."""
+    reflection included; single scattering, G₂ as pbrt), averaged over the base's
+    cosine-distributed light with weight 2 cos θ: ∫₀¹ ρ(c) 2c dc on ``n_cos`` Gauss–Legendre nodes."""
     x, wx = np.polynomial.legendre.leggauss(n_cos)
     c, wc = (x + 1.0) / 2.0, wx / 2.0
     m, w = _normals(alpha)
@@ -149,6 +128,11 @@ def coat_internal_reflectance(alpha: float, eta: float, n_cos: int = 48) -> floa
 class DielectricCoat:
     """pbrt-v4's ``coateddiffuse`` with no medium and a thin layer, evaluated in closed form
     (module docstring).
+
+    pbrt-v4's ``CoatedDiffuseMaterial::Create`` (``src/pbrt/materials.cpp``; ``LayeredBxDF<DielectricBxDF,
+    DiffuseBxDF>``, [PBRT4] §14.3) defaults: ``roughness`` 0, ``thickness`` 0.01, ``eta`` 1.5,
+    ``maxdepth`` 10, ``nsamples`` 1, ``albedo`` 0, ``remaproughness`` true, with
+    ``TrowbridgeReitzDistribution::RoughnessToAlpha(r) = √r``.
 
     Attributes
     ----------
@@ -190,7 +174,14 @@ class DielectricCoat:
 
     def eval(self, L: np.ndarray, V: np.ndarray) -> np.ndarray:
         """ρ (..., 3) in 1/sr: the coat's reflection plus the base seen through it; 0 where L or
-        V is below the surface."""
+        V is below the surface.
+
+        The coat's reflection f_top is pbrt's rough ``DielectricBxDF`` ([PBRT4] §9.5–9.7):
+        Trowbridge–Reitz (GGX) D of width α, height-correlated Smith G = 1/(1 + Λ(ω_i) + Λ(ω_o)),
+        the exact unpolarized dielectric Fresnel of index η (``FrDielectric``), D G F/(4 cos θ_i
+        cos θ_o). The base adds T(θ_i) T(θ_o) R / (π η² (1 − R ρ)): leaving the layer, radiance is
+        divided by η² (pbrt's radiance-mode BTDF, reciprocity), and the series Σ (R ρ)^k of the
+        factor 1/(1 − R ρ) is the walk's repeated bounces between base and coat."""
         L, V = as_directions(L, V)
         cos_i, cos_o = L[..., 2], V[..., 2]
         above = (cos_i > 0) & (cos_o > 0)
@@ -211,7 +202,9 @@ class DielectricCoat:
 
     def maxdepth(self) -> int:
         """The ``maxdepth`` that leaves pbrt's walk at most :data:`_WALK_TAIL` of the base's light:
-        2⌈ln(tail)/ln(R_max ρ)⌉, at least pbrt's default 10."""
+        2⌈ln(tail)/ln(R_max ρ)⌉, at least pbrt's default 10. pbrt truncates the walk after
+        ``maxdepth`` interface events and the base is hit at events 0, 2, 4, …, so the missing
+        share is (R ρ)^⌈maxdepth/2⌉ ≤ 10⁻³."""
         q = float(np.max(self.reflectance)) * self.rho
         if q <= 0.0:
             return _PBRT_MAXDEPTH
