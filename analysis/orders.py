@@ -33,7 +33,7 @@ from __future__ import annotations
 import time
 import warnings
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
 
@@ -46,8 +46,9 @@ from ..brdf_io.specs import load_brdf
 from .brdf_coeffs import BRDFCoefficients, rho_lpq
 from .defaults import DEFAULT_MAX_F, DEFAULT_MAX_P  # numpy-free home, for the CLI's parsers
 from .notebook import order_choice_html
+from .order_rule import OrderRule, resolve_rule
 from .threads import single_threaded_blas
-from .tolerance import DEFAULT_EPS, check_eps
+from .tolerance import check_eps
 from .view_bands import (
     DEFAULT_CRITERION,
     DEFAULT_MAX_VIEW_DEG,
@@ -117,6 +118,9 @@ class OrderChoice:
         a representation at view order P uses.
     criterion, max_view_deg
         The order rule and its view limit (degrees of θ_v).
+    rule
+        The :class:`~shrmkit.analysis.order_rule.OrderRule` asked for, with ``eps`` = ``tolerance``
+        (None only for a choice built by hand).
     profile
         ρ̂ resolved by view band (:class:`~shrmkit.analysis.view_bands.ViewProfile`).
     rh02_table
@@ -138,6 +142,7 @@ class OrderChoice:
     criterion: str = DEFAULT_CRITERION
     max_view_deg: float = DEFAULT_MAX_VIEW_DEG
     source: _GridData | None = field(default=None, repr=False)
+    rule: OrderRule | None = field(default=None, repr=False)
 
     _repr_html_ = order_choice_html  # notebook card (analysis.notebook)
 
@@ -427,13 +432,14 @@ def _validate(tolerance: float, max_F: int, max_P: int, criterion: str = DEFAULT
 def choose_orders(
     brdf: BRDF | str | Path,
     *,
-    eps: float = DEFAULT_EPS,
-    max_F: int = DEFAULT_MAX_F,
-    max_P: int = DEFAULT_MAX_P,
+    eps: float | None = None,
+    max_F: int | None = None,
+    max_P: int | None = None,
     start_F: int = 24,
     start_P: int = 4,
-    criterion: str = DEFAULT_CRITERION,
-    max_view_deg: float = DEFAULT_MAX_VIEW_DEG,
+    criterion: str | None = None,
+    max_view_deg: float | None = None,
+    rule: OrderRule | None = None,
 ) -> OrderChoice:
     """Choose (F, P) for ``brdf`` at tolerance ``eps`` (RH02 §5.1, Appendix C).
 
@@ -442,17 +448,19 @@ def choose_orders(
     brdf
         Any evaluable BRDF (model, MERL, table, fitted model), or a spec string or path for
         :func:`~shrmkit.brdf_io.specs.load_brdf`.
-    eps
-        Tolerance on the uncaptured energy fraction, in (0, 1).
-    max_F, max_P
-        Caps on the orders; beyond them the result is ``capped`` (documented, no loop).
+    rule
+        The order rule (:class:`~shrmkit.analysis.order_rule.OrderRule`: criterion, view limit,
+        tolerance, caps); default ``OrderRule()``.
+    eps, max_F, max_P, criterion, max_view_deg
+        The rule's fields as loose keywords (None: not given), as before the rule: with ``rule``
+        they must agree with it; without it they build it (defaults 0.03, 512, 20, ``"bands"``,
+        80°). ``eps``: tolerance on the uncaptured energy fraction, in (0, 1); ``max_F``,
+        ``max_P``: caps on the orders, beyond them the result is ``capped`` (documented, no
+        loop); ``criterion``: ``"bands"``, every θ_v band that starts below ``max_view_deg``
+        meets ``eps`` under a point light, or ``"rh02"``, RH02's energy over all views (module
+        docs); ``max_view_deg``: view limit of the ``"bands"`` rule in degrees of θ_v, in (0, 90].
     start_F, start_P
         Orders the first quadrature grid is sized for.
-    criterion
-        ``"bands"`` (default): every θ_v band that starts below ``max_view_deg`` meets ``eps``
-        under a point light; ``"rh02"``: RH02's energy over all views (module docs).
-    max_view_deg
-        View limit of the ``"bands"`` rule in degrees of θ_v, in (0, 90] (default 80).
 
     Returns
     -------
@@ -462,22 +470,23 @@ def choose_orders(
     ------
     BadInputError
         ε outside (0, 1), caps or view limit out of range, an unknown criterion, an all-zero
-        or non-finite BRDF.
+        or non-finite BRDF, a loose keyword that disagrees with ``rule``.
     """
-    return choose_orders_many(brdf, (eps,), max_F=max_F, max_P=max_P, start_F=start_F, start_P=start_P,
-                              criterion=criterion, max_view_deg=max_view_deg)[0]
+    rule = resolve_rule(rule, eps=eps, max_F=max_F, max_P=max_P, criterion=criterion, max_view_deg=max_view_deg)
+    return choose_orders_many(brdf, (rule.eps,), start_F=start_F, start_P=start_P, rule=rule)[0]
 
 
 def choose_orders_many(
     brdf: BRDF | str | Path,
     tolerances: Sequence[float],
     *,
-    max_F: int = DEFAULT_MAX_F,
-    max_P: int = DEFAULT_MAX_P,
+    max_F: int | None = None,
+    max_P: int | None = None,
     start_F: int = 24,
     start_P: int = 4,
-    criterion: str = DEFAULT_CRITERION,
-    max_view_deg: float = DEFAULT_MAX_VIEW_DEG,
+    criterion: str | None = None,
+    max_view_deg: float | None = None,
+    rule: OrderRule | None = None,
 ) -> list[OrderChoice]:
     """:func:`choose_orders` at each of ``tolerances`` (in that order), sharing the work.
 
@@ -487,11 +496,16 @@ def choose_orders_many(
     result equals the one :func:`choose_orders` gives alone; its ``seconds`` is the time of
     its own search given the grids already computed for the tolerances before it.
 
+    ``rule`` and the loose keywords are those of :func:`choose_orders`; ``rule.eps`` is not used
+    (each choice's ``rule`` is ``rule`` at its own tolerance).
+
     Raises
     ------
     BadInputError
         As :func:`choose_orders`; also an empty ``tolerances``.
     """
+    rule = resolve_rule(rule, max_F=max_F, max_P=max_P, criterion=criterion, max_view_deg=max_view_deg)
+    max_F, max_P, criterion, max_view_deg = rule.max_F, rule.max_P, rule.criterion, rule.max_view_deg
     tolerances = [_validate(t, max_F, max_P, criterion, max_view_deg) for t in tolerances]
     if not tolerances:
         raise BadInputError(None, "no tolerance to choose orders for")
@@ -515,8 +529,13 @@ def choose_orders_many(
         return cache[key]
 
     with single_threaded_blas():
-        return [_search(data_for, tol, max_F, max_P, min(start_F, max_F), start_P, criterion, max_view_deg,
-                        cap_note) for tol in tolerances]
+        return [_with_rule(_search(data_for, tol, max_F, max_P, min(start_F, max_F), start_P, criterion,
+                                   max_view_deg, cap_note), rule) for tol in tolerances]
+
+
+def _with_rule(choice: OrderChoice, rule: OrderRule) -> OrderChoice:
+    """``choice`` stating the rule it was made under, at its own tolerance."""
+    return replace(choice, rule=rule.replace(eps=choice.tolerance))
 
 
 #: ``"bands"``: a grid resolves a choice when the energy just above the chosen orders is at most
@@ -623,15 +642,18 @@ def _choice(on: _GridData, F: int, P: int, eps: float, capped: bool, converged: 
 
 
 def orders_on_grid_for(
-    brdf: BRDF, F: int, P: int, *, eps: float = DEFAULT_EPS, criterion: str = DEFAULT_CRITERION,
-    max_view_deg: float = DEFAULT_MAX_VIEW_DEG,
+    brdf: BRDF, F: int, P: int, *, eps: float | None = None, criterion: str | None = None,
+    max_view_deg: float | None = None, rule: OrderRule | None = None,
 ) -> OrderChoice:
     """ρ̂_lpq and ε(F, P) on one quadrature grid sized for given orders (no search).
 
     For callers that force (F, P): the rule's choice on this grid is still reported in
     ``F``/``P`` (capped if the grid cannot meet ``eps``), but the grid is neither grown
-    nor refined (``converged`` is False and ``message`` says so).
+    nor refined (``converged`` is False and ``message`` says so). ``rule`` and the loose
+    keywords as in :func:`choose_orders`; the rule's caps are not used (F and P are).
     """
+    rule = resolve_rule(rule, eps=eps, criterion=criterion, max_view_deg=max_view_deg)
+    eps, criterion, max_view_deg = rule.eps, rule.criterion, rule.max_view_deg
     eps = _validate(eps, max(F, 1), P, criterion, max_view_deg)
     t0 = time.perf_counter()
     grid = ReparamGrid.for_orders(F, P)
@@ -642,7 +664,8 @@ def orders_on_grid_for(
     notes = [f"orders asked (F={F}, P={P}): the grid was sized for them and not refined"]
     if on.missing:
         notes.append(f"{on.missing} reparameterized samples had no measurement to interpolate (set to 0)")
-    return _choice(on, F_rule, P_rule, eps, capped, False, notes, time.perf_counter() - t0, criterion, max_view_deg)
+    return _with_rule(_choice(on, F_rule, P_rule, eps, capped, False, notes, time.perf_counter() - t0, criterion,
+                              max_view_deg), rule)
 
 
 def forced_orders_note(
