@@ -25,6 +25,7 @@ from .lighting import LightingCoefficients
 from .lights import Extraction, merge_error_by_band
 from .map_budget import MapAssessment, assess_map
 from .map_size import default_size, fast_map_rows, map_rows
+from .order_rule import OrderRule
 from .orders import OrderChoice, choose_orders, forced_orders_note, orders_on_grid_for
 from .pixels import PixelCheck, pixel_orders, pixel_sampler, pixel_statement
 from .records import LightsInfo, PrefilterInfo, Timings, ViewBand, WindowInfo
@@ -61,26 +62,27 @@ class Stages:
                        cube=s.get("cube"), errors=s["errors"], total=time.perf_counter() - self.start)
 
 
-def check_given_orders(orders: OrderChoice, brdf: Any, eps: float, criterion: str, max_view_deg: float) -> None:
-    """Refuse an :class:`OrderChoice` made for another tolerance, rule or view limit."""
+def check_given_orders(orders: OrderChoice, brdf: Any, rule: OrderRule) -> None:
+    """Refuse an :class:`OrderChoice` made for another tolerance, rule or view limit (the caps are
+    not compared)."""
     given = (orders.tolerance, orders.criterion, orders.max_view_deg)
-    if given != (float(eps), criterion, float(max_view_deg)):
+    if given != (rule.eps, rule.criterion, rule.max_view_deg):
         raise BadInputError(
             getattr(brdf, "name", None),
             f"orders chosen at eps={given[0]:g}, criterion={given[1]}, max view {given[2]:g} deg do not match "
-            f"eps={eps:g}, criterion={criterion}, max view {max_view_deg:g} deg",
+            f"eps={rule.eps:g}, criterion={rule.criterion}, max view {rule.max_view_deg:g} deg",
         )
 
 
-def brdf_orders(brdf: Any, eps: float, *, F: int | None, P: int | None, orders: OrderChoice | None, max_F: int,
-                max_P: int, criterion: str, max_view_deg: float) -> OrderChoice:
-    """Stage 1: the BRDF's orders — on the grid of forced (F, P), the caller's, or chosen."""
+def brdf_orders(brdf: Any, rule: OrderRule, *, F: int | None, P: int | None,
+                orders: OrderChoice | None) -> OrderChoice:
+    """Stage 1: the BRDF's orders under ``rule`` — on the grid of forced (F, P), the caller's, or chosen."""
     if F is not None and P is not None:
-        return orders_on_grid_for(brdf, int(F), int(P), eps=eps, criterion=criterion, max_view_deg=max_view_deg)
+        return orders_on_grid_for(brdf, int(F), int(P), rule=rule)
     if orders is not None:
-        check_given_orders(orders, brdf, eps, criterion, max_view_deg)
+        check_given_orders(orders, brdf, rule)
         return orders
-    return choose_orders(brdf, eps=eps, max_F=max_F, max_P=max_P, criterion=criterion, max_view_deg=max_view_deg)
+    return choose_orders(brdf, rule=rule)
 
 
 @dataclass(frozen=True)

@@ -31,7 +31,8 @@ from . import _prefilter as stage
 from .lights import DEFAULT_LIGHTS, LightSet, check_lights, extract_lights
 from .map_size import DEFAULT_MAP_BUDGET_BYTES, default_size
 from .notebook import shrm_html, shrm_png
-from .orders import DEFAULT_MAX_F, DEFAULT_MAX_P, OrderChoice, choose_orders, orders_on_grid_for
+from .order_rule import OrderRule, resolve_rule
+from .orders import OrderChoice
 from .records import PrefilterInfo
 from .scene import scene_for
 from .sh import real_sph_harm
@@ -45,8 +46,6 @@ from .synthesis import (
     windowed,
 )
 from .threads import with_single_threaded_blas
-from .tolerance import DEFAULT_EPS, check_eps
-from .view_bands import DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG
 from .window import (
     DEFAULT_WINDOW,
     UNDERSHOOT_MAX_VIEW_DEG,
@@ -278,40 +277,30 @@ def cube_directions(size: int) -> np.ndarray:
     return cube_map_directions(size)
 
 
-def _brdf_orders(brdf: Any, eps: float, *, F: int | None, P: int | None, orders: OrderChoice | None,
-                 max_F: int, max_P: int, criterion: str, max_view_deg: float) -> OrderChoice:
-    """Stage 1: the BRDF's orders — on the grid of forced (F, P), the caller's (checked), or chosen."""
-    if F is not None and P is not None:
-        return orders_on_grid_for(brdf, int(F), int(P), eps=eps, criterion=criterion, max_view_deg=max_view_deg)
-    if orders is not None:
-        stage.check_given_orders(orders, brdf, eps, criterion, max_view_deg)
-        return orders
-    return choose_orders(brdf, eps=eps, max_F=max_F, max_P=max_P, criterion=criterion, max_view_deg=max_view_deg)
-
-
 @with_single_threaded_blas
 def prefilter(
     env: Any,
     brdf: Any,
     *,
-    eps: float = DEFAULT_EPS,
+    eps: float | None = None,
     size: int | None = None,
     budget_bytes: int = DEFAULT_MAP_BUDGET_BYTES,
     F: int | None = None,
     P: int | None = None,
-    max_F: int = DEFAULT_MAX_F,
-    max_P: int = DEFAULT_MAX_P,
+    max_F: int | None = None,
+    max_P: int | None = None,
     nthreads: int = 0,
     azimuth_free: bool = False,
     window: str = DEFAULT_WINDOW,
     cube: bool = False,
     cube_size: int | None = None,
     progress: Any = None,
-    criterion: str = DEFAULT_CRITERION,
-    max_view_deg: float = DEFAULT_MAX_VIEW_DEG,
+    criterion: str | None = None,
+    max_view_deg: float | None = None,
     orders: OrderChoice | None = None,
     lights: str | int = DEFAULT_LIGHTS,
     pixel_rule: bool = True,
+    rule: OrderRule | None = None,
 ) -> SHRM:
     """Prefilter an environment into a global SHRM (RH02 §4–5, Appendix C).
 
@@ -321,14 +310,17 @@ def prefilter(
         An :class:`~shrmkit.brdf_io.envmap.EnvironmentMap`, or a spec/path for ``load_env``.
     brdf
         A BRDF, or a spec/path for ``load_brdf``.
-    eps
-        Tolerance: orders come from :func:`~shrmkit.analysis.orders.choose_orders` and the
-        scene's F_B, P_B = P_ρ from :func:`~shrmkit.analysis.scene.scene_orders`.
-    criterion, max_view_deg
-        The order rule (``"bands"``: every view band θ_v below ``max_view_deg`` meets ε, the
-        default; ``"rh02"``: RH02's energy rule and F_B = min(F_ρ, F_L)); see
-        :mod:`~shrmkit.analysis.view_bands`. ``meta["view_bands"]`` states the predicted and
-        bounded relative RMS per band for either.
+    rule
+        The order rule (:class:`~shrmkit.analysis.order_rule.OrderRule`: criterion, view limit,
+        tolerance ε, caps on F and P; default ``OrderRule()``): orders come from
+        :func:`~shrmkit.analysis.orders.choose_orders` and the scene's F_B, P_B = P_ρ from
+        :func:`~shrmkit.analysis.scene.scene_orders`. ``"bands"``: every view band θ_v below
+        ``max_view_deg`` meets ε, the default; ``"rh02"``: RH02's energy rule and
+        F_B = min(F_ρ, F_L); see :mod:`~shrmkit.analysis.view_bands`. ``meta["view_bands"]``
+        states the predicted and bounded relative RMS per band for either.
+    eps, max_F, max_P, criterion, max_view_deg
+        The rule's fields as loose keywords (None: not given), as in
+        :func:`~shrmkit.analysis.orders.choose_orders`: with ``rule`` they must agree with it.
     size
         Rows S_B of the S_B × 2S_B output (default :func:`default_size`: 10 F_B, within
         [32, 1024] rows and a 256 MiB map budget; the meta says when the budget applied).
@@ -425,7 +417,7 @@ def prefilter(
     >>> m.P, m.F <= 3   # Phong needs no view dependence; the 4-row map resolves l <= 3
     (0, True)
     """
-    eps = check_eps(eps)
+    rule = resolve_rule(rule, eps=eps, max_F=max_F, max_P=max_P, criterion=criterion, max_view_deg=max_view_deg)
     window = check_window(window)
     lights = check_lights(lights)
     stages = stage.Stages(progress)
@@ -434,13 +426,12 @@ def prefilter(
     if isinstance(brdf, str | Path):
         brdf = load_brdf(brdf)
     with stages("orders"):
-        orders = _brdf_orders(brdf, eps, F=F, P=P, orders=orders, max_F=max_F, max_P=max_P, criterion=criterion,
-                              max_view_deg=max_view_deg)
+        orders = stage.brdf_orders(brdf, rule, F=F, P=P, orders=orders)
     with stages("lights"):
         extraction = extract_lights(env, lights)  # the SHRM holds the map without its lights
     with stages("lighting"):
         lighting, scene = scene_for(extraction.residual, orders, F=F, nthreads=nthreads)
-    s = stage.setup(orders, lighting, scene, eps=eps, F=F, P=P, azimuth_free=azimuth_free, size=size,
+    s = stage.setup(orders, lighting, scene, eps=rule.eps, F=F, P=P, azimuth_free=azimuth_free, size=size,
                     budget_bytes=budget_bytes, nthreads=nthreads)
     with stages("window"):
         w = stage.choose_window_for(s, window)
@@ -463,5 +454,5 @@ def prefilter(
     info = stage.record(s, w, st, S, brdf=brdf, source_env=env, extraction=extraction, lights=lights,
                         window=window, F=F, P=P, azimuth_free=azimuth_free, timings=stages.timings())
     light_set = extraction.lights if len(extraction.lights) else None
-    return SHRM(F=w.F_B, P=s.P_B, coeffs=coeffs, tolerance=float(eps), eps=st.eps, meta=info.to_meta(),
+    return SHRM(F=w.F_B, P=s.P_B, coeffs=coeffs, tolerance=rule.eps, eps=st.eps, meta=info.to_meta(),
                 cube=cube_coeffs, lights=light_set, brdf=brdf if light_set is not None else None)
