@@ -93,8 +93,6 @@ def report_sections(doc: dict[str, Any], image_link: Any = None) -> Iterator[tup
     """
     image = image_link or (lambda key, file, alt: f"![{alt}]({file})")
     wanted = plots_wanted(doc)
-    drawn = doc.get("options", {}).get("plots", True)
-    explorer_drawn = doc.get("options", {}).get("explorer_plots", True)
 
     def link(key: str, file: str, alt: str) -> str:
         """The image, or nothing for a plot that was not drawn (``plots``, ``explorer_plots``)."""
@@ -103,6 +101,24 @@ def report_sections(doc: dict[str, Any], image_link: Any = None) -> Iterator[tup
     if doc["status"] != "ok":
         yield "Failed", f"The report of `{doc['source']}` could not be made:\n\n```\n{doc.get('error')}\n```"
         return
+    yield "Summary", _summary_body(doc)
+    # the preview next, on the first screen with the answer (issue 26), before the tables behind it
+    yield "Preview", _preview_body(doc, link)
+    yield "Data warnings", _warnings_body(doc)
+    yield "Orders (RH02 §5.1)", _orders_body(doc, link)
+    yield "Environments", _environments_body(doc)
+    yield "Speed against error", _speed_body(doc, link)
+    yield "Fits", _fits_body(doc, link)
+    yield "Data checks", _data_checks_body(doc)
+    explorer = doc.get("explorer")
+    if explorer:
+        yield "BRDF Explorer views", _explorer_body(doc, explorer, link)
+
+
+def _summary_body(doc: dict[str, Any]) -> str:
+    """The answer first: source, main (F, P), each scene's and each fit's headline, the run's profile."""
+    drawn = doc.get("options", {}).get("plots", True)
+    explorer_drawn = doc.get("options", {}).get("explorer_plots", True)
     b = doc["brdf"]
     head = [f"Source: `{doc['source']}` ({b['kind']}); main tolerance ε = {fmt(doc['main']['tolerance'])}: "
             f"**F = {doc['main']['F']}, P = {doc['main']['P']}** (ε(F, P) = {fmt(doc['main']['eps'])})."]
@@ -119,39 +135,54 @@ def report_sections(doc: dict[str, Any], image_link: Any = None) -> Iterator[tup
                 + (" The BRDF views' plots (fit slices, BRDF Explorer) were not drawn (quick profile; "
                    "--explorer-plots draws them): their numbers are in report.json." if drawn and not explorer_drawn
                    else ""))
-    yield "Summary", "\n\n".join(head)
+    return "\n\n".join(head)
 
-    # the preview next, on the first screen with the answer (issue 26), before the tables behind it
+
+def _preview_body(doc: dict[str, Any], link: Any) -> str:
+    """The live previews (report.html), the still images and the preview's notes."""
     p = doc["preview"]
     parts = _live_parts(doc.get("live_preview"))
     parts += [f"{img['key']} ({img['renderer']}, ε = {fmt(p['tolerance'])}, F = {p['F']}, P = {p['P']}, "
               f"environment {p['env']}):\n\n" + link(f"preview_{img['key']}", img["file"], f"preview {img['key']}")
               for img in p["images"]]
     parts += [f"- {n}" for n in p["notes"]]
-    yield "Preview", "\n\n".join(parts) if parts else "No preview."
+    return "\n\n".join(parts) if parts else "No preview."
 
+
+def _warnings_body(doc: dict[str, Any]) -> str:
+    """One bullet per data warning, or the sentence saying the data passed every check."""
     if doc["warnings"]:
-        yield "Data warnings", "\n".join(f"- **{w['code']}**: {w['message']}" for w in doc["warnings"])
-    else:
-        yield "Data warnings", "None: no missing or clamped data, reciprocal, directional albedo ≤ 1."
+        return "\n".join(f"- **{w['code']}**: {w['message']}" for w in doc["warnings"])
+    return "None: no missing or clamped data, reciprocal, directional albedo ≤ 1."
 
+
+def _orders_body(doc: dict[str, Any], link: Any) -> str:
+    """The (F, P) table per tolerance, the main tolerance's view bands and the order plots."""
     rows = [[o["tolerance"], o["F"], o["P"], o["eps"], o.get("eps_rh02", o["eps"]), o["capped"], o["converged"],
              o["orders_seconds"]] for o in doc["orders"]]
     body = md_table(["tolerance", "F", "P", "ε(F, P)", "ε RH02", "capped", "converged", "time (s)"], rows)
     main_orders = next((o for o in doc["orders"] if o["tolerance"] == doc["main"]["tolerance"]), None)
     if main_orders and main_orders.get("view_bands"):
-        body += ("\n\nRule: " + ("every view band θ_v that starts below "
-                 f"{fmt(main_orders['max_view_deg'])}° meets ε under a point light (ε is the worst band's)"
-                 if main_orders["criterion"] == "bands" else "RH02 §5.1, energy over all views") + ". By view band "
-                 f"at (F, P) = ({main_orders['F']}, {main_orders['P']}), under a point light "
-                 "(the hardest lighting: its relative RMS is √ε; a scene's is stated under Environments):\n\n")
-        body += md_table(["θ_v (°)", "ε", "point-light rel. RMS (√ε)", "note"], [
-            [f"{b['theta_v_deg'][0]:g}–{b['theta_v_deg'][1]:g}", b["eps"], b["rel_rms_point_light"],
-             _band_note(b)] for b in main_orders["view_bands"]])
+        body += _orders_view_bands(main_orders)
     body += "\n\n" + link("energy", "plot_energy.png", PLOT_TITLES["energy"])
     body += "\n\n" + link("accuracy_by_p", "plot_accuracy_by_p.png", PLOT_TITLES["accuracy_by_p"])
-    yield "Orders (RH02 §5.1)", body
+    return body
 
+
+def _orders_view_bands(main_orders: dict[str, Any]) -> str:
+    """The order rule in words and ε by view band at the main (F, P), under a point light."""
+    text = ("\n\nRule: " + ("every view band θ_v that starts below "
+            f"{fmt(main_orders['max_view_deg'])}° meets ε under a point light (ε is the worst band's)"
+            if main_orders["criterion"] == "bands" else "RH02 §5.1, energy over all views") + ". By view band "
+            f"at (F, P) = ({main_orders['F']}, {main_orders['P']}), under a point light "
+            "(the hardest lighting: its relative RMS is √ε; a scene's is stated under Environments):\n\n")
+    return text + md_table(["θ_v (°)", "ε", "point-light rel. RMS (√ε)", "note"], [
+        [f"{b['theta_v_deg'][0]:g}–{b['theta_v_deg'][1]:g}", b["eps"], b["rel_rms_point_light"],
+         _band_note(b)] for b in main_orders["view_bands"]])
+
+
+def _environments_body(doc: dict[str, Any]) -> str:
+    """Each scene's orders (F_L, F_B, P_B), predicted, bound and measured errors, and its view bands."""
     rows = [[e["name"], f"{e['height']}×{e['width']}", f"≥ {e['F_L']}" if e.get("lighting_capped") else e["F_L"],
              e["F_B"], e["P_B"], e["eps_B"], e.get("predicted_rel_rms"), e.get("bound_rel_rms"),
              e["measured_rel_rms"], e["n_pairs"]] for e in doc["environments"]]
@@ -170,14 +201,21 @@ def report_sections(doc: dict[str, Any], image_link: Any = None) -> Iterator[tup
                       "measured rel. RMS", "pairs"], rows)
     for e in doc["environments"]:
         if e.get("view_bands"):
-            body += (f"\n\n**{e['name']}** by view band (measured: relative RMS ± its standard error on the pairs of "
-                     "the band; \"stated\": beyond the view limit, errors stated, not promised):\n\n")
-            body += md_table(["θ_v (°)", "predicted rel. RMS", "bound rel. RMS", "measured rel. RMS", "± s.e.",
-                              "pairs", "note"], [
-                [f"{b['theta_v_deg'][0]:g}–{b['theta_v_deg'][1]:g}", b["predicted_rel_rms"], b["bound_rel_rms"],
-                 b["measured_rel_rms"], b["measured_stderr"], b["n_pairs"], _band_note(b)] for b in e["view_bands"]])
-    yield "Environments", body
+            body += _environment_view_bands(e)
+    return body
 
+
+def _environment_view_bands(e: dict[str, Any]) -> str:
+    """One scene's predicted, bound and measured relative RMS by view band."""
+    return (f"\n\n**{e['name']}** by view band (measured: relative RMS ± its standard error on the pairs of "
+            "the band; \"stated\": beyond the view limit, errors stated, not promised):\n\n") + md_table(
+        ["θ_v (°)", "predicted rel. RMS", "bound rel. RMS", "measured rel. RMS", "± s.e.", "pairs", "note"], [
+            [f"{b['theta_v_deg'][0]:g}–{b['theta_v_deg'][1]:g}", b["predicted_rel_rms"], b["bound_rel_rms"],
+             b["measured_rel_rms"], b["measured_stderr"], b["n_pairs"], _band_note(b)] for b in e["view_bands"]])
+
+
+def _speed_body(doc: dict[str, Any], link: Any) -> str:
+    """Prefilter time against the angular reference's, with each row's error and window."""
     rows = [[r["env"], r["tolerance"], r["F_B"], r["P_B"], r["size"], _window_text(r), r["eps_B"],
              r.get("predicted_rel_rms"), r.get("bound_rel_rms"), r["measured_rel_rms"], r.get("pixel_p90"),
              r["prefilter_seconds"] * 1e3,
@@ -193,21 +231,23 @@ def report_sections(doc: dict[str, Any], image_link: Any = None) -> Iterator[tup
              "what undershoot is left is clamped to 0. Per-pixel p90: the 90th percentile of the relative error "
              "per direction, estimated on a sample against a higher order (the pixel rule keeps it within √ε).")
     body += "\n\n" + link("speed_error", "plot_speed_error.png", PLOT_TITLES["speed_error"])
-    yield "Speed against error", body
+    return body
 
-    rows = []
-    for f in doc["fits"]:
-        if f.get("error"):
-            rows.append([f["model"], "failed: " + f["error"], None, None, None, None, "FAILED", None,
-                         f["fit_seconds"]])
-        else:
-            band = f.get("worst_band")
-            rows.append([f["model"], f["spec"], band["rel_rms"] if band else None,
-                         f"{band['lo_deg']:g}–{band['hi_deg']:g}°" if band else None, f["errors"].get("rel_rms"),
-                         f["errors"].get("log_rms"), "ok" if f["success"] else "FAILED", f["status"],
-                         f["fit_seconds"]])
+
+def _fit_row(f: dict[str, Any]) -> list[Any]:
+    """One fitted model's row: spec, worst view band, overall errors, verdict, nlopt's stop, time."""
+    if f.get("error"):
+        return [f["model"], "failed: " + f["error"], None, None, None, None, "FAILED", None, f["fit_seconds"]]
+    band = f.get("worst_band")
+    return [f["model"], f["spec"], band["rel_rms"] if band else None,
+            f"{band['lo_deg']:g}–{band['hi_deg']:g}°" if band else None, f["errors"].get("rel_rms"),
+            f["errors"].get("log_rms"), "ok" if f["success"] else "FAILED", f["status"], f["fit_seconds"]]
+
+
+def _fits_body(doc: dict[str, Any], link: Any) -> str:
+    """The fits' table and failure rule, their parameters (those at a bound), errors by band and plots."""
     body = md_table(["model", "fitted spec", "worst band rel. RMS", "worst band", "rel. RMS (all)", "log RMS",
-                     "verdict", "nlopt stop", "time (s)"], rows)
+                     "verdict", "nlopt stop", "time (s)"], [_fit_row(f) for f in doc["fits"]])
     body += (f"\n\nA fit FAILS when its relative RMS error passes {fmt(FIT_FAIL_BAND_REL_RMS)} in any view band "
              "(of 10 samples or more): the model does not represent the material there, whatever its average. "
              "nlopt's stop reason says how the search ended, not whether the fit is good.")
@@ -225,8 +265,11 @@ def report_sections(doc: dict[str, Any], image_link: Any = None) -> Iterator[tup
                                                                      "log RMS"], band_rows)
         body += "\n\n" + link("fit_bands", "plot_fit_bands.png", PLOT_TITLES["fit_bands"])
     body += "\n\n" + link("fit_slices", "plot_fit_slices.png", PLOT_TITLES["fit_slices"])
-    yield "Fits", body
+    return body
 
+
+def _data_checks_body(doc: dict[str, Any]) -> str:
+    """Missing and clamped samples, reciprocity and directional albedo per view."""
     c = doc["data_checks"]
     rec = c["reciprocity"]
     a = c["albedo"]
@@ -241,11 +284,7 @@ def report_sections(doc: dict[str, Any], image_link: Any = None) -> Iterator[tup
     body = md_table(["check", "result"], rows)
     body += "\n\nDirectional albedo per view (RGB): " + "; ".join(
         f"{v:g}°: {'/'.join(fmt(x) for x in rgb)}" for v, rgb in zip(a["views_deg"], a["rgb"], strict=True))
-    yield "Data checks", body
-
-    explorer = doc.get("explorer")
-    if explorer:
-        yield "BRDF Explorer views", _explorer_body(doc, explorer, link)
+    return body
 
 
 
