@@ -76,6 +76,6 @@ def export_format(name: str | None, path: str | os.PathLike[str]) -> ExportForma
     matches = [f for f in EXPORT_FORMATS.values() if f.suffix == suffix]
     if len(matches) != 1:
         known = ", ".join(f"{f.suffix} ({f.name})" for f in EXPORT_FORMATS.values())
-        why = "is written by several formats: name one with --to" if matches else "is not a format written"
+        why = "is written by several formats: name one with name=FORMAT" if matches else "is not a format written"
         raise BadInputError(path, f"suffix {suffix or '(none)'!r} {why}; known: {known}")
     return matches[0]

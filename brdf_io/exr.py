@@ -302,8 +302,8 @@ def _choose_part(path: Path, parts: list[_Part], part: int | str | None) -> _Par
     if not colour:
         raise BadInputError(path, f"OpenEXR file has no R, G, B (or Y) channels; {listing()}")
     raise BadInputError(
-        path, f"OpenEXR file has {len(colour)} parts with colour channels; choose one with part= (--env-part "
-        f"NAME|INDEX): {listing()}",
+        path, f"OpenEXR file has {len(colour)} parts with colour channels; choose one with "
+        f"part=NAME|INDEX: {listing()}",
     )
 
 
@@ -339,7 +339,7 @@ def _choose_layer(path: Path, part: _Part, layer: str | None, multipart: bool) -
         )
     raise BadInputError(
         path, f"OpenEXR file has no plain R, G, B channels{where} and {len(colour)} layers with colour: "
-        f"{_describe_layers(colour)}; choose one with layer= (--env-layer NAME)",
+        f"{_describe_layers(colour)}; choose one with layer=NAME",
     )
 
 

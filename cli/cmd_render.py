@@ -34,8 +34,10 @@ from ..render.output import to_8bit, turntable_paths, write_exr, write_gif, writ
 from ..render.pipeline import Frame, light_turntable_rotations, turntable_cameras
 from ..render.preview import preview_exposure
 from .common import (
+    ERROR_IMAGE_TERMS,
     env_rotation_arg,
     env_sources_arg,
+    in_cli_terms,
     load_analysis_brdf,
     load_env_arg,
     load_env_sequence,
@@ -82,7 +84,10 @@ def _validate(args: argparse.Namespace, sequence: bool = False) -> tuple[list[Ca
     if args.exr and Path(args.exr).suffix.lower() != ".exr":
         raise BadInputError(args.exr, "--exr must name a .exr file")
     if args.error_image:
-        check_error_image_request(args.error_image, args.mode)
+        try:
+            check_error_image_request(args.error_image, args.mode)
+        except BadInputError as err:
+            raise BadInputError(err.source, in_cli_terms(err.problem, ERROR_IMAGE_TERMS)) from None
     if args.self_shadow and args.mode not in self_shadow_modes():
         raise BadInputError(None, f"--self-shadow needs --mode {' or '.join(self_shadow_modes())}")
     given = [f"--{name}" for name in ("lobes", "elevations") if getattr(args, f"{name}_given", False)]

@@ -39,10 +39,12 @@ from .options import (  # the parsers' options, numpy-free (cli/options.py), her
     positive_float,
     tolerance,
 )
+from .terms import ERROR_IMAGE_TERMS, in_cli_terms  # the library's words as options (numpy-free, cli/terms.py)
 
 __all__ = [
     "say",
     "in_cli_terms",
+    "ERROR_IMAGE_TERMS",
     "brdf_help",
     "add_env_orientation",
     "add_window_option",
@@ -101,18 +103,6 @@ def say(text: str) -> None:
     """One line of plain text on :data:`stdout`, as ``print`` writes it (no markup, highlighting,
     emoji codes or wrapping)."""
     stdout.print(text, soft_wrap=True, markup=False, highlight=False, emoji=False)
-
-
-#: The library's names of the limits a message may advise raising, and the options that set them.
-_OPTION_OF = (("max_F/max_P", "--max-F/--max-P"),)
-
-
-def in_cli_terms(text: str) -> str:
-    """A library message (which names the API's parameters, ``max_F/max_P``) as the command line
-    says it (the options that set them, ``--max-F/--max-P``)."""
-    for name, option in _OPTION_OF:
-        text = text.replace(name, option)
-    return text
 
 
 def rgl_brdf_arg(source: str, args: argparse.Namespace) -> str:

@@ -33,6 +33,7 @@ from pathlib import Path
 
 from .._version import __version__
 from ..brdf_io.errors import ShrmError
+from .terms import in_cli_terms
 
 HERE = Path(__file__).parent
 
@@ -194,7 +195,7 @@ def main(argv: list[str] | None = None) -> int:
             with contextlib.redirect_stdout(sink) if quiet else contextlib.nullcontext():
                 return int(args._run(args) or 0)
     except ShrmError as err:
-        print(f"shrm {args.verb}: error: {shorten(str(err))}", file=sys.stderr)
+        print(f"shrm {args.verb}: error: {shorten(in_cli_terms(str(err)))}", file=sys.stderr)
         return 2
     except OSError as err:  # a file system refusal the verb did not turn into a BadInputError
         where = f"{err.filename}: " if err.filename else ""

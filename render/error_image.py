@@ -102,14 +102,15 @@ def check_error_image_request(path: str | Path, mode: str) -> Path:
     Raises
     ------
     BadInputError
-        One line naming the problem.
+        One line naming the problem in the API's terms (``path``, ``mode=``); the CLI says it with
+        its options (``cli.common.in_cli_terms``: ``--error-image``, ``--mode``).
     """
     path = Path(path)
     if path.suffix.lower() != ".exr":
-        raise BadInputError(path, "--error-image must name a .exr file")
+        raise BadInputError(path, "the error image path must name a .exr file")
     modes = error_image_modes()
     if mode not in modes:
-        raise BadInputError(None, f"--error-image needs an SHRM mode ({', '.join(modes)}), not --mode {mode}: "
+        raise BadInputError(None, f"an error image needs an SHRM mode ({', '.join(modes)}), not mode={mode}: "
                             "the error statement is the SHRM's")
     return path
 
