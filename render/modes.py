@@ -15,8 +15,10 @@ model, its numbers, the lines ``shrm render`` prints), ``models`` (the types
 - ``gaussian-lobes`` (``gaussian_lobes``): [Green07], Gaussian lobes over an SG mip stack.
 
 Adding a mode: its method in the table of methods, its ``shading`` (and ``update``), its
-``build``, and one :class:`RenderMode` entry in :data:`RENDER_MODES` below. Citation keys:
-``data_specs/bibliography.md``.
+``build``, one :class:`RenderMode` entry in :data:`RENDER_MODES` below, and its one-line help in
+``render/defaults.py`` (``RENDER_MODE_HELP``, numpy-free, which ``shrm render --mode`` shows;
+``SELF_SHADOW_MODES``/``LOBE_OPTION_MODES`` there too when it has those options: the mirrors are
+checked by ``tests/cli/test_cli_startup.py``). Citation keys: ``data_specs/bibliography.md``.
 """
 
 from __future__ import annotations
