@@ -1,13 +1,11 @@
 """Frequency-space analysis ([RH02]): BRDF coefficients ρ̂_lpq, the choice of orders, lighting
 coefficients, SHRM prefiltering and synthesis, the stated error per view band, and the
-angular-domain reference (DESIGN §4–6). Imports only :mod:`shrmkit.brdf_io`.
+angular-domain reference (DESIGN §4–6). Imports only :mod:`shrmkit.brdf_io`. Public API: the names
+in ``__all__``, importable from ``shrmkit.analysis``:
 
-Public API — the names in ``__all__``, importable from ``shrmkit.analysis``:
-
-- The SHRM: :func:`prefilter` (environment × BRDF → :class:`SHRM`, [RH02] §4–5),
-  :func:`load_shrm` (``data_specs/shrm_file.md``); what a prefilter states, typed (``SHRM.info``):
-  :class:`PrefilterInfo` with :class:`WindowInfo`, :class:`LightsInfo`, :class:`Timings`,
-  :class:`ViewBand`.
+- The SHRM: :func:`prefilter` (environment × BRDF → :class:`SHRM`, [RH02] §4–5), :func:`load_shrm`
+  (``data_specs/shrm_file.md``); what a prefilter states, typed (``SHRM.info``): :class:`PrefilterInfo`
+  with :class:`WindowInfo`, :class:`LightsInfo`, :class:`Timings`, :class:`ViewBand`.
 - Orders: :func:`choose_orders` and :func:`choose_orders_many` ([RH02] §5.1) returning
   :class:`OrderChoice`; the defaults :data:`DEFAULT_EPS`, :data:`DEFAULT_MAX_VIEW_DEG` and the
   rules :data:`CRITERIA`; :class:`BandStatement`, one view band's stated error
@@ -16,8 +14,7 @@ Public API — the names in ``__all__``, importable from ``shrmkit.analysis``:
   :func:`lighting_coefficients` → :class:`LightingCoefficients`; :func:`scene_orders` →
   :class:`SceneOrders` and :func:`residual_bound`; :func:`real_sph_harm` (the real SH basis of
   DESIGN §2).
-- Explicit lights beside the SHRM (DESIGN §5a): :func:`extract_lights`, :class:`LightSet`,
-  :class:`Light`.
+- Explicit lights beside the SHRM (DESIGN §5a): :func:`extract_lights`, :class:`LightSet`, :class:`Light`.
 - The brute-force reference (the ground truth of the tests): :func:`reference_radiance`,
   :func:`reference_map`; the predicted error of a render's pixels: :func:`predicted_error`.
 - BRDF checks and views: :func:`directional_albedo`, :func:`reciprocity_check`,
