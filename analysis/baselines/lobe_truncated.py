@@ -7,27 +7,13 @@
 
 the sum of :func:`~shrmkit.analysis.reference.reference_radiance` (every lit pixel p of the
 lat-long map, direction ω_p at its centre, exact solid angle Ω_p, ρ̂ in the local frame of
-N) restricted to a cone about R. The cone's half-angle c(θ_v) (θ_v = angle(N, V), half the
-angle between R and V) is found numerically, per view elevation, from the BRDF's own ρ̂ in
-the reflection frame (R = +z, DESIGN §3): the largest angle θ_i' from R at which any
-channel of ρ̂(θ_i', θ_o' = 2θ_v, φ') exceeds ``threshold`` × that channel's peak for the
-view, on a fine (θ_i', φ') grid, rounded up to the grid with one node to spare (conservative
-for a lobe sampled finer than its width). Between tabulated view elevations the larger of the two
-neighbouring cones is used. The pixels inside the cone come from a KD-tree on the unit
-pixel directions (``scipy.spatial.cKDTree.query_ball_point`` with the chord 2 sin(c/2)).
+N) restricted to a cone about R. The cone's half-angle c(θ_v) comes from the BRDF's own ρ̂
+(:func:`lobe_cones`, :class:`LobeCones`), the pixels inside it from :func:`cone_pixels`; every
+dropped pixel has ρ̂ below ``threshold`` × peak, which bounds the error per output
+(:meth:`LobeTruncatedSum.radiance_and_bound`). :func:`lobe_truncated_sum` sets the sum up,
+:func:`lobe_truncated_radiance` evaluates it once.
 
-What the truncation drops is bounded per output: every dropped pixel has ρ̂ below
-``threshold`` × peak, so the absolute error is at most threshold × peak × (the flux
-Σ L_p Ω_p of the pixels outside the cone) — :meth:`LobeTruncatedSum.radiance_and_bound`
-returns it. Relative to B that is ~``threshold`` for smooth lighting and can be much more
-for a bright source just outside a sharp lobe.
-
-Public objects: :class:`LobeCones`, :func:`lobe_cones`, :class:`LobeTruncatedSum`,
-:func:`lobe_truncated_sum`, :func:`lobe_truncated_radiance`.
-
-References
-----------
-[RH02] §6, Table 3 (costs) and Table 4 (the angular-domain baseline that sums only the
+References: [RH02] §6, Table 3 (costs) and Table 4 (the angular-domain baseline that sums only the
 significant part of the lobe). Citation keys: ``data_specs/bibliography.md``.
 """
 
@@ -111,14 +97,17 @@ def lobe_cones(
 ) -> LobeCones:
     """Tabulate the cone that holds ρ̂ above ``threshold`` × its peak, for each view elevation.
 
-    In the reflection frame (R = +z, V' at θ_o' = 2θ_v; :func:`~shrmkit.brdf_io.reparam.reparam_directions`)
+    θ_v = angle(N, V) is half the angle between R and V. The half-angle c(θ_v) is the largest angle
+    θ_i' from R at which any channel of ρ̂(θ_i', θ_o' = 2θ_v, φ') exceeds ``threshold`` × that
+    channel's peak for the view, found numerically on a fine grid (DESIGN §3):
+    in the reflection frame (R = +z, V' at θ_o' = 2θ_v; :func:`~shrmkit.brdf_io.reparam.reparam_directions`)
     ρ̂ is evaluated on ``n_theta`` angles θ_i' uniform in [0, π] × ``n_phi`` azimuths φ'
     uniform in [0, π] (ρ̂ of an isotropic BRDF is even in φ'), for ``n_views`` elevations θ_v
     uniform in [0°, 89.5°] (θ_v = 90° is the grazing singularity θ_o' = π). The half-angle is
     the grid angle two nodes beyond the last node above threshold × peak (per channel, any
     channel), i.e. rounded *up* to the grid with one node to spare for the sampling of φ' and
-    θ_v (checked against a 8× finer grid: within 0.02° of it or above); π when the lobe
-    reaches the antipode.
+    θ_v (checked against a 8× finer grid: within 0.02° of it or above; conservative for a lobe
+    sampled finer than its width); π when the lobe reaches the antipode.
 
     Parameters
     ----------
@@ -310,7 +299,9 @@ class LobeTruncatedSum:
         bound
             (n, 3) float64: threshold × peak(θ_v) × the flux of the pixels outside the cone,
             an upper bound on |reference − radiance| per pair and channel (up to the grid of
-            :func:`lobe_cones`).
+            :func:`lobe_cones`): every dropped pixel has ρ̂ below threshold × peak. Relative to B
+            that is ~``threshold`` for smooth lighting and can be much more for a bright source
+            just outside a sharp lobe.
         terms
             The number of (output, lit pixel) terms summed; the brute-force reference sums
             n × (lit pixels).
