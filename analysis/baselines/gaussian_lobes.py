@@ -2,35 +2,16 @@
 
 Fits K lobes to the BRDF's transfer function per view elevation, convolves the environment
 with Gaussians of doubling width, and evaluates B(R, V) from both (the ``gaussian_lobes`` method
-of :mod:`.methods` builds its model here). Citation keys: ``data_specs/bibliography.md``.
+of :mod:`.methods` builds its model here):
 
-1. **Fit** (their §3). At N view elevations θ_v (the angle between N and V; our
-   reparameterized θ_o' = 2θ_v, DESIGN §3) the transfer function in the reflection frame,
-   T_θo'(L') = ρ̂(θ_i', θ_o', φ'), is fitted by K isotropic spherical Gaussians
+1. **Fit** ([Green07] §3, :func:`fit_gaussian_lobes` → :class:`GaussianLobes`): at N view
+   elevations θ_v, the transfer function in the reflection frame by K spherical Gaussians
+   G_σ(t) = exp((t − 1)/σ²) / N(σ) (:func:`sg_eval`, :func:`sg_norm`);
+2. **Mip stack** ([Green07] §4, :func:`sg_mip_stack` → :class:`SGMipStack`): the environment
+   convolved with G_σ for doubling σ, as an SH product (:func:`sg_zonal_factors`);
+3. **Render** (:class:`GaussianLobeModel`): B(R, V) = Σ_k w_k (G_σk * L)(d_k), interpolated in θ_v.
 
-       T(L') ≈ Σ_k w_k G_σk(μ_k · L'),   G_σ(t) = exp((t − 1)/σ²) / N(σ),
-       N(σ) = 2πσ²(1 − e^{−2/σ²})  (unit integral over the sphere),
-
-   with RGB weights w_k (the energy of lobe k), width σ_k (radians; G ≈ exp(−γ²/2σ²)) and
-   mean μ_k in the plane of R and V at signed angle θ_μ,k from R (positive toward V). T is
-   even in φ' so the lobes need no out-of-plane offset. Least squares over the sphere
-   (solid-angle weighted), nlopt LN_BOBYQA over the shapes (θ_μ, ln σ), with the weights
-   solved in closed form by non-negative least squares for each trial shape (variable
-   projection), continuation from the neighbouring elevation plus fixed starts.
-
-2. **Mip stack** (their §4): the environment convolved with G_σj for σ_{j+1} = 2σ_j,
-   computed as an SH product (G * L)_lm = a_l(σ) L_lm with the exact zonal factor
-   a_l = 4π e^{−λ} i_l(λ) / N(σ), λ = 1/σ² (Funk–Hecke with e^{λt} = Σ (2l+1) i_l(λ) P_l(t),
-   i_l the modified spherical Bessel function), then one fast SH synthesis per level.
-   The Gaussian's coefficients decay like exp(−l²σ²/2): the narrowest level is
-   σ_0 = 4/H for an H-row environment (a_l < 4e-4 at the truncation l = H − 1, so no
-   visible ringing); level j is stored at the power of two of rows >= 4π/σ_j (pixel pitch
-   <= σ_j/4), between 8 and H rows.
-
-3. **Render**: B(R, V) = Σ_k w_k (G_σk * L)(d_k) with d_k = cos θ_μ R + sin θ_μ t, t the unit
-   vector toward V perpendicular to R; σ between levels is interpolated linearly in
-   log2 σ (σ below σ_0 uses level 0: the environment's own resolution limit), and the
-   radiance is interpolated linearly in θ_v between the two neighbouring elevations.
+Citation keys: ``data_specs/bibliography.md``.
 """
 
 from __future__ import annotations
@@ -138,7 +119,15 @@ class SGMipStack:
 def sg_mip_stack(
     env: Any, *, sigma0: float | None = None, n_levels: int | None = None, sigma_max: float = 2.0, nthreads: int = 1
 ) -> SGMipStack:
-    """Build the SG mip stack of an environment by SH products (Green et al. 2007 §4).
+    """Build the SG mip stack of an environment by SH products ([Green07] §4).
+
+    The environment convolved with G_σj for σ_{j+1} = 2σ_j, computed as an SH product
+    (G * L)_lm = a_l(σ) L_lm with the exact zonal factor a_l = 4π e^{−λ} i_l(λ) / N(σ), λ = 1/σ²
+    (Funk–Hecke with e^{λt} = Σ (2l+1) i_l(λ) P_l(t), i_l the modified spherical Bessel
+    function; :func:`sg_zonal_factors`), then one fast SH synthesis per level. The Gaussian's
+    coefficients decay like exp(−l²σ²/2): the narrowest level is σ_0 = 4/H for an H-row
+    environment (a_l < 4e-4 at the truncation l = H − 1, so no visible ringing); level j is
+    stored at the power of two of rows >= 4π/σ_j (pixel pitch <= σ_j/4), between 8 and H rows.
 
     Parameters
     ----------
@@ -324,7 +313,21 @@ def fit_gaussian_lobes(
     max_evals: int = 400,
     samples: TransferSamples | None = None,
 ) -> GaussianLobes:
-    """Fit K isotropic Gaussian lobes to T_θo' at ``n_elevations`` view elevations.
+    """Fit K isotropic Gaussian lobes to T_θo' at ``n_elevations`` view elevations ([Green07] §3).
+
+    At each view elevation θ_v (the angle between N and V; our reparameterized θ_o' = 2θ_v,
+    DESIGN §3) the transfer function in the reflection frame, T_θo'(L') = ρ̂(θ_i', θ_o', φ'), is
+    fitted by K isotropic spherical Gaussians
+
+        T(L') ≈ Σ_k w_k G_σk(μ_k · L'),   G_σ(t) = exp((t − 1)/σ²) / N(σ),
+        N(σ) = 2πσ²(1 − e^{−2/σ²})  (unit integral over the sphere),
+
+    with RGB weights w_k (the energy of lobe k), width σ_k (radians; G ≈ exp(−γ²/2σ²)) and
+    mean μ_k in the plane of R and V at signed angle θ_μ,k from R (positive toward V). T is
+    even in φ' so the lobes need no out-of-plane offset. Least squares over the sphere
+    (solid-angle weighted), nlopt LN_BOBYQA over the shapes (θ_μ, ln σ), with the weights
+    solved in closed form by non-negative least squares for each trial shape (variable
+    projection), continuation from the neighbouring elevation plus fixed starts.
 
     Parameters
     ----------
@@ -392,7 +395,13 @@ def fit_gaussian_lobes(
 
 @dataclass(frozen=True, eq=False)
 class GaussianLobeModel:
-    """Lobes + mip stack: B(R, V) = Σ_k w_k (G_σk * L)(d_k), interpolated in θ_v."""
+    """Lobes + mip stack: B(R, V) = Σ_k w_k (G_σk * L)(d_k), interpolated in θ_v.
+
+    d_k = cos θ_μ R + sin θ_μ t, t the unit vector toward V perpendicular to R; σ between levels
+    is interpolated linearly in log2 σ (σ below σ_0 uses level 0: the environment's own
+    resolution limit), and the radiance is interpolated linearly in θ_v between the two
+    neighbouring elevations.
+    """
 
     lobes: GaussianLobes
     stack: SGMipStack
