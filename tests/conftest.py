@@ -66,6 +66,21 @@ def pytest_xdist_make_scheduler(config, log):
     return ClassScheduling(config, log)
 
 
+@pytest.hookimpl(wrapper=True)
+def pytest_collection(session):
+    """Collection with bytecode writing on, whatever ``PYTHONDONTWRITEBYTECODE`` says: pytest caches a
+    test module's assertion rewrite only when ``sys.dont_write_bytecode`` is false, and without that
+    cache every run (every xdist worker) re-parses and rewrites all ~130 test modules: 17.6 s CPU of
+    collection per worker instead of 8.3 s on the project's 2-core machine, where the variable is set.
+    The files go to the ``__pycache__`` folders git ignores; the flag is restored before any test runs."""
+    saved = sys.dont_write_bytecode
+    sys.dont_write_bytecode = False
+    try:
+        return (yield)
+    finally:
+        sys.dont_write_bytecode = saved
+
+
 def pytest_collection_modifyitems(config, items):
     """Tests marked ``slow`` first (a stable sort: otherwise collection order), but the tests that
     read the shared demo run after the first of them last. Under xdist the single tests are handed
