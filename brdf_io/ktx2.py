@@ -1,26 +1,13 @@
-"""Khronos KTX 2.0 (``.ktx2``) cube maps with mip chains: writer and reader.
+"""Khronos KTX 2.0 (``.ktx2``) cube maps with mip chains: writer and reader ([KTX2], [KDFS13]).
 
-Layout (Khronos, *KTX File Format Specification* 2.0, "File Structure"; ``data_specs/export.md``
-has the byte table), all little-endian:
-
-* the 12-byte identifier ``«KTX 20»\\r\\n\\x1a\\n``, then nine UInt32 (``vkFormat``, ``typeSize``,
-  ``pixelWidth`` = ``pixelHeight`` = S, ``pixelDepth`` 0, ``layerCount`` 0, ``faceCount`` 6,
-  ``levelCount`` N, ``supercompressionScheme`` 0 = none);
-* the index (``dfdByteOffset``, ``dfdByteLength``, ``kvdByteOffset``, ``kvdByteLength`` as UInt32,
-  ``sgdByteOffset``, ``sgdByteLength`` as UInt64, both 0): the header is 80 bytes;
-* the level index, N × (UInt64 ``byteOffset``, ``byteLength``, ``uncompressedByteLength``),
-  **largest level first** (index p holds level p);
-* the Data Format Descriptor: ``dfdTotalSize`` and one Khronos basic descriptor block
-  (*Khronos Data Format Specification* 1.3, §5; as KTX-Software's ``createDFDUnpacked`` writes
-  it): colour model RGBSDA, primaries BT.709, transfer linear, straight alpha, one 1×1×1 texel
-  of ``bytesPlane0`` bytes, four samples R, G, B, A (channel ids 0, 1, 2, 15) with float
-  samples qualified FLOAT | SIGNED and bounds −1.0f … 1.0f, 8-bit samples 0 … 255;
-* key/value data sorted by key, each pair padded to 4 bytes: ``KTXorientation`` = ``"rd"``
-  (S to the right, T down: the first texel of a face is its top left, the only orientation the
-  spec allows for cube maps read by Vulkan / OpenGL samplers) and ``KTXwriter``;
-* the mip level array, **smallest level first** (level N − 1 … 0), each level starting on a
-  multiple of lcm(texel size, 4) bytes from the start of the file (``mipPadding``, zeros); inside
-  a level the faces +X, −X, +Y, −Y, +Z, −Z, each face's rows top to bottom, texels R, G, B, A.
+:func:`write_ktx2_cube` writes a cube map's mip chain in the layout engines load, all little-endian:
+the 80-byte header (faceCount 6, no supercompression), the level index (**largest level first**),
+one Khronos basic Data Format Descriptor (linear RGBA, as KTX-Software's ``createDFDUnpacked``
+writes it), the key/value data sorted by key (``KTXorientation`` = ``"rd"``, ``KTXwriter``), and
+the mip level array (**smallest level first**, each level padded to lcm(texel size, 4) bytes; inside
+a level the faces +X, −X, +Y, −Y, +Z, −Z, rows top to bottom, texels R, G, B, A).
+:func:`read_ktx2_cube` reads such files back. The byte table: ``data_specs/export.md`` §3 ("KTX2
+layout").
 
 Pixel formats (:data:`KTX2_FORMATS`, the names of ``brdf_io/dds.py``'s :data:`DDS_FORMATS`):
 ``rgba16f`` (``VK_FORMAT_R16G16B16A16_SFLOAT``, 97, the engines' HDR format), ``rgba32f``
@@ -28,15 +15,10 @@ Pixel formats (:data:`KTX2_FORMATS`, the names of ``brdf_io/dds.py``'s :data:`DD
 clipped to [0, 1] and rounded; linear, not sRGB). Alpha is written as 1. The texels are
 byte-for-byte those of the DDS writer: only the container differs.
 
-Public objects: :data:`KTX2_FORMATS`, :func:`write_ktx2_cube`, :func:`read_ktx2_cube`.
-
-References
-----------
-Khronos Group, *KTX File Format Specification*, version 2.0 (KhronosGroup/KTX-Specification,
-``ktxspec.adoc``): "File Structure", "Level Index", "Mip Level Array", "mipPadding",
-"Key/Value Data", "KTXorientation", "KTXwriter", appendix "Cubemap Orientation".
-Khronos Group, *Khronos Data Format Specification* 1.3, §5 "Khronos Basic Data Format
-Descriptor Block". KhronosGroup/KTX-Software ``lib/dfdutils/createdfd.c`` (sample bounds).
+References: [KTX2] ("File Structure", "Level Index", "Mip Level Array", "mipPadding", "Key/Value
+Data", "KTXorientation", "KTXwriter", appendix "Cubemap Orientation"); [KDFS13] §5 and
+KTX-Software's ``lib/dfdutils/createdfd.c`` (sample bounds). Citation keys:
+``data_specs/bibliography.md``.
 """
 
 from __future__ import annotations
