@@ -1,5 +1,5 @@
 """Limits every reader checks *before* it allocates or reads, and the one safe way to
-open an input file.
+open an input file (``data_specs/limits.md``).
 
 A hostile or broken file must cost a reader no more than a look at its header: a FIFO
 named ``x.binary`` would block forever, a symlink to ``/dev/zero`` would read until
@@ -7,32 +7,18 @@ memory runs out, and a few kilobytes of header can declare 10⁹ pixels or array
 elements. Readers therefore
 
 1. open inputs through :func:`regular_file` / :func:`read_bytes`, which accept only a
-   regular file (after following links) no larger than :func:`max_file_bytes`, and
+   regular file (after following links) no larger than :func:`max_file_bytes`,
 2. check every declared size with :func:`check_elements` (or :func:`check_pixels`)
    against :func:`max_elements` before allocating, and against the bytes the file
-   actually holds where the format lets them.
+   actually holds where the format lets them, and
+3. estimate their peak memory from the header and the options before allocating
+   (:func:`check_memory`, against :func:`max_memory_bytes`).
 
-The limits are generous for real data (a 16384 × 8192 lat-long map, a MERL table,
-a 1 GB table) and overridable through the environment (documented in
-``data_specs/limits.md``):
-
-``SHRM_MAX_FILE_BYTES``
-    largest input file, bytes (default 8 GiB);
-``SHRM_MAX_PIXELS``
-    largest image, pixels (width × height, default 2²⁸ = 268,435,456, twice a
-    16384 × 8192 map);
-``SHRM_MAX_ELEMENTS``
-    largest array a reader allocates from a file's declared shape, elements (default
-    2²⁹ ≈ 5.4 · 10⁸, 4 GiB of float64);
-``SHRM_MAX_MEMORY_BYTES``
-    largest peak memory a reader or a verb may plan to spend, bytes (default 8 GiB, a third
-    of a 24 GiB machine):
-    each estimates its peak from the header and the options before it allocates
-    (:func:`check_memory`), so that a few kilobytes declaring 2²⁸ pixels or a table that
-    inflates a thousand-fold cost a look at the header, not 8 GB.
-
-Raises :class:`~shrmkit.brdf_io.errors.BadInputError` naming the file for every
-violation, so the CLI prints one line and exits with status 2.
+The limits are generous for real data (a 16384 × 8192 lat-long map, a MERL table, a 1 GB table)
+and overridable through the environment: ``SHRM_MAX_FILE_BYTES``, ``SHRM_MAX_PIXELS``,
+``SHRM_MAX_ELEMENTS``, ``SHRM_MAX_MEMORY_BYTES`` (defaults and meaning: each ``max_*`` function).
+Every violation raises :class:`~shrmkit.brdf_io.errors.BadInputError` naming the file, so the CLI
+prints one line and exits with status 2.
 """
 
 from __future__ import annotations
@@ -86,18 +72,20 @@ def max_file_bytes() -> int:
 
 
 def max_pixels() -> int:
-    """Largest image a reader decodes, in pixels (``SHRM_MAX_PIXELS``, default 2²⁸)."""
+    """Largest image a reader decodes, in pixels: width × height (``SHRM_MAX_PIXELS``, default
+    2²⁸ = 268,435,456, twice a 16384 × 8192 map)."""
     return _env_limit("SHRM_MAX_PIXELS", DEFAULT_MAX_PIXELS)
 
 
 def max_elements() -> int:
-    """Largest array a reader allocates from declared sizes (``SHRM_MAX_ELEMENTS``, default 2²⁹)."""
+    """Largest array a reader allocates from a file's declared shape, in elements
+    (``SHRM_MAX_ELEMENTS``, default 2²⁹ ≈ 5.4 · 10⁸, 4 GiB of float64)."""
     return _env_limit("SHRM_MAX_ELEMENTS", DEFAULT_MAX_ELEMENTS)
 
 
 def max_memory_bytes() -> int:
     """Largest peak memory a reader or verb plans to spend, in bytes (``SHRM_MAX_MEMORY_BYTES``,
-    default 8 GiB)."""
+    default 8 GiB, a third of a 24 GiB machine)."""
     return _env_limit("SHRM_MAX_MEMORY_BYTES", DEFAULT_MAX_MEMORY_BYTES)
 
 
@@ -112,6 +100,10 @@ def format_bytes(nbytes: float) -> str:
 
 def check_memory(source: object, nbytes: float, what: str) -> int:
     """Refuse a planned peak of ``nbytes`` bytes over :func:`max_memory_bytes`, before it is spent.
+
+    Each reader or verb estimates its peak from the header and the options before it allocates,
+    so that a few kilobytes declaring 2²⁸ pixels or a table that inflates a thousand-fold cost a
+    look at the header, not 8 GB.
 
     Parameters
     ----------
