@@ -1,42 +1,23 @@
-"""The engines' split-sum prefiltered environment lighting for GGX materials.
-
-[Karis13] (§ Image Based Lighting, "Split Sum Approximation"); [LdR14] § 4.9 (distant light
-probes). Citation keys: ``data_specs/bibliography.md``. The speed baseline of
+"""The engines' split-sum prefiltered environment lighting for GGX materials ([Karis13] § Image
+Based Lighting, "Split Sum Approximation"; [LdR14] §4.9, distant light probes): the speed baseline of
 ``benchmarks/prefilter_speed.py``.
 
-The reflected radiance of a Cook–Torrance GGX material (``brdf_io.models.CookTorrance``
-with ``dist=ggx``: ρ = kd/π + ks D F G / (4 cos θ_i cos θ_o), GGX D of width α, Schlick F
-with F0, separable exact Smith G) under distant lighting is approximated by splitting the
-integral of the specular term into two factors:
+The reflected radiance of a Cook–Torrance GGX material under distant lighting is approximated by
+splitting the integral of the specular term into two factors (:class:`SplitSum`):
 
     B(R, V) ≈ ks · L̄_α(R) · (F0 · A(μ, r) + B(μ, r)) + kd/π · E(N),
     N = normalize(R + V), μ = N·V, r = √α (UE4's "roughness"),
 
-1. **prefiltered environment** L̄_α(R) = ∫ L(ω) D_α(h) max(R·ω, 0) dω / ∫ D_α(h) max(R·ω, 0) dω,
-   h = normalize(R + ω): Karis's GGX-importance-sampled prefilter under the assumption
-   N = V = R (his ``PrefilterEnvMap``: samples of L weighted by N·L), here summed over *every*
-   pixel of the lat-long map (exact pixel weights, no sampling noise). The kernel depends on
-   the angle between R and ω only (zonal), so on a lat-long grid each pair of (output row,
-   map row) is a circular convolution in φ, done with FFTs (:func:`zonal_convolution`). One
-   map per roughness (the mip chain of :func:`prefiltered_levels`; the material's own α by
-   default, which is the engines' best case);
-2. **environment BRDF** (:func:`env_brdf_lut`): the directional albedo of the specular
-   term, split into the scale A and bias B of F0 (F = F0 (1 − F_c) + F_c, F_c = (1 − V·H)⁵),
-   on a 2-D table over (μ = N·V, r) at texel centres, bilinear between them. Computed by
-   Gauss–Legendre quadrature over Karis's GGX sample warp (ξ ∈ (0, 1), φ ∈ [0, 2π)) with
-   shrmkit's exact separable Smith G (not UE4's Schlick k = α/2), so that it is the
-   directional albedo of *this* model;
-3. **diffuse**: kd/π times the irradiance E(N) = ∫ L(ω) max(N·ω, 0) dω, an irradiance map
-   made by the same zonal convolution (engines use 9 SH coefficients or a map).
+1. the **prefiltered environment** L̄_α(R) (:func:`ggx_prefiltered`, :func:`prefiltered_levels`),
+   summed over every pixel of the lat-long map by a zonal convolution (:func:`zonal_convolution`);
+2. the **environment BRDF** A, B (:func:`env_brdf_lut` → :class:`EnvBRDFLUT`), the directional
+   albedo of *this* model's specular term;
+3. the **diffuse** term: kd/π times the irradiance E(N), by the same zonal convolution.
 
-For a constant environment L̄ = L and E = πL, so the split sum equals the directional albedo
-× L exactly, up to the table's interpolation. For other lighting the split (and N = V = R
-inside the prefilter: no stretching of the lobe at grazing views) costs accuracy that
-depends on the map and the view; ``benchmarks/prefilter_speed.py`` measures it against
-brute force.
-
-Public objects: :class:`EnvBRDFLUT`, :func:`env_brdf_lut`, :func:`zonal_convolution`,
-:func:`ggx_prefiltered`, :func:`prefiltered_levels`, :class:`SplitSum`, :func:`split_sum`.
+:func:`split_sum` builds it for an environment and a material. For a constant environment it equals
+the directional albedo × L exactly (up to the table's interpolation); otherwise the split costs an
+accuracy that ``benchmarks/prefilter_speed.py`` measures against brute force. Citation keys:
+``data_specs/bibliography.md``.
 """
 
 from __future__ import annotations
@@ -298,6 +279,33 @@ def prefiltered_levels(
 @dataclass(frozen=True, eq=False)
 class SplitSum:
     """Split-sum lighting of one environment for one GGX Cook–Torrance material.
+
+    The material is ``brdf_io.models.CookTorrance`` with ``dist=ggx``: ρ = kd/π + ks D F G /
+    (4 cos θ_i cos θ_o), GGX D of width α, Schlick F with F0, separable exact Smith G. Its
+    reflected radiance under distant lighting is B(R, V) ≈ ks · L̄_α(R) · (F0 · A(μ, r) + B(μ, r))
+    + kd/π · E(N), N = normalize(R + V), μ = N·V, r = √α:
+
+    1. L̄_α(R) = ∫ L(ω) D_α(h) max(R·ω, 0) dω / ∫ D_α(h) max(R·ω, 0) dω, h = normalize(R + ω):
+       Karis's GGX-importance-sampled prefilter under the assumption N = V = R (his
+       ``PrefilterEnvMap``: samples of L weighted by N·L), here summed over *every* pixel of the
+       lat-long map (exact pixel weights, no sampling noise). The kernel depends on the angle
+       between R and ω only (zonal), so on a lat-long grid each pair of (output row, map row) is
+       a circular convolution in φ, done with FFTs (:func:`zonal_convolution`). One map per
+       roughness (the mip chain of :func:`prefiltered_levels`; the material's own α by default,
+       which is the engines' best case);
+    2. A, B: the directional albedo of the specular term split into the scale A and bias B of F0
+       (F = F0 (1 − F_c) + F_c, F_c = (1 − V·H)⁵), on a 2-D table over (μ, r) at texel centres,
+       bilinear between them (:func:`env_brdf_lut`: Gauss–Legendre quadrature over Karis's GGX
+       sample warp (ξ ∈ (0, 1), φ ∈ [0, 2π)) with shrmkit's exact separable Smith G, not UE4's
+       Schlick k = α/2, so that it is the directional albedo of *this* model);
+    3. E(N) = ∫ L(ω) max(N·ω, 0) dω, an irradiance map made by the same zonal convolution
+       (engines use 9 SH coefficients or a map).
+
+    For a constant environment L̄ = L and E = πL, so the split sum equals the directional albedo
+    × L exactly, up to the table's interpolation. For other lighting the split (and N = V = R
+    inside the prefilter: no stretching of the lobe at grazing views) costs accuracy that
+    depends on the map and the view; ``benchmarks/prefilter_speed.py`` measures it against
+    brute force.
 
     Attributes
     ----------
