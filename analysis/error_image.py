@@ -4,48 +4,11 @@ An SHRM states its error per band of the view angle θ_v = angle(N, V) (``SHRM.m
 ``data_specs/view_bands.md``) as a relative RMS over reflection directions R uniform on the sphere.
 A render is read per pixel, where the local radiance can be far below that average (dark regions)
 or far above it (near a light). :func:`predicted_error` turns the statements into a relative error
-at each (R, V) pair — what ``shrm render --error-image`` writes per pixel.
-
-The model
----------
-The statement of band b is an RMS relative to the reflection of the map the SHRM holds (the map
-without its explicit lights when it has some: ``*_residual``), so the SHRM part's **absolute**
-error in band b has the RMS
-
-    e_b = rel_b · RMS_b(B_part),
-
-with rel_b the band's ``predicted_rel_rms_residual`` (or ``predicted_rel_rms`` without lights) and
-RMS_b(B_part) the RMS of the SHRM part ``SHRM.radiance(R, V, lights=False)`` over R uniform on the
-sphere, the view azimuth uniform and θ_v uniform in the band — the statement's own distribution —
-measured once per SHRM by a seeded Monte Carlo (:func:`band_signal`, cached per object). The
-explicit lights are shaded exactly and add no error. Between band centres e(θ_v) is interpolated
-linearly in θ_v (constant before the first and after the last centre). The predicted relative
-error at (R, V) is then
-
-    err(R, V) = min( e(θ_v) / |B(R, V)|, cap ),
-
-with B the whole radiance (``SHRM.radiance(R, V)``: SHRM part + lights) and cap = :data:`ERROR_CAP`
-where the radiance is (nearly) zero.
-
-**Colour.** Every norm is the RMS over the three channels, |x| = sqrt((x_R² + x_G² + x_B²)/3): the
-statements pool the channels the same way, so err is the per-pixel analogue of the stated number.
-
-**Assumptions.** (1) Within a band the absolute error is spread evenly over R: a pixel gets the
-band's RMS, not its own error; where the error concentrates (a horizon, a sharp edge of the map,
-what ringing the window left) the pixel's error is larger than predicted, elsewhere smaller.
-Measured against brute force per pixel (``tests/analysis/test_error_image.py``: 48² spheres
-under ``builtin:sky`` and a one-pixel sun; ``benchmarks/error_image_figure.py``: the README's
-``venice_sunset`` sphere): the measured/predicted ratio has a median of 0.5–0.85 and a 90th
-percentile of 1.4–2.0; the error concentrates beside the sky's horizon step (ratio up to 4) and is
-over-predicted toward the rim on ``venice_sunset`` (median 0.3 at θ_v > 75°). (2) The SHRM
-part's RMS stands for the RMS of the exact reflection of the map it holds (they differ by the
-stated error). (3) The statements hold (a band with missing measured data, ``bound_holds`` false,
-only predicts).
-
-**Bound version** (``bound=True``). e_b from ``bound_rel_rms[_residual]``, divided by √level: if
-the band's bound holds, Chebyshev's inequality (Markov's on the squared error) lets at most a share
-``level`` (default :data:`BOUND_LEVEL` = 10 %) of the band's (R, V) pairs exceed it. An RMS bound
-alone is no per-pixel bound: the RMS itself is exceeded on roughly a third of the pixels.
+at each (R, V) pair — what ``shrm render --error-image`` writes per pixel: the band's absolute error
+e(θ_v) = rel_b · RMS_b(B_part) (:func:`band_errors`, :func:`band_signal`) over the pixel's radiance,
+capped at :data:`ERROR_CAP`; or, with ``bound=True``, a per-pixel reading of the bound that at most
+a share :data:`BOUND_LEVEL` of a band's pairs exceed (Chebyshev). The model, its assumptions and
+how it compares with brute force: :func:`predicted_error`.
 """
 
 from __future__ import annotations
@@ -188,7 +151,7 @@ def band_signal(shrm: Any, *, pairs_per_band: int = SIGNAL_PAIRS_PER_BAND, seed:
 def band_errors(
     shrm: Any, *, bound: bool = False, level: float = BOUND_LEVEL, signal: BandSignal | None = None
 ) -> np.ndarray:
-    """e_b, the absolute error per view band: rel_b · RMS_b(B_part) (module docstring), (n_bands,).
+    """e_b, the absolute error per view band: rel_b · RMS_b(B_part) (:func:`predicted_error`, Notes), (n_bands,).
 
     rel_b is the band's residual statement with explicit lights, the whole one without;
     ``bound=True`` takes the ``bound_*`` statement divided by √``level``. A band whose statement
@@ -247,12 +210,53 @@ def predicted_error(
     Returns
     -------
     (n,) float64 relative errors in [0, cap]: the channel-RMS norm of the error over that of B
-    (module docstring).
+    (Notes).
 
     Raises
     ------
     ValueError
         An SHRM without per-band statements, mismatched shapes, ``level`` or ``cap`` out of range.
+
+    Notes
+    -----
+    The statement of band b is an RMS relative to the reflection of the map the SHRM holds (the map
+    without its explicit lights when it has some: ``*_residual``), so the SHRM part's **absolute**
+    error in band b has the RMS
+
+        e_b = rel_b · RMS_b(B_part),
+
+    with rel_b the band's ``predicted_rel_rms_residual`` (or ``predicted_rel_rms`` without lights) and
+    RMS_b(B_part) the RMS of the SHRM part ``SHRM.radiance(R, V, lights=False)`` over R uniform on the
+    sphere, the view azimuth uniform and θ_v uniform in the band — the statement's own distribution —
+    measured once per SHRM by a seeded Monte Carlo (:func:`band_signal`, cached per object). The
+    explicit lights are shaded exactly and add no error. Between band centres e(θ_v) is interpolated
+    linearly in θ_v (constant before the first and after the last centre). The predicted relative
+    error at (R, V) is then
+
+        err(R, V) = min( e(θ_v) / |B(R, V)|, cap ),
+
+    with B the whole radiance (``SHRM.radiance(R, V)``: SHRM part + lights) and cap = :data:`ERROR_CAP`
+    where the radiance is (nearly) zero.
+
+    **Colour.** Every norm is the RMS over the three channels, |x| = sqrt((x_R² + x_G² + x_B²)/3): the
+    statements pool the channels the same way, so err is the per-pixel analogue of the stated number.
+
+    **Assumptions.** (1) Within a band the absolute error is spread evenly over R: a pixel gets the
+    band's RMS, not its own error; where the error concentrates (a horizon, a sharp edge of the map,
+    what ringing the window left) the pixel's error is larger than predicted, elsewhere smaller.
+    Measured against brute force per pixel (``tests/analysis/test_error_image.py``: 48² spheres
+    under ``builtin:sky`` and a one-pixel sun; ``benchmarks/error_image_figure.py``: the README's
+    ``venice_sunset`` sphere): the measured/predicted ratio has a median of 0.5–0.85 and a 90th
+    percentile of 1.4–2.0; the error concentrates beside the sky's horizon step (ratio up to 4) and is
+    over-predicted toward the rim on ``venice_sunset`` (median 0.3 at θ_v > 75°). (2) The SHRM
+    part's RMS stands for the RMS of the exact reflection of the map it holds (they differ by the
+    stated error). (3) The statements hold (a band with missing measured data, ``bound_holds`` false,
+    only predicts).
+
+    **Bound version** (``bound=True``). e_b from ``bound_rel_rms[_residual]``, divided by √level: if
+    the band's bound holds, Chebyshev's inequality (Markov's on the squared error) lets at most a share
+    ``level`` (default :data:`BOUND_LEVEL` = 10 %) of the band's (R, V) pairs exceed it. An RMS bound
+    alone is no per-pixel bound: the RMS itself is exceeded on roughly a third of the pixels.
 
     Examples
     --------
