@@ -8,41 +8,11 @@ parts spreads over the dark ones as ringing, and there the *relative* error of a
 while the energy error is 3 % (Grace + Phong s = 200 at the energy rule's F_B = 28: per-pixel
 relative error median 0.17, 90th percentile 0.62 against brute force).
 
-Rule. With tolerance ε the relative RMS the tolerance stands for is √ε; the pixel rule takes the
-smallest F >= F_B (on a fixed ladder of orders, so that the choice is monotone in ε) whose
-*per-direction* relative error of the reflected luminance has its 90th percentile (:data:`QUANTILE`)
-at most √ε, over a sample of reflection directions R (a :data:`ROWS` × 2·ROWS lat-long grid of pixel
-centres) at the normal view V = R and, for P > 0, the oblique views of
-:data:`~shrmkit.analysis.synthesis.LOCAL_VIEWS_DEG` (up to θ_v = 80°). The error of order F is
-measured against the same field at a reference order F_ref = min(top, 4 F + 32) (top: the largest
-order the lighting and the BRDF coefficients hold); the reference is raised with the choice when it
-falls below 3 F + 12.
-Directions whose reference luminance is below 10⁻⁴ of the sample's largest (black: nothing to be
-relatively wrong about) do not count.
-
-The sample is the reflection of the map the SHRM holds: with lights taken out as explicit lights
-(:mod:`.lights`), of the residual map, relative to its own reflection — a conservative statement
-for the whole, since the lights only add (exactly shaded) signal. The synthesis is exact at the
-sample points (a coarse grid of an exact band-limited field; measured: the 48-row statistics agree
-with the full-resolution sample's within 0.01 for Grace, sky, Venice under Phong, microfacet and
-GGX lobes).
-
-The statement is an estimate, not a bound: it leaves out the maps' bilinear lookup (stated per band
-in ``view_bands``), the view orders' truncation and fit (P_B; the sample is compared at the same P)
-and what the reference order itself misses. Against brute force on 600 pixels of a rendered sphere
-the measured 90th percentile was 0.75–1.07 × the estimate (sky, Grace, Venice; README, "Per pixel
-as well as per band"). Over issue 23's matrix (``benchmarks/lights_matrix.py``: sky, Venice, Grace
-and three lamps at 128 rows × 8 BRDFs, 300 sphere pixels each) it was 0.07–2.05 × (median 0.86),
-above the estimate in 9 of 32 cells (Grace: σ = 0.1 2.05 ×, σ = 0.3 1.59 ×, the RGL table 1.37 ×;
-Venice Phong s = 512 1.21 ×), and above √ε itself in two (Grace σ = 0.3 0.247, RGL 0.231). Under the
-one-pixel sun the residual is a constant sky: the estimate is 4·10⁻⁵–6·10⁻⁴ while brute force
-measures up to 0.012 (the view orders' error, which the sample does not see).
-
-Per region. :func:`region_bounds` reads an SHRM's per-band statement over a region of reflection
-directions (a dark part of the map, where the band bound, an energy average, is exceeded 1.3–35× in
-20 of the matrix's 32 dark cells): a bound guaranteed wherever the band's bound holds, and a tighter
-reading with the error spread evenly over R that brute force did not exceed in any band of those
-cells (``data_specs/lights.md``).
+:func:`pixel_orders` takes the smallest F >= F_B on a fixed ladder whose per-direction relative error
+of the reflected luminance has its 90th percentile (:data:`QUANTILE`) at most √ε, over a sample of
+reflection directions (:func:`pixel_sampler`) against a higher reference order; :func:`pixel_statement`
+states that error for the map as made (an estimate, not a bound), :func:`pixel_line` says it in one
+line, and :func:`region_bounds` reads the per-band statement over a region of reflection directions.
 """
 
 from __future__ import annotations
@@ -211,7 +181,26 @@ def pixel_orders(
     q_max: int | None = None, nthreads: int = 1, fields: _Fields | None = None,
 ) -> PixelCheck:
     """The smallest order >= ``F`` of the ladder (F, F + ⌈F/8⌉, …, ``top``) whose per-direction
-    relative error has its :data:`QUANTILE` at most √``eps`` (module docs).
+    relative error has its :data:`QUANTILE` at most √``eps``.
+
+    With tolerance ε the relative RMS the tolerance stands for is √ε; the pixel rule takes the
+    smallest F >= F_B (on a fixed ladder of orders, so that the choice is monotone in ε) whose
+    *per-direction* relative error of the reflected luminance has its 90th percentile (:data:`QUANTILE`)
+    at most √ε, over a sample of reflection directions R (a :data:`ROWS` × 2·ROWS lat-long grid of pixel
+    centres) at the normal view V = R and, for P > 0, the oblique views of
+    :data:`~shrmkit.analysis.synthesis.LOCAL_VIEWS_DEG` (up to θ_v = 80°). The error of order F is
+    measured against the same field at a reference order F_ref = min(top, 4 F + 32) (top: the largest
+    order the lighting and the BRDF coefficients hold); the reference is raised with the choice when it
+    falls below 3 F + 12.
+    Directions whose reference luminance is below 10⁻⁴ of the sample's largest (black: nothing to be
+    relatively wrong about) do not count.
+
+    The sample is the reflection of the map the SHRM holds: with lights taken out as explicit lights
+    (:mod:`.lights`), of the residual map, relative to its own reflection — a conservative statement
+    for the whole, since the lights only add (exactly shaded) signal. The synthesis is exact at the
+    sample points (a coarse grid of an exact band-limited field; measured: the 48-row statistics agree
+    with the full-resolution sample's within 0.01 for Grace, sky, Venice under Phong, microfacet and
+    GGX lobes).
 
     Parameters
     ----------
@@ -257,7 +246,19 @@ def pixel_statement(
 ) -> PixelCheck:
     """The per-direction errors of the map as made (order ``F``, window ``sigma``) against the
     reference order of :func:`pixel_orders` (``F_reference`` when given and high enough for F: the
-    rule's own, already synthesized): what a user reads per pixel (module docs)."""
+    rule's own, already synthesized): what a user reads per pixel (the sample: :func:`pixel_orders`).
+
+    The statement is an estimate, not a bound: it leaves out the maps' bilinear lookup (stated per band
+    in ``view_bands``), the view orders' truncation and fit (P_B; the sample is compared at the same P)
+    and what the reference order itself misses. Against brute force on 600 pixels of a rendered sphere
+    the measured 90th percentile was 0.75–1.07 × the estimate (sky, Grace, Venice; README, "Per pixel
+    as well as per band"). Over issue 23's matrix (``benchmarks/lights_matrix.py``: sky, Venice, Grace
+    and three lamps at 128 rows × 8 BRDFs, 300 sphere pixels each) it was 0.07–2.05 × (median 0.86),
+    above the estimate in 9 of 32 cells (Grace: σ = 0.1 2.05 ×, σ = 0.3 1.59 ×, the RGL table 1.37 ×;
+    Venice Phong s = 512 1.21 ×), and above √ε itself in two (Grace σ = 0.3 0.247, RGL 0.231). Under the
+    one-pixel sun the residual is a constant sky: the estimate is 4·10⁻⁵–6·10⁻⁴ while brute force
+    measures up to 0.012 (the view orders' error, which the sample does not see).
+    """
     fields = fields or pixel_sampler(lighting, coefficients, P, q_max=q_max, nthreads=nthreads)
     top = max(top, F)
     F_ref = F_reference if F_reference is not None and _reference_holds(F_reference, F, top) else \
@@ -336,6 +337,12 @@ def region_bounds(shrm, region: np.ndarray, *, seed: int = REGION_SEED) -> list[
     """The per-band statement read over a **region of reflection directions** (a dark part of the map,
     any part a user reads): a bound on the region's relative RMS that holds wherever the band's bound
     holds (issue 23: "statements that hold where they are read").
+
+    It reads an SHRM's per-band statement over a region of reflection directions (a dark part of
+    the map, where the band bound, an energy average, is exceeded 1.3–35× in
+    20 of the matrix's 32 dark cells): a bound guaranteed wherever the band's bound holds, and a tighter
+    reading with the error spread evenly over R that brute force did not exceed in any band of those
+    cells (``data_specs/lights.md``).
 
     The quantity bounded, per view band b (the law of ``data_specs/view_bands.md``: R uniform, θ_v
     uniform in the band, view azimuth uniform), is the region's relative RMS against the exact
