@@ -37,6 +37,7 @@ _LAZY = {
     "ShrmError": "shrmkit.brdf_io.errors",
     "choose_orders": "shrmkit.analysis.orders",
     "OrderChoice": "shrmkit.analysis.orders",
+    "OrderRule": "shrmkit.analysis.order_rule",
     "prefilter": "shrmkit.analysis.shrm",
     "load_shrm": "shrmkit.analysis.shrm",
     "SHRM": "shrmkit.analysis.shrm",

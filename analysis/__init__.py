@@ -6,10 +6,10 @@ in ``__all__``, importable from ``shrmkit.analysis``:
 - The SHRM: :func:`prefilter` (environment × BRDF → :class:`SHRM`, [RH02] §4–5), :func:`load_shrm`
   (``data_specs/shrm_file.md``); what a prefilter states, typed (``SHRM.info``): :class:`PrefilterInfo`
   with :class:`WindowInfo`, :class:`LightsInfo`, :class:`Timings`, :class:`ViewBand`.
-- Orders: :func:`choose_orders` and :func:`choose_orders_many` ([RH02] §5.1) returning
-  :class:`OrderChoice`; the defaults :data:`DEFAULT_EPS`, :data:`DEFAULT_MAX_VIEW_DEG` and the
-  rules :data:`CRITERIA`; :class:`BandStatement`, one view band's stated error
-  (``data_specs/view_bands.md``).
+- Orders: :func:`choose_orders` and :func:`choose_orders_many` ([RH02] §5.1) under an
+  :class:`OrderRule` (criterion, view limit, tolerance, caps) returning :class:`OrderChoice`;
+  the defaults :data:`DEFAULT_EPS`, :data:`DEFAULT_MAX_VIEW_DEG` and the rules :data:`CRITERIA`;
+  :class:`BandStatement`, one view band's stated error (``data_specs/view_bands.md``).
 - The pieces of the pipeline: :func:`rho_lpq` ([RH02] eq. 13) → :class:`BRDFCoefficients`;
   :func:`lighting_coefficients` → :class:`LightingCoefficients`; :func:`scene_orders` →
   :class:`SceneOrders` and :func:`residual_bound`; :func:`real_sph_harm` (the real SH basis of
@@ -45,6 +45,7 @@ _LAZY = {
     "Timings": "shrmkit.analysis.records",
     "ViewBand": "shrmkit.analysis.records",
     "OrderChoice": "shrmkit.analysis.orders",
+    "OrderRule": "shrmkit.analysis.order_rule",
     "choose_orders": "shrmkit.analysis.orders",
     "choose_orders_many": "shrmkit.analysis.orders",
     "DEFAULT_EPS": "shrmkit.analysis.tolerance",

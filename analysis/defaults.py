@@ -112,7 +112,7 @@ CENSUS_THRESHOLD = 0.9
 
 #: ``CompareOptions()``'s defaults that ``shrm compare`` shows (``compare.options.CompareOptions``).
 COMPARE_DEFAULTS: dict[str, Any] = {
-    "env_height": 64, "n_pairs": 2000, "max_view_deg": 88.0, "seed": 0, "lobes": (1, 2, 3, 4), "elevations": 15,
+    "env_height": 64, "n_pairs": 2000, "sample_max_view_deg": 88.0, "seed": 0, "lobes": (1, 2, 3, 4), "elevations": 15,
 }
 #: (default, lo, hi) of the published methods' settings (``baselines.methods.GAUSSIAN_LOBES``,
 #: ``GAUSSIAN_ELEVATIONS``, ``RSIBR_REFERENCE_HEIGHT``).

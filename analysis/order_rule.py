@@ -127,7 +127,9 @@ def resolve_rule(rule: OrderRule | None = None, *, override: bool = False, **key
     if not given:
         return rule
     merged = rule.replace(**given)
-    if override or merged == rule:
+    if merged == rule:
+        return rule
+    if override:
         return merged
     clash = [k for k in given if getattr(merged, k) != getattr(rule, k)]
     raise BadInputError(None, "give the order rule once: " + ", ".join(

@@ -19,6 +19,7 @@ from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
 from ..analysis.compare import CompareOptions, compare_representations
+from ..analysis.order_rule import OrderRule
 from ..brdf_io.atomic import atomic_path, check_writable
 from ..brdf_io.errors import BadInputError
 from ..render.mesh import load_mesh
@@ -46,10 +47,10 @@ def _lobes(text: str) -> tuple[int, ...]:
 
 def _options(args: argparse.Namespace) -> CompareOptions:
     return CompareOptions(
-        eps=args.eps, env_height=args.env_height, n_pairs=args.pairs, max_view_deg=args.max_view, seed=args.seed,
+        rule=OrderRule(eps=args.eps, criterion=args.criterion, max_view_deg=args.max_view_deg),
+        env_height=args.env_height, n_pairs=args.pairs, sample_max_view_deg=args.max_view, seed=args.seed,
         lower_P=args.lower_p, lobes=_lobes(args.lobes), elevations=args.elevations,
-        rsibr_reference_height=args.rsibr_reference_height or None, window=args.window,
-        criterion=args.criterion, rule_max_view_deg=args.max_view_deg, lights=args.lights,
+        rsibr_reference_height=args.rsibr_reference_height or None, window=args.window, lights=args.lights,
     )
 
 

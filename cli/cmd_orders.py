@@ -17,6 +17,7 @@ import numpy as np
 from rich.table import Table
 
 from ..analysis.lights import extract_lights
+from ..analysis.order_rule import OrderRule
 from ..analysis.orders import choose_orders
 from ..analysis.scene import scene_for
 from .common import (
@@ -37,7 +38,8 @@ def run(args: argparse.Namespace) -> int:
     busy = contextlib.nullcontext() if args.json else stderr.status(f"choosing orders for {brdf.name} ...",
                                                                     spinner="dots")
     with busy:
-        orders = choose_orders(brdf, eps=args.eps, max_F=args.max_F, max_P=args.max_P, **order_rule(args))
+        rule = OrderRule(eps=args.eps, max_F=args.max_F, max_P=args.max_P, **order_rule(args))
+        orders = choose_orders(brdf, rule=rule)
     doc = {
         "brdf": source_brdf.name,
         # scattered measurements: the representation the orders describe (data_specs/representation_json.md)

@@ -11,6 +11,7 @@ from pathlib import Path
 from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
+from ..analysis.order_rule import OrderRule
 from ..analysis.pixels import pixel_line
 from ..analysis.shrm import prefilter
 from ..brdf_io.atomic import check_writable
@@ -44,9 +45,9 @@ def run(args: argparse.Namespace) -> int:
                   disable=args.json) as bar:
         task = bar.add_task("prefiltering", total=None)
         shrm = prefilter(
-            env, brdf, eps=args.eps, size=args.size, max_F=args.max_F, max_P=args.max_P, cube=args.cube,
-            cube_size=args.cube_size, window=args.window, lights=args.lights, pixel_rule=args.pixel_rule == "on",
-            **order_rule(args),
+            env, brdf, rule=OrderRule(eps=args.eps, max_F=args.max_F, max_P=args.max_P, **order_rule(args)),
+            size=args.size, cube=args.cube, cube_size=args.cube_size, window=args.window, lights=args.lights,
+            pixel_rule=args.pixel_rule == "on",
             progress=lambda stage: bar.update(task, description=f"prefiltering: {stage}"),
         )
     shrm.save(out)

@@ -11,6 +11,7 @@ import argparse
 from pathlib import Path
 
 from ..analysis.notebook import stated_band
+from ..analysis.order_rule import OrderRule
 from ..analysis.orders import choose_orders
 from ..analysis.shrm import prefilter
 from ..brdf_io.atomic import check_writable
@@ -47,11 +48,11 @@ def run(args: argparse.Namespace) -> int:
     _, brdf, choice = load_analysis_brdf(args.brdf, args, quiet=args.json)  # scattered data: its representation
     if choice is not None and not args.json:
         say(choice.line())
-    rule = order_rule(args)
+    rule = OrderRule(eps=args.eps, **order_rule(args))
     # the orders depend on the BRDF only: chosen once for every map
-    orders = choose_orders(brdf, eps=args.eps, **rule) if len(envs) > 1 else None
-    shrms = [prefilter(env, brdf, eps=args.eps, size=args.size, window=args.window, lights=args.lights,
-                       pixel_rule=args.pixel_rule == "on", orders=orders, **rule) for env in envs]
+    orders = choose_orders(brdf, rule=rule) if len(envs) > 1 else None
+    shrms = [prefilter(env, brdf, rule=rule, size=args.size, window=args.window, lights=args.lights,
+                       pixel_rule=args.pixel_rule == "on", orders=orders) for env in envs]
     shrm, env = shrms[0], envs[0]
     page = build_view(
         shrm, env, mesh=args.mesh, mode=args.mode, exposure=args.exposure, tone=args.tone, azimuth=args.azimuth,

@@ -66,8 +66,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_order_rule(parser)
     parser.add_argument("--pairs", type=number_in(10, 10**6, integer=True), default=d.n_pairs,
                         help=f"sampled (R, V) pairs (default {d.n_pairs})")
-    parser.add_argument("--max-view", type=number_in(1.0, 90.0, hi_open=True), default=d.max_view_deg,
-                        help=f"largest view angle from the normal, degrees (default {d.max_view_deg:g})")
+    parser.add_argument("--max-view", type=number_in(1.0, 90.0, hi_open=True), default=d.sample_max_view_deg,
+                        help=f"largest view angle from the normal, degrees (default {d.sample_max_view_deg:g})")
     parser.add_argument("--lower-p", type=number_in(0, 64, integer=True), help="P of the lower-order SHRM "
                         "(default P-2)")
     parser.add_argument("--lobes", default=",".join(map(str, d.lobes)),

@@ -239,9 +239,9 @@ def render_sequence(
     """Render ``mesh`` made of ``brdf`` under each environment of ``envs``: one frame per map.
 
     The BRDF's orders (F, P) depend on the BRDF and the order rule only, so the SHRM modes choose
-    them once (:func:`~shrmkit.analysis.orders.choose_orders` at ``eps``, ``options.criterion`` and
-    ``options.max_view_deg``) and prefilter every map with them (``RenderOptions(orders=)``); each
-    map's lights, F_B, window and stated errors are its own. Frame k equals
+    them once (:func:`~shrmkit.analysis.orders.choose_orders` under ``options.rule_at(eps)``: ``eps``,
+    ``options.criterion`` and ``options.max_view_deg``) and prefilter every map with them
+    (``RenderOptions(orders=)``); each map's lights, F_B, window and stated errors are its own. Frame k equals
     ``render_scene(mesh, envs[k], brdf, ...)`` with the same arguments.
 
     Parameters
@@ -295,7 +295,7 @@ def render_sequence(
     if record.uses_orders and options.orders is None:
         stage("orders")
         t0 = time.perf_counter()
-        choice = choose_orders(brdf, eps=eps, criterion=options.criterion, max_view_deg=options.max_view_deg)
+        choice = choose_orders(brdf, rule=options.rule_at(eps))
         orders_seconds = time.perf_counter() - t0
         options = dataclasses.replace(options, orders=choice)
     renders, seconds = [], []

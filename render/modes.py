@@ -44,10 +44,11 @@ from ..analysis.baselines.methods import (
 from ..analysis.baselines.rsibr import RSIBRMaps
 from ..analysis.baselines.selfshadow import vertex_visibility_sh
 from ..analysis.lights import DEFAULT_LIGHTS, check_lights
+from ..analysis.order_rule import OrderRule
 from ..analysis.orders import OrderChoice
 from ..analysis.pixels import pixel_line
 from ..analysis.shrm import DEFAULT_WINDOW, SHRM, check_window
-from ..analysis.view_bands import DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG, check_criterion, check_max_view
+from ..analysis.view_bands import DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG
 from ..brdf_io.brdf import BRDF
 from ..brdf_io.env_rotation import check_env_rotation
 from ..brdf_io.envmap import EnvironmentMap
@@ -100,8 +101,9 @@ class RenderOptions:
         The SHRM modes' window against Gibbs ringing, one of ``analysis.shrm.WINDOWS``
         (``prefilter(window=)``; default ``"auto"``).
     criterion, max_view_deg
-        The SHRM modes' order rule and its view limit (``prefilter(criterion=, max_view_deg=)``,
-        :mod:`shrmkit.analysis.view_bands`).
+        The SHRM modes' order rule and its view limit (validated as an
+        :class:`~shrmkit.analysis.order_rule.OrderRule`'s; :mod:`shrmkit.analysis.view_bands`). The
+        tolerance is the render's ``eps`` argument: :meth:`rule_at` is the whole rule at it.
     lights
         The SHRM modes' explicit lights (``prefilter(lights=)``: ``"auto"``, ``"none"`` or at most
         N lights; validated by :func:`~shrmkit.analysis.lights.check_lights`): the compact bright
@@ -144,11 +146,22 @@ class RenderOptions:
         check_window(self.window)
         if not isinstance(self.pixel_rule, bool):
             raise BadInputError(None, f"pixel_rule must be True or False, got {self.pixel_rule!r}")
-        check_criterion(self.criterion)
         object.__setattr__(self, "lights", check_lights(self.lights))
-        object.__setattr__(self, "max_view_deg", check_max_view(self.max_view_deg))
+        object.__setattr__(self, "max_view_deg", self.rule_at(None).max_view_deg)  # the rule's checks
         for setting in (GAUSSIAN_LOBES, GAUSSIAN_ELEVATIONS):
             setting.check(getattr(self, setting.name))
+
+    def rule_at(self, eps: float | None) -> OrderRule:
+        """The SHRM modes' :class:`~shrmkit.analysis.order_rule.OrderRule` at tolerance ``eps`` (None:
+        the default ε), with this criterion and view limit and the default caps.
+
+        Raises
+        ------
+        BadInputError
+            ``eps``, ``criterion`` or ``max_view_deg`` out of range.
+        """
+        return OrderRule(criterion=self.criterion, max_view_deg=self.max_view_deg,
+                         **({} if eps is None else {"eps": eps}))
 
     def rotations(self) -> np.ndarray | list[np.ndarray] | None:
         """``env_rotation`` as ``render_frames`` takes it: None, one (3, 3) matrix, or a list of them."""

@@ -14,14 +14,16 @@ from typing import Any
 from ...brdf_io.errors import BadInputError
 from ..baselines.methods import GAUSSIAN_ELEVATIONS, GAUSSIAN_LOBES, RSIBR_REFERENCE_HEIGHT
 from ..lights import DEFAULT_LIGHTS, check_lights
+from ..order_rule import OrderRule, resolve_rule
 from ..shrm import DEFAULT_WINDOW, check_window
-from ..tolerance import DEFAULT_EPS, check_eps
-from ..view_bands import DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG, check_criterion, check_max_view
 
 __all__ = ["CompareOptions", "DEFAULT_ENV_HEIGHT"]
 
 #: Earlier keyword → its name now (accepted with a DeprecationWarning).
-_RENAMED = {"n_elevations": "elevations", "cabral_reference_height": "rsibr_reference_height"}
+_RENAMED = {"n_elevations": "elevations", "cabral_reference_height": "rsibr_reference_height",
+            "max_view_deg": "sample_max_view_deg"}
+#: Constructor keywords that set a field of :attr:`CompareOptions.rule` → that field.
+_RULE_KEYWORDS = {"eps": "eps", "criterion": "criterion", "rule_max_view_deg": "max_view_deg"}
 
 #: Rows the environment is area-resampled to before the comparison (the angular reference
 #: costs O(W S_L²) per value).
@@ -32,22 +34,29 @@ DEFAULT_ENV_HEIGHT = 64
 class CompareOptions:
     """Everything a comparison can be told, keyword-only, validated once on construction.
 
-    ``n_elevations`` and ``cabral_reference_height``, the names before the table of methods, are
+    ``n_elevations`` and ``cabral_reference_height``, the names before the table of methods, and
+    ``max_view_deg``, the sampling range's name before the order rule's limit got its own, are
     still accepted (and readable) with a :class:`DeprecationWarning`; an unknown keyword raises
     ``TypeError``.
 
     Attributes
     ----------
+    rule
+        The order rule of every SHRM of the comparison
+        (:class:`~shrmkit.analysis.order_rule.OrderRule`; its caps are the prefilter's). The
+        keywords ``eps``, ``criterion`` and ``rule_max_view_deg`` set its fields (over a ``rule=``
+        given too, so that ``dataclasses.replace`` works) and read them back.
     eps
-        SHRM tolerance ε on the uncaptured energy (RH02 §5.1); (F, P) by RH02's order rule
-        (:func:`~shrmkit.analysis.shrm.prefilter`). Checked by
+        SHRM tolerance ε on the uncaptured energy (RH02 §5.1): ``rule.eps``; (F, P) by the order
+        rule (:func:`~shrmkit.analysis.shrm.prefilter`). Checked by
         :func:`~shrmkit.analysis.tolerance.check_eps`.
     env_height
         The environment is area-resampled to this many rows first (when it has more);
         None keeps it.
-    n_pairs, max_view_deg, seed
-        The error sample, :func:`~shrmkit.analysis.compare.pairs.sample_pairs` (n_pairs ≥ 10,
-        max_view_deg in (0, 90)).
+    n_pairs, sample_max_view_deg, seed
+        The error sample, :func:`~shrmkit.analysis.compare.pairs.sample_pairs` (n_pairs ≥ 10;
+        views up to ``sample_max_view_deg`` in (0, 90), default 88°: the sampling range, not the
+        rule's view limit).
     lower_P
         P of the lower-order SHRM row (default max(P − 2, 0)); no row when it is not below P.
     lobes
@@ -62,8 +71,8 @@ class CompareOptions:
         View direction (need not be unit) at which the per-frame update of the distant
         viewer is timed.
     criterion, rule_max_view_deg
-        The order rule of every SHRM of the comparison and its view limit
-        (:mod:`~shrmkit.analysis.view_bands`; ``max_view_deg`` above is the sampling range).
+        ``rule.criterion`` and ``rule.max_view_deg``: the order rule of every SHRM of the
+        comparison and its view limit (:mod:`~shrmkit.analysis.view_bands`).
     window
         The window of every SHRM of the comparison (the SHRM rows, Kautz–McCool, Cabral's
         maps from the SHRM) against Gibbs ringing, one of ``analysis.shrm.WINDOWS``
@@ -73,10 +82,9 @@ class CompareOptions:
         ``"none"`` or N; :mod:`~shrmkit.analysis.lights`). Cabral's maps from the SHRM hold them too.
     """
 
-    eps: float = DEFAULT_EPS
     env_height: int | None = DEFAULT_ENV_HEIGHT
     n_pairs: int = 2000
-    max_view_deg: float = 88.0
+    sample_max_view_deg: float = 88.0
     seed: int = 0
     lower_P: int | None = None
     lobes: tuple[int, ...] = (1, 2, 3, 4)
@@ -84,9 +92,8 @@ class CompareOptions:
     rsibr_reference_height: int | None = RSIBR_REFERENCE_HEIGHT.default
     update_view: tuple[float, float, float] = (1.0, 0.0, 0.3)
     window: str = DEFAULT_WINDOW
-    criterion: str = DEFAULT_CRITERION
-    rule_max_view_deg: float = DEFAULT_MAX_VIEW_DEG
     lights: str | int = DEFAULT_LIGHTS
+    rule: OrderRule = OrderRule()
 
     def __init__(self, **options: Any) -> None:
         for old, new in _RENAMED.items():
@@ -95,6 +102,8 @@ class CompareOptions:
                 if new in options:
                     raise TypeError(f"CompareOptions: give {new}= or {old}=, not both")
                 options[new] = options.pop(old)
+        loose = {field_: options.pop(key) for key, field_ in _RULE_KEYWORDS.items() if key in options}
+        options["rule"] = resolve_rule(options.get("rule"), override=True, **loose)
         known = fields(self)
         unknown = sorted(set(options) - {f.name for f in known})
         if unknown:
@@ -102,6 +111,28 @@ class CompareOptions:
         for f in known:
             object.__setattr__(self, f.name, options.get(f.name, f.default))
         self.__post_init__()
+
+    @property
+    def eps(self) -> float:
+        """The SHRMs' tolerance ε: ``rule.eps``."""
+        return self.rule.eps
+
+    @property
+    def criterion(self) -> str:
+        """The SHRMs' order rule: ``rule.criterion``."""
+        return self.rule.criterion
+
+    @property
+    def rule_max_view_deg(self) -> float:
+        """The order rule's view limit, degrees: ``rule.max_view_deg`` (not the sampling range)."""
+        return self.rule.max_view_deg
+
+    @property
+    def max_view_deg(self) -> float:
+        """Deprecated name of :attr:`sample_max_view_deg` (the sampling range)."""
+        warnings.warn("CompareOptions.max_view_deg is deprecated: use sample_max_view_deg", DeprecationWarning,
+                      stacklevel=2)
+        return self.sample_max_view_deg
 
     @property
     def n_elevations(self) -> int:
@@ -124,17 +155,14 @@ class CompareOptions:
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
-        set_(self, "eps", check_eps(self.eps))
         check_window(self.window)
         set_(self, "lights", check_lights(self.lights))
-        check_criterion(self.criterion)
-        set_(self, "rule_max_view_deg", check_max_view(self.rule_max_view_deg))
         set_(self, "lobes", tuple(int(k) for k in self.lobes))
         set_(self, "update_view", tuple(float(x) for x in self.update_view))
         if self.n_pairs < 10:
             raise BadInputError(None, f"n_pairs must be at least 10, got {self.n_pairs}")
-        if not 0.0 < self.max_view_deg < 90.0:
-            raise BadInputError(None, f"max_view_deg must be in (0, 90), got {self.max_view_deg}")
+        if not 0.0 < self.sample_max_view_deg < 90.0:
+            raise BadInputError(None, f"sample_max_view_deg must be in (0, 90), got {self.sample_max_view_deg}")
         if self.env_height is not None and self.env_height < 2:
             raise BadInputError(None, f"env_height must be at least 2 (or None), got {self.env_height}")
         if self.lower_P is not None and self.lower_P < 0:

@@ -104,7 +104,7 @@ def compare_representations(
             progress(name)
 
     n = options.n_pairs
-    R, V, theta_v = sample_pairs(n, seed=options.seed, max_view_deg=options.max_view_deg)
+    R, V, theta_v = sample_pairs(n, seed=options.seed, max_view_deg=options.sample_max_view_deg)
     stage("angular reference")
     t0 = time.perf_counter()
     ref = reference_radiance(env, brdf, R, V)
@@ -147,7 +147,7 @@ def compare_representations(
         "rule_max_view_deg": options.rule_max_view_deg,
         "n_pairs": int(n),
         "band_pairs_per_band": int(per_band),
-        "max_view_deg": float(options.max_view_deg),
+        "max_view_deg": float(options.sample_max_view_deg),  # the sampling range (compare_json.md)
         "grazing_deg": GRAZING_DEG,
         "seed": int(options.seed),
         "reference": {"seconds": t_ref, "us_per_pair": 1e6 * t_ref / n},

@@ -195,8 +195,7 @@ def _slices(brdf: BRDF, fitted: list[Any], models: tuple[str, ...]) -> dict[str,
 def _orders(brdf: BRDF, options: ReportOptions) -> tuple[list[dict[str, Any]], dict[str, Any], list[OrderChoice]]:
     rows = []
     # one search per tolerance on shared quadrature grids; prefilter reuses each choice
-    choices = choose_orders_many(brdf, options.all_tolerances, max_F=options.max_F, max_P=options.max_P,
-                                 criterion=options.criterion, max_view_deg=options.max_view_deg)
+    choices = choose_orders_many(brdf, options.all_tolerances, rule=options.rule)
     for tol, choice in zip(options.all_tolerances, choices, strict=True):
         rows.append({
             "tolerance": tol,
@@ -275,8 +274,7 @@ def _environments(brdf: BRDF, options: ReportOptions, choices: dict[float, Order
         rows_before = len(speed_rows)
         for tol in order:
             _stage(progress, f"prefilter {env.name} eps={tol:g}")
-            shrm = prefilter(env, brdf, eps=tol, max_F=options.max_F, max_P=options.max_P, window=options.window,
-                             criterion=options.criterion, max_view_deg=options.max_view_deg, nthreads=nthreads,
+            shrm = prefilter(env, brdf, rule=options.rule.replace(eps=tol), window=options.window, nthreads=nthreads,
                              orders=choices[tol], lights=options.lights)
             err = relative_rms(shrm.radiance(R, V), reference)  # clamped at 0, as rendered
             bands = beside_measured(band_error(shrm.radiance(sample.R, sample.V), reference_b, sample),

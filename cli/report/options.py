@@ -6,16 +6,16 @@ Everything that changes the numbers of a report is an option here and is recorde
 
 from __future__ import annotations
 
+import copy
 import math
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import InitVar, dataclass, field, replace
 from typing import Any
 
 from ...analysis.fit.models_param import MODELS
 from ...analysis.lights import DEFAULT_LIGHTS, check_lights
-from ...analysis.orders import DEFAULT_MAX_F, DEFAULT_MAX_P
+from ...analysis.order_rule import RULE_FIELDS, OrderRule, resolve_rule
 from ...analysis.shrm import DEFAULT_WINDOW, check_window
-from ...analysis.tolerance import DEFAULT_EPS, check_eps
-from ...analysis.view_bands import DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG, check_criterion, check_max_view
+from ...analysis.tolerance import check_eps
 from ...brdf_io.errors import BadInputError
 from ..common import load_oriented_env
 
@@ -32,10 +32,17 @@ PREVIEW_MODES = ("auto", "gl", "cpu", "none")
 class ReportOptions:
     """What a report computes and at which cost.
 
+    The order rule is one value, :attr:`rule` (:class:`~shrmkit.analysis.order_rule.OrderRule`);
+    the keywords ``eps``, ``max_F``, ``max_P``, ``criterion`` and ``max_view_deg`` set its fields
+    (over a ``rule=`` given too, so that :meth:`with_changes` and ``dataclasses.replace`` work) and
+    read them back. :meth:`as_dict` writes them under their own names, as before the rule.
+
     Attributes
     ----------
+    rule
+        The order rule of every choice of orders and SHRM of the report.
     eps
-        Main tolerance ε: the scene orders, residual bound and preview use it.
+        Main tolerance ε (``rule.eps``): the scene orders, residual bound and preview use it.
     tolerances
         Tolerances of the order table and the speed-against-error rows (``eps`` is added).
     envs
@@ -59,8 +66,8 @@ class ReportOptions:
     seed
         Seed of every random choice (pairs, fit samples, fit starts).
     max_F, max_P
-        Caps of ``choose_orders``: those of ``shrm orders`` (512, 20), so the two choose the same
-        orders (the quick profile caps F at 96 and says so).
+        Caps of ``choose_orders`` (``rule.max_F``, ``rule.max_P``): those of ``shrm orders`` (512,
+        20), so the two choose the same orders (the quick profile caps F at 96 and says so).
     preview, preview_size, mesh
         Preview renderer (:data:`PREVIEW_MODES`), image size in pixels, and an optional mesh
         (file or ``builtin:``) rendered besides the sphere.
@@ -70,8 +77,8 @@ class ReportOptions:
         The prefilter's window against Gibbs ringing (``analysis.shrm.WINDOWS``, default
         ``"auto"``) of every SHRM of the report (errors and preview).
     criterion, max_view_deg
-        The order rule and its view limit (``analysis.view_bands``); the measured errors are
-        sampled up to the same view limit.
+        The order rule and its view limit (``rule.criterion``, ``rule.max_view_deg``;
+        ``analysis.view_bands``); the measured errors are sampled up to the same view limit.
     lights
         The explicit lights of every SHRM of the report (``prefilter(lights=)``; ``"auto"``,
         ``"none"`` or N): the report lists them per environment.
@@ -88,7 +95,7 @@ class ReportOptions:
         error) and the fits' band errors are drawn whenever ``plots`` is.
     """
 
-    eps: float = DEFAULT_EPS
+    eps: InitVar[float | None] = None
     tolerances: tuple[float, ...] = DEFAULT_TOLERANCES
     envs: tuple[str, ...] = ("builtin:sky",)
     env_height: int = 64
@@ -106,26 +113,27 @@ class ReportOptions:
     # the caps of `shrm orders` (analysis.orders), so that both choose the same (F, P): the search
     # starts from ε(min(F0, max_F), p), so a lower cap moves P, and F with it, even when F stays
     # below it (microfacet σ = 0.03 at ε = 0.01: (241, 18) under 256, (274, 17) under 512; issue 29)
-    max_F: int = DEFAULT_MAX_F
-    max_P: int = DEFAULT_MAX_P
+    max_F: InitVar[int | None] = None
+    max_P: InitVar[int | None] = None
     preview: str = "auto"
     preview_size: int = 192
     mesh: str | None = None
     albedo_nodes: int = 64
     window: str = DEFAULT_WINDOW
-    criterion: str = DEFAULT_CRITERION
-    max_view_deg: float = DEFAULT_MAX_VIEW_DEG
+    criterion: InitVar[str | None] = None
+    max_view_deg: InitVar[float | None] = None
     lights: str | int = DEFAULT_LIGHTS
     plots: bool = True
     explorer_plots: bool = True
     profile: str = field(default="full")
+    rule: OrderRule = OrderRule()
 
-    def __post_init__(self) -> None:
-        check_eps(self.eps)
+    def __post_init__(self, eps: float | None, max_F: int | None, max_P: int | None, criterion: str | None,
+                      max_view_deg: float | None) -> None:
+        object.__setattr__(self, "rule", resolve_rule(self.rule, override=True, eps=eps, max_F=max_F, max_P=max_P,
+                                                      criterion=criterion, max_view_deg=max_view_deg))
         check_window(self.window)
         object.__setattr__(self, "lights", check_lights(self.lights))
-        check_criterion(self.criterion)
-        check_max_view(self.max_view_deg)
         for tol in self.tolerances:
             check_eps(tol, "every tolerance")
         if not 4 <= self.env_height <= 2048:
@@ -159,12 +167,22 @@ class ReportOptions:
         return replace(self, **changes)
 
     def as_dict(self) -> dict[str, Any]:
-        """JSON-able record of the options (``report.json`` ``options``)."""
-        d = asdict(self)
+        """JSON-able record of the options (``report.json`` ``options``): every constructor keyword
+        in declaration order, the rule's fields under their own names (no ``rule`` key)."""
+        d = {name: copy.deepcopy(getattr(self, name)) for name in self.__dataclass_fields__ if name != "rule"}
         d["tolerances"] = list(self.all_tolerances)
         d["envs"] = list(self.envs)
         d["models"] = list(self.models)
         return d
+
+
+def _rule_field(name: str) -> property:
+    return property(lambda self: getattr(self.rule, name), doc=f"``rule.{name}`` (:class:`ReportOptions`).")
+
+
+for _name in RULE_FIELDS:  # the keywords read back from the rule (the InitVars' class defaults replaced)
+    setattr(ReportOptions, _name, _rule_field(_name))
+del _name
 
 
 def profile(name: str = "full", **changes: Any) -> ReportOptions:

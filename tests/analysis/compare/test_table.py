@@ -145,7 +145,7 @@ def test_options_validation() -> None:
     assert CompareOptions().eps == DEFAULT_EPS
     assert CompareOptions(lobes=[2, 3]).lobes == (2, 3)
     for bad, match in (({"eps": 1.5}, "eps"), ({"n_pairs": 3}, "n_pairs"), ({"lobes": (9,)}, "lobes"),
-                       ({"max_view_deg": 90.0}, "max_view_deg"), ({"elevations": 0}, "elevations"),
+                       ({"sample_max_view_deg": 90.0}, "sample_max_view_deg"), ({"elevations": 0}, "elevations"),
                        ({"update_view": (0.0, 0.0, 0.0)}, "update_view")):
         with pytest.raises(BadInputError, match=match):
             CompareOptions(**bad)

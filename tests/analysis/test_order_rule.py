@@ -1,0 +1,97 @@
+"""OrderRule (issue 27 point 4): the order rule as one value instead of five loose keywords.
+
+References: the loose keywords of the same functions (the path before the rule), and the
+constructor keywords of the options classes (their ``as_dict`` output must not change).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import warnings
+
+import pytest
+
+from shrmkit.analysis import OrderRule
+from shrmkit.analysis.compare import CompareOptions
+from shrmkit.analysis.order_rule import resolve_rule
+from shrmkit.analysis.orders import choose_orders, choose_orders_many, orders_on_grid_for
+from shrmkit.brdf_io.errors import BadInputError
+from shrmkit.brdf_io.specs import load_brdf
+from shrmkit.cli.report.options import ReportOptions, profile
+
+# cheap: a Phong lobe of low exponent needs few orders (well under a second per choice)
+SPEC = "phong:s=8"
+
+
+def test_rule_from_keywords_equals_explicit_rule() -> None:
+    explicit = OrderRule(criterion="rh02", max_view_deg=70.0, eps=0.05, max_F=64, max_P=6)
+    assert resolve_rule(None, criterion="rh02", max_view_deg=70, eps=0.05, max_F=64, max_P=6) == explicit
+    assert resolve_rule(explicit, eps=0.05, max_view_deg=70) is explicit  # agreeing keywords: the rule itself
+    assert OrderRule() == OrderRule(criterion="bands", max_view_deg=80.0, eps=0.03, max_F=512, max_P=20)
+    assert OrderRule(eps=0.01).to_json() == {"criterion": "bands", "max_view_deg": 80.0, "eps": 0.01,
+                                             "max_F": 512, "max_P": 20}
+    assert OrderRule.from_json(explicit.to_json()) == explicit
+
+
+@pytest.mark.parametrize("bad, match", [({"eps": 1.5}, "eps"), ({"criterion": "nope"}, "criterion"),
+                                        ({"max_view_deg": 95.0}, "max view"), ({"max_F": 0}, "max_F"),
+                                        ({"max_P": 65}, "max_P")])
+def test_rule_validates(bad: dict, match: str) -> None:
+    with pytest.raises(BadInputError, match=match):
+        OrderRule(**bad)
+
+
+def test_conflicting_rule_and_keyword_refused() -> None:
+    brdf = load_brdf(SPEC)
+    rule = OrderRule(eps=0.1)
+    with pytest.raises(BadInputError, match=r"eps=0\.03 disagrees with rule\.eps=0\.1"):
+        choose_orders(brdf, rule=rule, eps=0.03)
+    with pytest.raises(BadInputError, match=r"criterion='rh02' disagrees with rule\.criterion='bands'"):
+        choose_orders_many(brdf, (0.1,), rule=rule, criterion="rh02")
+    with pytest.raises(BadInputError, match="max_view_deg"):
+        orders_on_grid_for(brdf, 4, 0, rule=rule, max_view_deg=60.0)
+    with pytest.raises(BadInputError, match="OrderRule"):
+        choose_orders(brdf, rule={"eps": 0.1})
+
+
+@pytest.mark.parametrize("keywords", [{"eps": 0.05}, {"eps": 0.1, "criterion": "rh02", "max_F": 16, "max_P": 2},
+                                      {"eps": 0.05, "max_view_deg": 60.0}])
+def test_choose_orders_rule_equals_keywords(keywords: dict) -> None:
+    brdf = load_brdf(SPEC)
+    by_keywords = choose_orders(brdf, **keywords)
+    by_rule = choose_orders(brdf, rule=OrderRule(**keywords))
+    assert (by_rule.F, by_rule.P, by_rule.eps, by_rule.capped) == (by_keywords.F, by_keywords.P, by_keywords.eps,
+                                                                   by_keywords.capped)
+    assert (by_rule.criterion, by_rule.max_view_deg, by_rule.tolerance) == (
+        by_keywords.criterion, by_keywords.max_view_deg, by_keywords.tolerance)
+    assert by_rule.rule == by_keywords.rule == OrderRule(**keywords)
+
+
+def test_compare_options_alias_warns_and_maps() -> None:
+    with pytest.warns(DeprecationWarning, match="max_view_deg"):
+        options = CompareOptions(max_view_deg=70.0)
+    assert options.sample_max_view_deg == 70.0
+    assert options.rule_max_view_deg == options.rule.max_view_deg == 80.0  # the rule's limit is not the range
+    with pytest.warns(DeprecationWarning, match="sample_max_view_deg"):
+        assert options.max_view_deg == 70.0
+    with pytest.raises(TypeError, match="not both"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)
+        CompareOptions(max_view_deg=70.0, sample_max_view_deg=60.0)
+    default = CompareOptions()
+    assert (default.sample_max_view_deg, default.rule) == (88.0, OrderRule())
+
+
+def test_options_hold_one_rule() -> None:
+    """CompareOptions and ReportOptions keep their keywords: they set (and read) the rule's fields."""
+    rule = OrderRule(eps=0.05, criterion="rh02", max_view_deg=70.0)
+    compare = CompareOptions(eps=0.05, criterion="rh02", rule_max_view_deg=70.0)
+    assert compare.rule == rule and (compare.eps, compare.criterion) == (0.05, "rh02")
+    assert dataclasses.replace(compare, eps=0.1).rule == rule.replace(eps=0.1)
+    assert compare.shrm_settings()["max_view_deg"] == 70.0
+    report = ReportOptions(eps=0.05, criterion="rh02", max_view_deg=70.0, max_F=96)
+    assert report.rule == rule.replace(max_F=96)
+    assert report.with_changes(eps=0.01).rule == rule.replace(max_F=96, eps=0.01)
+    quick = profile("quick").as_dict()
+    assert (quick["eps"], quick["max_F"], quick["max_P"], quick["criterion"], quick["max_view_deg"]) == (
+        0.03, 96, 20, "bands", 80.0)
+    assert "rule" not in quick
