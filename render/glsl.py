@@ -3,43 +3,14 @@
 Each render mode (``render.modes``) turns its model into a :class:`Shading`: one float32
 texture (sampler ``shrmTex``), VTK shader replacements, optional per-vertex ``vec4``
 attributes, and the state its per-frame update reads. The replacements are made here, once:
-
-- vertex shader (:func:`vertex_replacements`): pass the world position ``shrmPosWC`` and
-  normal ``shrmNormWC`` on (the actor's model matrix is the identity and VBO shift/scale is
-  disabled, so ``vertexMC`` and ``normalMC`` are world-space), plus each attribute ``a`` as
-  the varying :func:`varying` (``a_f``);
-- fragment shader (:func:`fragment_replacements`): the prelude computes, in the z-up world
-  frame (= VTK world frame), N = normalize(interpolated normal) flipped on back faces,
-  V = normalize(eye − P) (perspective) or the constant direction toward the camera (ortho),
-  R = 2 (N·V) N − V; the mode's body then sets ``vec3 shrmRad``, written out as the colour.
-
-Deferred shading (the per-pixel modes; ``vtk_renderer`` module docstring): the geometry pass
-(:func:`gbuffer_fragment_replacements`) writes R scaled by the object's tag ``shrmGScale``
-(2^(k+1) for object k: an exact scaling) to the float colour buffer; the screen pass
-(:func:`screen_fragment_replacements`) draws a quad filling the view, reads R back at its
-pixel (``texelFetch(shrmGbuf, ivec2(gl_FragCoord.xy))``), keeps the pixels of its own tag,
-computes V as the prelude does (the quad's point lies on the same pixel ray as the surface
-point, so eye − P has the same direction) and runs the same body.
-
-Uniforms (set per frame by the renderer): ``shrmEye`` (vec3), ``shrmOrtho`` (int),
-``shrmViewDir`` (vec3, toward the camera, used when ortho), and :data:`TO_MAP_UNIFORM`
-(mat3 Qᵀ): the environment rotated by Q at view time (``brdf_io.env_rotation``). The prelude
-of every shading body turns N, V and R into the unrotated map's frame (Qᵀ N, Qᵀ V, Qᵀ R), so
-every mode's lookup, its lights and its per-frame map read B_Q(R, V) = B(Qᵀ R, Qᵀ V); the
-identity when nothing rotates. The deferred geometry pass writes the world R (unrotated), and
-the screen pass rotates what it reads back.
-
-Lat-long lookup (:data:`LATLONG_GLSL`) is the bilinear interpolation of
-:func:`shrmkit.brdf_io.latlong.bilinear_lookup` done with ``texelFetch`` (four exact float
-texels, weights in float32): φ wraps around with no seam, θ is clamped to the first and last
-row centres; θ = atan2(|R_xy|, R_z) stays accurate at the poles. No hardware filtering or
-mipmapping is involved, so there is no seam from derivative jumps and no 8-bit weight
-quantization.
-
-The real SH (DESIGN §2 basis, index l² + l + m) are generated as straight-line GLSL
-(:func:`sh_glsl`): Y^r_lm = K_lm h_lm(z) Re (x + iy)^m (m ≥ 0) or Im (x + iy)^|m| (m < 0),
-with K_m = √2 (−1)^m f_mm / sin^m θ and h_lm the normalized-Legendre three-term recurrence of
-:func:`shrmkit.analysis.sh.legendre_f` divided by f_mm (no trigonometric functions).
+the vertex shader's (:func:`vertex_replacements`), the fragment shader's prelude that computes
+N, V and R in the z-up world frame (= VTK world frame) before the mode's body sets ``vec3 shrmRad``
+(:func:`fragment_replacements`), and the two passes of deferred shading
+(:func:`gbuffer_fragment_replacements`, :func:`screen_fragment_replacements`; the per-pixel modes,
+:class:`~shrmkit.render.vtk_renderer.SHRMRenderer`). Uniforms set per frame by the renderer:
+``shrmEye``, ``shrmOrtho``, ``shrmViewDir`` and :data:`TO_MAP_UNIFORM` (the environment's rotation
+at view time). Also the bilinear lat-long lookup (:data:`LATLONG_GLSL`) and the real SH as
+straight-line GLSL (:func:`sh_glsl`).
 """
 
 from __future__ import annotations
@@ -131,7 +102,12 @@ def varying(attribute: str) -> str:
 
 
 def vertex_replacements(attributes: Sequence[str] = ()) -> Replacements:
-    """(tag, replacement) pairs for the vertex shader: world position, normal and ``attributes`` passed on."""
+    """(tag, replacement) pairs for the vertex shader: world position, normal and ``attributes`` passed on.
+
+    The world position ``shrmPosWC`` and normal ``shrmNormWC`` are passed on as they are (the actor's
+    model matrix is the identity and VBO shift/scale is disabled, so ``vertexMC`` and ``normalMC`` are
+    world-space), plus each attribute ``a`` as the varying :func:`varying` (``a_f``).
+    """
     dec = ["//VTK::Normal::Dec", "out vec3 shrmPosWC;", "out vec3 shrmNormWC;"]
     impl = ["//VTK::Normal::Impl", "  shrmPosWC = vertexMC.xyz;", "  shrmNormWC = normalMC;"]
     for name in attributes:
@@ -143,8 +119,11 @@ def vertex_replacements(attributes: Sequence[str] = ()) -> Replacements:
 #: V: toward the eye (perspective) or the constant direction toward the camera (ortho)
 _VIEW_LINE = "  vec3 shrmV = (shrmOrtho != 0) ? normalize(shrmViewDir) : normalize(shrmEye - shrmPosWC);"
 
-#: The mat3 uniform Qᵀ taking world directions into the unrotated environment's frame (module docstring;
-#: column-major as OpenGL stores it); a shader that reads it declares nothing: the renderer sets it.
+#: The mat3 uniform Qᵀ taking world directions into the unrotated environment's frame (column-major
+#: as OpenGL stores it); a shader that reads it declares nothing: the renderer sets it. The environment
+#: is rotated by Q at view time (``brdf_io.env_rotation``): the prelude of every shading body turns
+#: N, V and R into the unrotated map's frame (Qᵀ N, Qᵀ V, Qᵀ R), so every mode's lookup, its lights
+#: and its per-frame map read B_Q(R, V) = B(Qᵀ R, Qᵀ V); the identity when nothing rotates.
 TO_MAP_UNIFORM = "shrmToMap"
 _TO_MAP_LINES = [f"  shrmN = {TO_MAP_UNIFORM} * shrmN;", f"  shrmV = {TO_MAP_UNIFORM} * shrmV;",
                  f"  shrmR = {TO_MAP_UNIFORM} * shrmR;"]
@@ -156,7 +135,14 @@ def fragment_replacements(
     """(tag, replacement) pairs for the fragment shader: the prelude, the mode's ``declarations``
     and ``body`` (which sets ``vec3 shrmRad`` from ``shrmN``, ``shrmV``, ``shrmR``), the output.
     ``to_map`` (default): N, V, R are turned into the unrotated environment's frame by the uniform
-    :data:`TO_MAP_UNIFORM` before the body; False leaves them in the world frame (the geometry pass)."""
+    :data:`TO_MAP_UNIFORM` before the body; False leaves them in the world frame (the geometry pass).
+
+    The prelude computes, in the z-up world frame (= VTK world frame), N = normalize(interpolated
+    normal) flipped on back faces, V = normalize(eye − P) (perspective) or the constant direction
+    toward the camera (ortho), R = 2 (N·V) N − V; the mode's body then sets ``vec3 shrmRad``, written
+    out as the colour. Uniforms (set per frame by the renderer): ``shrmEye`` (vec3), ``shrmOrtho``
+    (int), ``shrmViewDir`` (vec3, toward the camera, used when ortho), and :data:`TO_MAP_UNIFORM`.
+    """
     dec = [
         "//VTK::Edges::Dec",
         "in vec3 shrmPosWC;",
@@ -181,7 +167,16 @@ def fragment_replacements(
 def gbuffer_fragment_replacements() -> Replacements:
     """(tag, replacement) pairs of the deferred geometry pass: the prelude's R (unit, z-up
     world frame) times the object's tag, the uniform ``shrmGScale`` (2^(k+1), exact), as the
-    colour; alpha 1. The screen pass (:func:`screen_fragment_replacements`) divides it out."""
+    colour; alpha 1. The screen pass (:func:`screen_fragment_replacements`) divides it out.
+
+    Deferred shading (the per-pixel modes; :class:`~shrmkit.render.vtk_renderer.SHRMRenderer`): this
+    geometry pass writes R scaled by the object's tag ``shrmGScale`` (2^(k+1) for object k: an exact
+    scaling) to the float colour buffer; the screen pass draws a quad filling the view, reads R back
+    at its pixel (``texelFetch(shrmGbuf, ivec2(gl_FragCoord.xy))``), keeps the pixels of its own tag,
+    computes V as the prelude does (the quad's point lies on the same pixel ray as the surface point,
+    so eye − P has the same direction) and runs the same body. This pass writes the world R
+    (unrotated); the screen pass rotates what it reads back.
+    """
     return fragment_replacements([], ["  vec3 shrmRad = shrmR * shrmGScale;"], to_map=False)
 
 
@@ -210,7 +205,13 @@ def screen_fragment_replacements(declarations: Sequence[str], body: Sequence[str
 
 
 def sh_glsl(lmax: int) -> str:
-    """GLSL function ``void shrm_sh(vec3 v, out float Y[n])`` for the real SH up to ``lmax``."""
+    """GLSL function ``void shrm_sh(vec3 v, out float Y[n])`` for the real SH up to ``lmax``.
+
+    The real SH of the DESIGN §2 basis, index l² + l + m, as straight-line GLSL:
+    Y^r_lm = K_lm h_lm(z) Re (x + iy)^m (m ≥ 0) or Im (x + iy)^|m| (m < 0), with
+    K_m = √2 (−1)^m f_mm / sin^m θ and h_lm the normalized-Legendre three-term recurrence of
+    :func:`shrmkit.analysis.sh.legendre_f` divided by f_mm (no trigonometric functions).
+    """
     n = (lmax + 1) ** 2
     lines = [f"void shrm_sh(vec3 v, out float Y[{n}]) {{", "  float x = v.x, y = v.y, z = v.z;"]
     lines.append("  float c0 = 1.0, s0 = 0.0;")
@@ -242,7 +243,11 @@ def sh_glsl(lmax: int) -> str:
 
 #: The bilinear lat-long lookup of ``brdf_io.latlong.bilinear_lookup`` in GLSL: ``latlong_setup``
 #: and ``latlong_fetch`` of the WebGL viewer's ``render/webgl/latlong.glsl`` (one source for both
-#: renderers), and ``shrm_fetch``, the fetch from the sampler ``shrmTex``.
+#: renderers), and ``shrm_fetch``, the fetch from the sampler ``shrmTex``. Done with ``texelFetch``
+#: (four exact float texels, weights in float32): φ wraps around with no seam, θ is clamped to the
+#: first and last row centres; θ = atan2(|R_xy|, R_z) stays accurate at the poles. No hardware
+#: filtering or mipmapping is involved, so there is no seam from derivative jumps and no 8-bit
+#: weight quantization.
 LATLONG_GLSL = resources.files(__package__).joinpath("webgl").joinpath("latlong.glsl").read_text(
     encoding="utf-8") + """
 // bilinear fetch from shrmTex at tile offset o (texel units)
