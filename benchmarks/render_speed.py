@@ -4,7 +4,7 @@ Measures, on whatever OpenGL the machine offers (Mesa llvmpipe on a CPU-only mac
 the ``distant`` and ``perpixel`` modes at 512² (and 1024²), for a ~100k- (and a
 1M-) triangle torus knot; ``perpixel`` twice in the same run: as the renderer draws it by
 default — deferred on a CPU rasterizer (a geometry pass writing R, then each covered pixel
-shaded once, ``vtk_renderer`` module docstring), forward on a GPU — and by the other path:
+shaded once, ``SHRMRenderer`` docstring), forward on a GPU — and by the other path:
 ``pp-fwd`` (``SHRMRenderer(deferred=False)``: every rasterized fragment shaded) or ``pp-def``
 (``deferred=True``). The OpenGL renderer string is printed first.
 

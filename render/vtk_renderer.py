@@ -8,37 +8,8 @@ mode's record makes the object's texture, shader replacements and vertex attribu
 once for every mode, and dispatches through the record. Rendering returns linear radiance
 read back as float32, never clamped or quantized.
 
-Frame: VTK world coordinates are the z-up math frame (``camera`` module docstring); meshes
-are uploaded in world coordinates with an identity actor matrix. The environment may be rotated
-per frame (``draw``/``render``'s ``env_rotation`` Q, ``brdf_io.env_rotation``): the shaders look
-up at Qᵀ R, Qᵀ V (``glsl.TO_MAP_UNIFORM``) and the per-frame maps are made for Qᵀ Ṽ; no texture
-changes.
-
-Per frame, ``draw`` only sets the camera, four uniforms and each object's back-face culling,
-runs the modes' texture updates and calls VTK's Render; shader replacements, textures and
-geometry are set up once in ``add_object``. Back faces are culled for an object whose mesh is
-closed and outward oriented (:func:`closed_outward`) while its bounding sphere lies wholly
-beyond the near plane: then they are all hidden, and culling them saves their rasterization
-and shading (on a CPU rasterizer, most of a frame) without changing a pixel.
-
-Deferred shading (``perpixel``, ``kautz-mccool``, and ``distant`` with explicit lights: the shadings
-whose ``Shading.deferred`` is set):
-when every object of the scene has it, a frame is two VTK renders. (1) The geometry pass draws
-each object k with a trivial shader writing its R (the prelude's reflected direction, unit, z-up
-world frame) times the tag 2^(k+1) (exact in float32) to the float colour buffer, with depth.
-(2) The screen pass keeps that depth buffer (``PreserveDepthBuffer``) and draws, per object, one
-quad filling the view just inside the far plane with depth test GL_GREATER and depth writes
-off: only covered pixels pass the depth test, before their shader runs (background blocks are
-skipped whole), and each is shaded once. Its fragment shader reads R back from the geometry
-pass's colour texture (the display framebuffer's GL_RGBA32F attachment, which VTK's blit at
-the end of pass 1 filled; no readback to the CPU), discards the pixels of other objects' tags,
-computes V from the quad's point (on the same pixel ray as the surface point) and evaluates
-the mode's sum ([RH02] eq. 8) once. The forward path shades each fragment of each small
-triangle: a CPU rasterizer (llvmpipe) shades whole 2×2 quads / 4×4 blocks of every one- or
-two-pixel triangle, plus overdraw. Images equal the forward path's to float rounding (R is
-passed exactly; V differs by the rounding of the interpolated point); coverage is identical.
-Scenes with an object of another mode, or built with ``deferred=False``, use the forward path;
-by default (``deferred=None``) the deferred path is used on CPU rasterizers only.
+:class:`SHRMRenderer` documents the frame, what a frame does, and the deferred shading of the
+per-pixel modes on CPU rasterizers (each covered pixel shaded once).
 """
 
 from __future__ import annotations
@@ -234,12 +205,45 @@ def _to_map_values(env_rotation: np.ndarray | None) -> list[float]:
 class SHRMRenderer:
     """Render meshes shaded by SHRMs (or another mode's model), offscreen, with float readback.
 
+    Frame: VTK world coordinates are the z-up math frame (``camera`` module docstring); meshes
+    are uploaded in world coordinates with an identity actor matrix. The environment may be rotated
+    per frame (``draw``/``render``'s ``env_rotation`` Q, ``brdf_io.env_rotation``): the shaders look
+    up at Qᵀ R, Qᵀ V (``glsl.TO_MAP_UNIFORM``) and the per-frame maps are made for Qᵀ Ṽ; no texture
+    changes.
+
+    Per frame, ``draw`` only sets the camera, four uniforms and each object's back-face culling,
+    runs the modes' texture updates and calls VTK's Render; shader replacements, textures and
+    geometry are set up once in ``add_object``. Back faces are culled for an object whose mesh is
+    closed and outward oriented (:func:`closed_outward`) while its bounding sphere lies wholly
+    beyond the near plane: then they are all hidden, and culling them saves their rasterization
+    and shading (on a CPU rasterizer, most of a frame) without changing a pixel.
+
+    Deferred shading (``perpixel``, ``kautz-mccool``, and ``distant`` with explicit lights: the shadings
+    whose ``Shading.deferred`` is set):
+    when every object of the scene has it, a frame is two VTK renders. (1) The geometry pass draws
+    each object k with a trivial shader writing its R (the prelude's reflected direction, unit, z-up
+    world frame) times the tag 2^(k+1) (exact in float32) to the float colour buffer, with depth.
+    (2) The screen pass keeps that depth buffer (``PreserveDepthBuffer``) and draws, per object, one
+    quad filling the view just inside the far plane with depth test GL_GREATER and depth writes
+    off: only covered pixels pass the depth test, before their shader runs (background blocks are
+    skipped whole), and each is shaded once. Its fragment shader reads R back from the geometry
+    pass's colour texture (the display framebuffer's GL_RGBA32F attachment, which VTK's blit at
+    the end of pass 1 filled; no readback to the CPU), discards the pixels of other objects' tags,
+    computes V from the quad's point (on the same pixel ray as the surface point) and evaluates
+    the mode's sum ([RH02] eq. 8) once. The forward path shades each fragment of each small
+    triangle: a CPU rasterizer (llvmpipe) shades whole 2×2 quads / 4×4 blocks of every one- or
+    two-pixel triangle, plus overdraw. Images equal the forward path's to float rounding (R is
+    passed exactly; V differs by the rounding of the interpolated point); coverage is identical.
+    Scenes with an object of another mode, or built with ``deferred=False``, use the forward path;
+    by default (``deferred=None``) the deferred path is used on CPU rasterizers only.
+
+
     Parameters
     ----------
     width, height
         Image size in pixels.
     deferred
-        Shade per-pixel objects once per covered pixel (module docstring) when every object of
+        Shade per-pixel objects once per covered pixel (above) when every object of
         the scene can be; False always draws forward (the reference for the deferred path).
         None (default): deferred where the OpenGL renderer is a CPU rasterizer
         (:func:`~shrmkit.render.offscreen.is_software_rasterizer`: llvmpipe, SwiftShader, …),
@@ -515,7 +519,7 @@ class SHRMRenderer:
         anything else): every object is shaded at Qᵀ R, Qᵀ V, its lights moved with the map.
 
         A deferred frame (:attr:`deferred`) is two VTK renders: the geometry pass, then the
-        screen pass (module docstring).
+        screen pass (class docstring).
 
         ``update_maps=False`` keeps the distant-mode maps of the previous frame (only for
         measuring the cost of the per-frame map update).

@@ -1,4 +1,4 @@
-"""Deferred per-pixel shading (``vtk_renderer`` module docstring) changes no image.
+"""Deferred per-pixel shading (``vtk_renderer.SHRMRenderer`` docstring) changes no image.
 
 The deferred path (a geometry pass writing R · 2^(k+1), then one screen quad per object shading
 each covered pixel once) against
