@@ -140,7 +140,37 @@ def read_cornell(path: str | os.PathLike[str]) -> ScatteredBRDF:
         text = read_bytes(path, "Cornell .brdf file", peak_per_byte=TEXT_PEAK_PER_BYTE).decode("ascii")
     except UnicodeDecodeError as err:
         raise BadInputError(path, f"cannot read Cornell .brdf file: not ASCII text (byte {err.start})") from None
-    lines = text.splitlines()
+    wavelengths, data, row_lines = _parse_lines(path, text.splitlines())
+    theta_i, phi_i, theta_s, phi_s = data[:, :4].T
+    _check_angles(path, theta_i, phi_i, theta_s, phi_s, row_lines)
+    spectral = data[:, 4:]
+    _check_values(path, spectral, row_lines)
+    rgb = spectral_to_linear_srgb(spectral)
+    return ScatteredBRDF(
+        L=_direction(theta_i, phi_i),  # incident direction = light
+        V=_direction(theta_s, phi_s),  # scattered direction = view; mirror of L at phi_s = phi_i + pi
+        rgb=np.maximum(rgb, 0.0),
+        n_clipped=int(np.sum(rgb < 0)),
+        spectral=spectral,
+        wavelengths=np.array(wavelengths),
+        name=path.stem,
+        source=str(path),
+    )
+
+
+def _wavelength_count(path: Path, line_no: int, count: float) -> int:
+    """Header 1: the number of wavelengths, a whole number in [1, :data:`MAX_WAVELENGTHS`]."""
+    if count != int(count) or not 1 <= count <= MAX_WAVELENGTHS:
+        raise BadInputError(
+            path, f"line {line_no}: wavelength count {count!r} is not a positive integer "
+            f"(at most {MAX_WAVELENGTHS})"
+        )
+    return int(count)
+
+
+def _parse_lines(path: Path, lines: list[str]) -> tuple[list[float], np.ndarray, list[int]]:
+    """The wavelengths (nm), the measurement rows (n, 4 + 31) (θ_i, φ_i, θ_s, φ_s in radians, then
+    the spectral values in 1/sr) and each row's line number, from the file's lines."""
     n_wavelengths: int | None = None
     wavelengths: list[float] = []
     data: np.ndarray | None = None
@@ -153,13 +183,7 @@ def read_cornell(path: str | os.PathLike[str]) -> ScatteredBRDF:
         numbers = [_number(path, line_no, tok) for tok in body.split()]
         if n_wavelengths is None:
             # header 1: the number of wavelengths (possibly followed by the first ones)
-            count = numbers[0]
-            if count != int(count) or not 1 <= count <= MAX_WAVELENGTHS:
-                raise BadInputError(
-                    path, f"line {line_no}: wavelength count {count!r} is not a positive integer "
-                    f"(at most {MAX_WAVELENGTHS})"
-                )
-            n_wavelengths = int(count)
+            n_wavelengths = _wavelength_count(path, line_no, numbers[0])
             numbers = numbers[1:]
         if len(wavelengths) < n_wavelengths:
             # header 2: the wavelengths, which may wrap over several lines
@@ -181,6 +205,14 @@ def read_cornell(path: str | os.PathLike[str]) -> ScatteredBRDF:
         data[n_rows] = numbers
         n_rows += 1
         row_lines.append(line_no)
+    _check_wavelengths(path, n_wavelengths, wavelengths)
+    if data is None:
+        raise BadInputError(path, "no measurement rows")
+    return wavelengths, data[:n_rows], row_lines
+
+
+def _check_wavelengths(path: Path, n_wavelengths: int | None, wavelengths: list[float]) -> None:
+    """The header is complete and lists the 31 wavelengths 400, 410, ..., 700 nm."""
     if n_wavelengths is None or len(wavelengths) < n_wavelengths:
         raise BadInputError(path, "no wavelength header (count, then the wavelengths in nm)")
     if n_wavelengths != WAVELENGTHS_NM.size or not np.allclose(wavelengths, WAVELENGTHS_NM):
@@ -188,10 +220,11 @@ def read_cornell(path: str | os.PathLike[str]) -> ScatteredBRDF:
         raise BadInputError(
             path, f"wavelengths {shown} are not the 31 values 400, 410, ..., 700 nm this reader converts"
         )
-    if data is None:
-        raise BadInputError(path, "no measurement rows")
-    data = data[:n_rows]
-    theta_i, phi_i, theta_s, phi_s = data[:, :4].T
+
+
+def _check_angles(path: Path, theta_i: np.ndarray, phi_i: np.ndarray, theta_s: np.ndarray, phi_s: np.ndarray,
+                  row_lines: list[int]) -> None:
+    """θ in [0, π/2] and |φ| <= 2π (radians, 1e-6 slack); the first bad row's line otherwise."""
     thetas = np.stack((theta_i, theta_s), axis=1)
     bad = np.any((thetas < 0) | (thetas > np.pi / 2 + 1e-6), axis=1)
     if np.any(bad):
@@ -205,7 +238,10 @@ def read_cornell(path: str | os.PathLike[str]) -> ScatteredBRDF:
         raise BadInputError(
             path, f"line {row_lines[k]}: phi_i={float(phi_i[k])!r}, phi_s={float(phi_s[k])!r} outside [-2pi, 2pi]"
         )
-    spectral = data[:, 4:]
+
+
+def _check_values(path: Path, spectral: np.ndarray, row_lines: list[int]) -> None:
+    """Spectral values in [0, :data:`MAX_MEASURED_RHO`] 1/sr; the first bad row's line otherwise."""
     bad = np.any(spectral < 0, axis=1)
     if np.any(bad):
         k = int(np.argmax(bad))
@@ -217,14 +253,3 @@ def read_cornell(path: str | os.PathLike[str]) -> ScatteredBRDF:
             path, f"line {row_lines[k]}: BRDF value {float(spectral[k].max())!r} above {MAX_MEASURED_RHO:g} 1/sr "
             "(not a plausible measurement)"
         )
-    rgb = spectral_to_linear_srgb(spectral)
-    return ScatteredBRDF(
-        L=_direction(theta_i, phi_i),  # incident direction = light
-        V=_direction(theta_s, phi_s),  # scattered direction = view; mirror of L at phi_s = phi_i + pi
-        rgb=np.maximum(rgb, 0.0),
-        n_clipped=int(np.sum(rgb < 0)),
-        spectral=spectral,
-        wavelengths=np.array(wavelengths),
-        name=path.stem,
-        source=str(path),
-    )
