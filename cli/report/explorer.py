@@ -143,52 +143,75 @@ def _explore(brdf: BRDF, fit_results: Sequence[Any], models: Sequence[str], albe
     fits = [(m, None if f is None else f.brdf) for m, f in zip(models, fit_results, strict=True)]
     block: dict[str, Any] = {"of": "measured samples" if scattered else "brdf", "error": None,
                              "luminance": "Rec. 709"}
-
     # the slice, or the measured samples near the plane of incidence
+    plane = None
     if scattered:
-        ti_all, so_all, rgb_all = plane_samples(brdf)
-        ti, so, rgb = ti_all, so_all, rgb_all
-        order = np.lexsort((so, ti))
-        ti, so, rgb = ti[order], so[order], rgb[order]
-        n_total = len(ti)
-        if n_total > MAX_SAMPLES:
-            keep = np.arange(0, n_total, math.ceil(n_total / MAX_SAMPLES))
-            ti, so, rgb = ti[keep], so[keep], rgb[keep]
+        plane = plane_samples(brdf)
         block["slice"] = None
-        block["samples"] = {"max_off_plane_deg": PLANE_TOLERANCE_DEG, "n_in_plane": int(n_total),
-                            "n_shown": int(len(ti)), "theta_i_deg": ti.tolist(), "theta_o_deg": so.tolist(),
-                            "rgb": rgb.tolist()}
+        block["samples"] = _samples_block(*plane)
     else:
-        s = halfdiff_slice(brdf)
-        blank = s["missing"] | s["below_surface"]
-        fitted: dict[str, Any] = {}
-        for model, fb in fits:
-            if fb is None:
-                fitted[model] = None
-            else:
-                f = halfdiff_slice(fb)
-                fitted[model] = _grid_json(_luma(f["rgb"]), f["below_surface"])
-        block["slice"] = {
-            "phi_d_deg": SLICE_PHI_D_DEG, "theta_h_deg": s["theta_h_deg"].tolist(),
-            "theta_d_deg": s["theta_d_deg"].tolist(), "lum": _grid_json(_luma(s["rgb"]), blank),
-            "missing": np.argwhere(s["missing"]).tolist(), "below_surface": np.argwhere(s["below_surface"]).tolist(),
-            "n_missing": int(s["missing"].sum()), "fitted_lum": fitted,
-        }
+        block["slice"] = _slice_block(brdf, fits)
         block["samples"] = None
+    block["polar"] = _polar_block(brdf, fits, plane)
+    block["albedo"] = _albedo_block(brdf, fits, scattered, albedo_nodes)
+    block["sphere"], files = _sphere_block(brdf, fits, scattered)
+    return block, files
 
-    # polar plots of the plane of incidence
+
+def _samples_block(ti: np.ndarray, so: np.ndarray, rgb: np.ndarray) -> dict[str, Any]:
+    """The measured samples near the plane of incidence (θ_i, θ_o in degrees, RGB in 1/sr), sorted
+    by (θ_i, θ_o) and thinned to at most :data:`MAX_SAMPLES`."""
+    order = np.lexsort((so, ti))
+    ti, so, rgb = ti[order], so[order], rgb[order]
+    n_total = len(ti)
+    if n_total > MAX_SAMPLES:
+        keep = np.arange(0, n_total, math.ceil(n_total / MAX_SAMPLES))
+        ti, so, rgb = ti[keep], so[keep], rgb[keep]
+    return {"max_off_plane_deg": PLANE_TOLERANCE_DEG, "n_in_plane": int(n_total),
+            "n_shown": int(len(ti)), "theta_i_deg": ti.tolist(), "theta_o_deg": so.tolist(),
+            "rgb": rgb.tolist()}
+
+
+def _slice_block(brdf: BRDF, fits: Sequence[tuple[str, BRDF | None]]) -> dict[str, Any]:
+    """The (θ_h, θ_d) slice at φ_d = :data:`SLICE_PHI_D_DEG`: the BRDF's and each fit's luminance."""
+    s = halfdiff_slice(brdf)
+    blank = s["missing"] | s["below_surface"]
+    fitted: dict[str, Any] = {}
+    for model, fb in fits:
+        if fb is None:
+            fitted[model] = None
+        else:
+            f = halfdiff_slice(fb)
+            fitted[model] = _grid_json(_luma(f["rgb"]), f["below_surface"])
+    return {
+        "phi_d_deg": SLICE_PHI_D_DEG, "theta_h_deg": s["theta_h_deg"].tolist(),
+        "theta_d_deg": s["theta_d_deg"].tolist(), "lum": _grid_json(_luma(s["rgb"]), blank),
+        "missing": np.argwhere(s["missing"]).tolist(), "below_surface": np.argwhere(s["below_surface"]).tolist(),
+        "n_missing": int(s["missing"].sum()), "fitted_lum": fitted,
+    }
+
+
+def _polar_incidence(brdf: BRDF, scattered: bool) -> list[float]:
+    """θ_i of the polar curves (degrees): :data:`POLAR_INCIDENCE_DEG`, or for measured samples the
+    nearest measured incidence (whole degrees) to each."""
+    if not scattered:
+        return list(POLAR_INCIDENCE_DEG)
+    samples = cast("ScatteredBRDF", brdf)  # the BRDFs of kind "scattered" (duck-typed by kind)
+    theta_all = np.degrees(np.arccos(np.clip(np.asarray(samples.L, float)[:, 2], -1.0, 1.0)))
+    levels = np.unique(np.round(theta_all))
+    return sorted({float(levels[np.argmin(np.abs(levels - v))]) for v in POLAR_INCIDENCE_DEG})
+
+
+def _polar_block(brdf: BRDF, fits: Sequence[tuple[str, BRDF | None]],
+                 plane: tuple[np.ndarray, np.ndarray, np.ndarray] | None) -> dict[str, Any]:
+    """Polar curves of the plane of incidence: measured (the samples within 0.5° of θ_i when
+    ``plane`` holds them) and fitted RGB against θ_o, per θ_i."""
     curves = []
-    if scattered:
-        samples = cast("ScatteredBRDF", brdf)  # the BRDFs of kind "scattered" (duck-typed by kind)
-        theta_all = np.degrees(np.arccos(np.clip(np.asarray(samples.L, float)[:, 2], -1.0, 1.0)))
-        levels = np.unique(np.round(theta_all))
-        incidence = sorted({float(levels[np.argmin(np.abs(levels - v))]) for v in POLAR_INCIDENCE_DEG})
-    else:
-        incidence = list(POLAR_INCIDENCE_DEG)
-    for theta_i in incidence:
+    for theta_i in _polar_incidence(brdf, plane is not None):
         L, V = plane_directions(theta_i, POLAR_THETA_DEG)
         curve: dict[str, Any] = {"theta_i_deg": theta_i}
-        if scattered:
+        if plane is not None:
+            ti_all, so_all, rgb_all = plane
             sel = np.abs(ti_all - theta_i) < 0.5
             order = np.argsort(so_all[sel], kind="stable")
             curve["measured_theta_o_deg"] = so_all[sel][order].tolist()
@@ -199,18 +222,24 @@ def _explore(brdf: BRDF, fit_results: Sequence[Any], models: Sequence[str], albe
             curve["measured_rgb"] = _rgb_json(rho, has)
         curve["fitted_rgb"] = {m: (None if fb is None else _rgb_json(fb.eval(L, V))) for m, fb in fits}
         curves.append(curve)
-    block["polar"] = {"theta_o_deg": POLAR_THETA_DEG.tolist(), "curves": curves}
+    return {"theta_o_deg": POLAR_THETA_DEG.tolist(), "curves": curves}
 
-    # directional albedo against θ_v
+
+def _albedo_block(brdf: BRDF, fits: Sequence[tuple[str, BRDF | None]], scattered: bool,
+                  albedo_nodes: int) -> dict[str, Any]:
+    """Directional albedo (RGB) against θ_v at :data:`ALBEDO_CURVE_VIEWS_DEG`, the BRDF's and each fit's."""
     views = tuple(float(v) for v in ALBEDO_CURVE_VIEWS_DEG)
-    block["albedo"] = {
+    return {
         "views_deg": list(views), "nodes": int(albedo_nodes),
         "measured_rgb": None if scattered else directional_albedo(brdf, views, nodes=albedo_nodes).tolist(),
         "fitted_rgb": {m: (None if fb is None else directional_albedo(fb, views, nodes=albedo_nodes).tolist())
                        for m, fb in fits},
     }
 
-    # lit sphere: the BRDF (not scattered samples) and each fit
+
+def _sphere_block(brdf: BRDF, fits: Sequence[tuple[str, BRDF | None]], scattered: bool
+                  ) -> tuple[dict[str, Any], list[ReportImage]]:
+    """Lit spheres of the BRDF (not of scattered samples) and of each fit: the block and the PNG."""
     panels = ([] if scattered else [("brdf", brdf)]) + [(m, fb) for m, fb in fits if fb is not None]
     images, entries = [], []
     for label, b in panels:
@@ -223,10 +252,10 @@ def _explore(brdf: BRDF, fit_results: Sequence[Any], models: Sequence[str], albe
     files = []
     if images:
         files.append(ReportImage(SPHERE_FILE, image_row_plot(images, [e["label"] for e in entries])))
-    block["sphere"] = {"file": SPHERE_FILE if images else None, "size": SPHERE_SIZE,
-                       "light": list(map(float, np.asarray(SPHERE_LIGHT) / np.linalg.norm(SPHERE_LIGHT))),
-                       "view": [0.0, 0.0, 1.0], "irradiance": math.pi, "tone": "filmic", "exposure": 0.0,
-                       "images": entries}
+    block = {"file": SPHERE_FILE if images else None, "size": SPHERE_SIZE,
+             "light": list(map(float, np.asarray(SPHERE_LIGHT) / np.linalg.norm(SPHERE_LIGHT))),
+             "view": [0.0, 0.0, 1.0], "irradiance": math.pi, "tone": "filmic", "exposure": 0.0,
+             "images": entries}
     return block, files
 
 
