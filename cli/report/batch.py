@@ -6,60 +6,11 @@ writes each folder atomically as results arrive and finally ``summary.csv`` and
 ``index.html``. The task never raises: a BRDF that fails (a corrupt file, nothing to
 analyse) comes back as a ``status: failed`` report with its error, and the batch goes on.
 
-Three engines run the same task function:
-
-- serial (``workers=1``): in this process, with per-stage progress, every core for
-  ducc0 and the BLAS (as the library functions use them);
-- ``workers=N``: N worker processes of our own (:func:`_processes`), started with the
-  ``spawn`` method (no fork of a process holding threads or an OpenGL context), one task
-  at a time each, over a pipe;
-- ``scheduler=ADDRESS``: a Dask ``distributed`` cluster (``Client.submit``); the
-  workers need shrmkit installed and the BRDF files readable at the same paths. Results
-  come back to this process, which writes them, so workers need no shared output folder.
-
-Scaling (``threads.py``): a worker process gets its share of the cores, cores // N
-threads (at least 1) for ducc0, the BLAS and the preview, set once when it starts (the
-pool's ``initializer``; a Dask worker process at its first task, with cores // the task
-threads of all workers on its host); ``ReportTask.nthreads`` passes the same number to
-ducc0. Worker processes import the report modules once, at start. Tasks are submitted
-largest first (:func:`estimate_cost`), so that a long BRDF does not start last and finish
-alone; the summary keeps the input order.
-
-Results do not depend on the engine or the threads (every random choice is seeded per
-BRDF, and the SHTs give the same numbers on any number of threads).
-
-Folder names are the file stem or the sanitized spec (:func:`report_names`), at most
-:data:`MAX_NAME_CHARS` characters: a longer one is cut and a short hash of the full stem or
-spec is added, so a 245-character file name still gives a folder (and its temporary
-siblings) the file system accepts, and two long names that share their first characters
-stay apart. A folder that cannot be written fails that BRDF alone; if the engine itself
-breaks (the Dask cluster goes away), the BRDFs without a result are marked failed. In every
-case the summary is written.
-
-Lifetime of worker processes (issues 28 and 30):
-
-- A worker process that dies (killed, out of memory) loses only its task, which is retried
-  once on a new worker process (``progress("retry", …)``, a note in the summary); a task
-  whose second worker dies too is a failed report (:data:`TASK_TRIES`).
-- SIGINT or SIGTERM (``shrm report`` turns both into :class:`BatchInterrupted`; a library
-  caller's Ctrl-C is a ``KeyboardInterrupt``) stops the batch: the workers are terminated and
-  joined, the summary lists the reports written so far, and :class:`BatchInterrupted` tells
-  how many were written. Workers ignore SIGINT (Ctrl-C reaches the whole process group; the
-  driver stops them), and exit by themselves when the driver is gone, even killed with
-  SIGKILL (``PR_SET_PDEATHSIG`` on Linux, and a thread that watches ``os.getppid()``): no
-  worker is left computing, or holding the caller's stdout/stderr pipes open.
-- On a Dask cluster (``scheduler=``), a worker that dies while it runs a task (the scheduler's
-  ``remove-worker`` event, and the task's own start event, :func:`_dask_started`) costs that task
-  one retry, which the scheduler makes on another worker (one ``progress("retry", …)`` line and
-  a note); a second death, or the scheduler's own ``KilledWorker``, is one failed report, and the
-  other tasks go on. A scheduler lost for :data:`DASK_SCHEDULER_LOST_SECONDS` stops the batch
-  with one line ("lost the Dask scheduler …"), the reports without a result failed in the
-  summary; distributed's loggers are held at CRITICAL meanwhile (no 30-line tracebacks).
-- The temporary files and folders of a run killed while writing (``.NAME.XXXXXXXX.tmp``,
-  ``.NAME.XXXXXXXX.old``, ``.summary.csv.XXXXXXXX.csv``, ``.index.html.XXXXXXXX.html``) are
-  removed by the next run into the same folder, unless another run into that folder is
-  alive: each run holds a lock on its own ``.shrm-report-run.XXXXXXXX.lock`` there, removed
-  when it ends (:func:`_remove_stale_temporaries`).
+:func:`run_batch` runs the tasks in this process (``workers=1``), in N worker processes of our
+own (``workers=N``) or on a Dask ``distributed`` cluster (``scheduler=ADDRESS``), largest first
+(:func:`estimate_cost`), each worker with its share of the cores (``threads.py``); the same
+results on every engine. Its docstring states the engines, the folder names
+(:func:`report_names`) and the lifetime of worker processes (retries, signals, stale temporaries).
 """
 
 from __future__ import annotations
@@ -750,6 +701,63 @@ def run_batch(
     -------
     BatchResult
         ``n_failed`` counts the BRDFs whose report failed (they are in the summary).
+
+    Notes
+    -----
+    Three engines run the same task function:
+
+    - serial (``workers=1``): in this process, with per-stage progress, every core for
+      ducc0 and the BLAS (as the library functions use them);
+    - ``workers=N``: N worker processes of our own (:func:`_processes`), started with the
+      ``spawn`` method (no fork of a process holding threads or an OpenGL context), one task
+      at a time each, over a pipe;
+    - ``scheduler=ADDRESS``: a Dask ``distributed`` cluster (``Client.submit``); the
+      workers need shrmkit installed and the BRDF files readable at the same paths. Results
+      come back to this process, which writes them, so workers need no shared output folder.
+
+    Scaling (``threads.py``): a worker process gets its share of the cores, cores // N
+    threads (at least 1) for ducc0, the BLAS and the preview, set once when it starts (the
+    pool's ``initializer``; a Dask worker process at its first task, with cores // the task
+    threads of all workers on its host); ``ReportTask.nthreads`` passes the same number to
+    ducc0. Worker processes import the report modules once, at start. Tasks are submitted
+    largest first (:func:`estimate_cost`), so that a long BRDF does not start last and finish
+    alone; the summary keeps the input order.
+
+    Results do not depend on the engine or the threads (every random choice is seeded per
+    BRDF, and the SHTs give the same numbers on any number of threads).
+
+    Folder names are the file stem or the sanitized spec (:func:`report_names`), at most
+    :data:`MAX_NAME_CHARS` characters: a longer one is cut and a short hash of the full stem or
+    spec is added, so a 245-character file name still gives a folder (and its temporary
+    siblings) the file system accepts, and two long names that share their first characters
+    stay apart. A folder that cannot be written fails that BRDF alone; if the engine itself
+    breaks (the Dask cluster goes away), the BRDFs without a result are marked failed. In every
+    case the summary is written.
+
+    Lifetime of worker processes (issues 28 and 30):
+
+    - A worker process that dies (killed, out of memory) loses only its task, which is retried
+      once on a new worker process (``progress("retry", …)``, a note in the summary); a task
+      whose second worker dies too is a failed report (:data:`TASK_TRIES`).
+    - SIGINT or SIGTERM (``shrm report`` turns both into :class:`BatchInterrupted`; a library
+      caller's Ctrl-C is a ``KeyboardInterrupt``) stops the batch: the workers are terminated and
+      joined, the summary lists the reports written so far, and :class:`BatchInterrupted` tells
+      how many were written. Workers ignore SIGINT (Ctrl-C reaches the whole process group; the
+      driver stops them), and exit by themselves when the driver is gone, even killed with
+      SIGKILL (``PR_SET_PDEATHSIG`` on Linux, and a thread that watches ``os.getppid()``): no
+      worker is left computing, or holding the caller's stdout/stderr pipes open.
+    - On a Dask cluster (``scheduler=``), a worker that dies while it runs a task (the scheduler's
+      ``remove-worker`` event, and the task's own start event, :func:`_dask_started`) costs that task
+      one retry, which the scheduler makes on another worker (one ``progress("retry", …)`` line and
+      a note); a second death, or the scheduler's own ``KilledWorker``, is one failed report, and the
+      other tasks go on. A scheduler lost for :data:`DASK_SCHEDULER_LOST_SECONDS` stops the batch
+      with one line ("lost the Dask scheduler …"), the reports without a result failed in the
+      summary; distributed's loggers are held at CRITICAL meanwhile (no 30-line tracebacks).
+    - The temporary files and folders of a run killed while writing (``.NAME.XXXXXXXX.tmp``,
+      ``.NAME.XXXXXXXX.old``, ``.summary.csv.XXXXXXXX.csv``, ``.index.html.XXXXXXXX.html``) are
+      removed by the next run into the same folder, unless another run into that folder is
+      alive: each run holds a lock on its own ``.shrm-report-run.XXXXXXXX.lock`` there, removed
+      when it ends (:func:`_remove_stale_temporaries`).
     """
 
     if not sources:
