@@ -4,7 +4,7 @@ What decides the orders (F, P) of a BRDF ([RH02] §5.1; ``"bands"``: :mod:`~shrm
 travels as this one frozen value from the CLI's options through the options classes to
 :func:`~shrmkit.analysis.orders.choose_orders` and :func:`~shrmkit.analysis.shrm.prefilter`, instead of
 five loose keywords (issue 27). Those keywords are still accepted: :func:`resolve_rule` builds the rule
-from them. ``data_specs/order_rule.md`` documents :meth:`OrderRule.to_json`.
+from them. ``data_specs/view_bands.md`` (the rule as one value) documents :meth:`OrderRule.to_json`.
 """
 
 from __future__ import annotations
@@ -13,14 +13,13 @@ from dataclasses import dataclass, fields, replace
 from typing import Any
 
 from ..brdf_io.errors import BadInputError
+from .defaults import CENSUS_MAX_F_LIMIT as MAX_F_LIMIT  # the caps choose_orders accepts (one home)
+from .defaults import CENSUS_MAX_P_LIMIT as MAX_P_LIMIT
 from .defaults import DEFAULT_CRITERION, DEFAULT_MAX_F, DEFAULT_MAX_P, DEFAULT_MAX_VIEW_DEG
 from .tolerance import DEFAULT_EPS, check_eps
 from .view_bands import check_criterion, check_max_view
 
-__all__ = ["OrderRule", "resolve_rule", "rule_keywords", "RULE_FIELDS", "MAX_F_LIMIT", "MAX_P_LIMIT"]
-
-#: The largest caps :class:`OrderRule` accepts on F and P (those ``choose_orders`` always checked).
-MAX_F_LIMIT, MAX_P_LIMIT = 2000, 64
+__all__ = ["OrderRule", "resolve_rule", "RULE_FIELDS"]
 
 
 @dataclass(frozen=True)
@@ -73,7 +72,7 @@ class OrderRule:
 
     def to_json(self) -> dict[str, Any]:
         """The rule as JSON: ``criterion``, ``max_view_deg``, ``eps``, ``max_F``, ``max_P``
-        (``data_specs/order_rule.md``)."""
+        (``data_specs/view_bands.md``)."""
         return {f.name: getattr(self, f.name) for f in fields(self)}
 
     @classmethod
@@ -96,14 +95,6 @@ def _cap(name: str, value: Any, lo: int, hi: int) -> int:
     return cap
 
 
-def rule_keywords(**keywords: Any) -> dict[str, Any]:
-    """The keywords of :data:`RULE_FIELDS` that were given (not None)."""
-    unknown = set(keywords) - set(RULE_FIELDS)
-    if unknown:
-        raise TypeError(f"not an order rule field: {', '.join(sorted(unknown))}")
-    return {k: v for k, v in keywords.items() if v is not None}
-
-
 def resolve_rule(rule: OrderRule | None = None, *, override: bool = False, **keywords: Any) -> OrderRule:
     """One :class:`OrderRule` from ``rule`` and/or the loose keywords of :data:`RULE_FIELDS`
     (None: not given).
@@ -119,7 +110,10 @@ def resolve_rule(rule: OrderRule | None = None, *, override: bool = False, **key
         ``rule`` is not an :class:`OrderRule`; a keyword given with ``rule`` disagrees with it
         (the message names both); a value out of range (:class:`OrderRule`).
     """
-    given = rule_keywords(**keywords)
+    unknown = set(keywords) - set(RULE_FIELDS)
+    if unknown:
+        raise TypeError(f"not an order rule field: {', '.join(sorted(unknown))}")
+    given = {k: v for k, v in keywords.items() if v is not None}
     if rule is None:
         return OrderRule(**given)
     if not isinstance(rule, OrderRule):
