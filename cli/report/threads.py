@@ -7,30 +7,12 @@ A report task runs three kinds of native threads:
 - the BLAS behind numpy and scipy (OpenBLAS starts one thread per core);
 - the OpenGL preview: Mesa's llvmpipe rasterizer and VTK's SMP tools (one per core).
 
-Left alone, N worker processes on a machine of C cores each use C threads of every kind:
-16 processes on 16 cores could run some 256 threads. Every worker therefore gets
-:func:`threads_per_worker` = C // N threads (at least 1), set **once per process** when it
-starts, by :func:`configure_worker`: the thread variables of the environment (read by the
-libraries loaded afterwards: llvmpipe, VTK SMP, a lazily loaded BLAS), ``threadpoolctl``
-limits on the BLAS already loaded, and ducc0's thread pool; the task then passes the same
-number as ``nthreads`` to ducc0 explicitly (``ReportTask.nthreads``). The serial engine runs
-in the caller's process and leaves its threads alone (every core, as before).
-
-The same function configures a Dask worker process at its first report task (``batch.py``);
-a Dask worker with T task threads gets C // (all task threads of the workers on its host).
-
-Memory allocator: ``distributed``'s nanny starts every worker process with
-``MALLOC_TRIM_THRESHOLD_=65536``. Setting any such glibc variable switches off glibc's
-dynamic mmap threshold, so every array above 128 KiB is mapped and unmapped afresh and its
-pages faulted in again: a report ran 2.6× slower in such a worker (24.4 s against 9.5 s,
-14 s of it system time). :func:`restore_malloc_thresholds` sets the thresholds glibc's
-dynamic rule would reach (mmap above 32 MiB, trim above 64 MiB) in that case only: the
-worker then keeps more freed memory for reuse (Dask's monitor counts it as unmanaged memory)
-instead of returning it at once.
-
-:func:`configure_worker` also imports everything a report task needs ("warm" worker), so
-the imports (VTK, matplotlib, scipy: about 2 s) happen once per process, at start, and not
-inside the first task.
+Left alone, N worker processes on a machine of C cores each use C threads of every kind (16
+processes on 16 cores: some 256 threads). :func:`configure_worker` gives every worker
+:func:`threads_per_worker` = C // N threads (at least 1), once per process, when it starts (a Dask
+worker at its first report task, ``batch.py``); the serial engine leaves the caller's threads
+alone. It also restores glibc's allocator thresholds in a Dask nanny's worker
+(:func:`restore_malloc_thresholds`) and imports what a report task needs ("warm" worker).
 """
 
 from __future__ import annotations
@@ -141,7 +123,17 @@ def restore_malloc_thresholds() -> bool:
     """When a glibc ``MALLOC_*_`` variable (:data:`MALLOC_ENV_VARS`) has switched off the
     dynamic mmap threshold, set the thresholds it would reach: arrays up to 32 MiB come from
     the heap again instead of fresh pages. Returns whether it changed anything (not glibc,
-    or no such variable: nothing to do)."""
+    or no such variable: nothing to do).
+
+    ``distributed``'s nanny starts every worker process with
+    ``MALLOC_TRIM_THRESHOLD_=65536``. Setting any such glibc variable switches off glibc's
+    dynamic mmap threshold, so every array above 128 KiB is mapped and unmapped afresh and its
+    pages faulted in again: a report ran 2.6× slower in such a worker (24.4 s against 9.5 s,
+    14 s of it system time). :func:`restore_malloc_thresholds` sets the thresholds glibc's
+    dynamic rule would reach (mmap above 32 MiB, trim above 64 MiB) in that case only: the
+    worker then keeps more freed memory for reuse (Dask's monitor counts it as unmanaged memory)
+    instead of returning it at once.
+    """
     global _malloc_restored
     if _malloc_restored:
         return True
@@ -166,6 +158,22 @@ def configure_worker(threads: int, *, warm: bool = True, preview_mode: str | Non
     (:func:`restore_malloc_thresholds`: a Dask nanny's worker). Later calls return the
     number of the first without changing anything. Call it in worker processes only: the
     limits stay for the life of the process.
+
+    Left alone, N worker processes on a machine of C cores each use C threads of every kind:
+    16 processes on 16 cores could run some 256 threads. Every worker therefore gets
+    :func:`threads_per_worker` = C // N threads (at least 1), set **once per process** when it
+    starts, by :func:`configure_worker`: the thread variables of the environment (read by the
+    libraries loaded afterwards: llvmpipe, VTK SMP, a lazily loaded BLAS), ``threadpoolctl``
+    limits on the BLAS already loaded, and ducc0's thread pool; the task then passes the same
+    number as ``nthreads`` to ducc0 explicitly (``ReportTask.nthreads``). The serial engine runs
+    in the caller's process and leaves its threads alone (every core, as before).
+
+    The same function configures a Dask worker process at its first report task (``batch.py``);
+    a Dask worker with T task threads gets C // (all task threads of the workers on its host).
+
+    It also imports everything a report task needs ("warm" worker), so
+    the imports (VTK, matplotlib, scipy: about 2 s) happen once per process, at start, and not
+    inside the first task.
     """
     global _configured, _start_seconds
     with _lock:
