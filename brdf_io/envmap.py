@@ -10,26 +10,10 @@ at θ = (i + ½)π/H, φ = 2π(j + ½)/W (φ from +x toward +y), direction
 probes, Direct3D cube maps (a folder of six faces), OpenEXR files carrying the standard
 ``envmap`` attribute (lat-long or cube, OpenEXR's own conventions, ImfEnvmap) and
 procedural ``builtin:`` specs, and maps each file's own orientation convention into the
-project frame; the rules are written down in data_specs/environment_maps.md. Lat-long files
-are read **y-up by default** (``up="y"``), the convention of nearly every panorama in the wild
-and of the tools that read them: a file is placed as Blender's Environment Texture places it in
-its z-up world (Cycles ``direction_to_equirectangular``: image centre toward +X), as three.js's
-``equirectUv`` places it in its y-up world mapped by (X, Y, Z) = (x, −z, y), and as Mitsuba 3's
-``envmap`` emitter places it in its y-up world mapped by (X, Y, Z) = (z, x, y) (checked against
-Mitsuba's emitter, and on OpenEXR's ``KernerEnvLatLong.exr``, whose ``envmap`` attribute states its
-orientation: the same map turned by −90°); ``up="z"`` reads a file literally in the project
-convention (mirrored for a viewer inside the sphere). :func:`save_env` writes the same y-up
-convention, so a saved map reads back unchanged and opens unmirrored in those tools.
-
-Radiance checks (all sources, :func:`EnvironmentMap` included): NaN and infinite values are
-refused; negative values no larger than :data:`NEGATIVE_CLAMP_FRACTION` (10⁻³) × the map's
-white level (:func:`white_level`: the 99.9th percentile of the per-pixel largest channel) are
-clamped to 0 with a warning that counts them (camera processing leaves such pixels in real
-photographs); larger negatives are refused.
-
-Public objects: :class:`EnvironmentMap`, :func:`load_env`, :func:`save_env`,
-:func:`white_level`, :func:`openexr_envmap_to_latlong`, :data:`OPENEXR_TO_PROJECT`,
-:data:`NEGATIVE_CLAMP_FRACTION`.
+project frame (the rules: data_specs/environment_maps.md); lat-long files are read **y-up by
+default**, as Blender, three.js and Mitsuba 3 place them. :func:`save_env` writes the same y-up
+convention, so a saved map reads back unchanged. Every map's radiance is checked (finite,
+negatives clamped or refused: :class:`EnvironmentMap`).
 """
 
 from __future__ import annotations
@@ -144,12 +128,18 @@ def _interval_overlap(edges_out: np.ndarray, edges_in: np.ndarray) -> np.ndarray
 class EnvironmentMap:
     """Linear radiance on a lat-long grid in the project frame (DESIGN §2).
 
+    Radiance checks (all sources, :func:`EnvironmentMap` included): NaN and infinite values are
+    refused; negative values no larger than :data:`NEGATIVE_CLAMP_FRACTION` (10⁻³) × the map's
+    white level (:func:`white_level`: the 99.9th percentile of the per-pixel largest channel) are
+    clamped to 0 with a warning that counts them (camera processing leaves such pixels in real
+    photographs); larger negatives are refused.
+
     Parameters
     ----------
     radiance
         ``(H, W, 3)`` float32 or float64, finite and non-negative; row 0 is the zenith
         (+z). Stored read-only. Negatives within 10⁻³ × the white level are clamped to 0
-        with a warning (module docstring); NaN, infinities and larger negatives raise
+        with a warning (above); NaN, infinities and larger negatives raise
         :class:`BadInputError`.
     name
         Short name (file stem or built-in name).
@@ -468,6 +458,16 @@ def load_env(
         growing with the column, i.e. mirrored for a viewer inside the sphere). Cube maps,
         probes and OpenEXR ``envmap`` files have their own fixed y-up conventions: ``up`` must
         be None or ``"y"`` for them.
+        Lat-long files are read y-up by default (``up="y"``), the convention of nearly every
+        panorama in the wild and of the tools that read them: a file is placed as Blender's
+        Environment Texture places it in its z-up world (Cycles ``direction_to_equirectangular``:
+        image centre toward +X), as three.js's ``equirectUv`` places it in its y-up world mapped by
+        (X, Y, Z) = (x, −z, y), and as Mitsuba 3's ``envmap`` emitter places it in its y-up world
+        mapped by (X, Y, Z) = (z, x, y) (checked against Mitsuba's emitter, and on OpenEXR's
+        ``KernerEnvLatLong.exr``, whose ``envmap`` attribute states its orientation: the same map
+        turned by −90°); ``up="z"`` reads a file literally in the project convention (mirrored for
+        a viewer inside the sphere). :func:`save_env` writes the same y-up convention, so a saved
+        map reads back unchanged and opens unmirrored in those tools.
     azimuth
         Degrees; the loaded map is rotated about the project +z axis so that a feature
         at φ moves to φ + azimuth (applied last).
