@@ -25,9 +25,6 @@ Euler angles (degrees) in the z-up frame of DESIGN §2, applied roll first:
 - ROLL turns the map about +x (right-handed: +y toward +z) before the other two.
 
 The horizon point at azimuth 0 ends at elevation EL, azimuth AZ.
-
-Public objects: :func:`env_rotation_matrix`, :func:`check_env_rotation`,
-:func:`to_map_frame`, :func:`rotation_about_z`.
 """
 
 from __future__ import annotations

@@ -1,50 +1,19 @@
 """Material snippets for other renderers: Mitsuba 3 (XML, Python dict), pbrt-v4, MaterialX.
 
 A Lambert or Cook–Torrance BRDF (``brdf_io/models.py``) is converted to the closest material
-each renderer offers, as an :class:`ExportedMaterial` that holds the renderer's own parameters
-(``native``, what the snippet writes) and evaluates the BSDF *as that renderer defines it*
-(:meth:`ExportedMaterial.eval`), so that the error of an export can be measured
-(``analysis/material_export.py``) instead of assumed. The snippets are text: :func:`material_text`
-(one function per target in :data:`MATERIAL_TARGETS`), written atomically by
-:func:`write_material`. Layout and mapping: ``data_specs/export.md``.
+each renderer offers (:func:`to_target`; what each target offers is stated there), as an
+:class:`ExportedMaterial` that holds the renderer's own parameters (``native``, what the snippet
+writes) and evaluates the BSDF *as that renderer defines it* (:meth:`ExportedMaterial.eval`), so
+that the error of an export can be measured (``analysis/material_export.py``) instead of assumed.
+The snippets are text: :func:`material_text` (one function per target in :data:`MATERIAL_TARGETS`),
+written atomically by :func:`write_material`. Layout and mapping: ``data_specs/export.md``.
 
-What each target offers (single scattering; the renderers' BSDF definitions):
-
-* **Mitsuba 3** — ``diffuse`` (ρ = R/π), ``roughconductor`` (Beckmann or GGX D, separable
-  Smith G with the same exact GGX / Walter-rational Beckmann G1 as ours, conductor Fresnel of a
-  complex index η + ik, or F = 1 for ``material="none"``, times ``specular_reflectance``) and
-  ``blendbsdf`` ((1 − w)·first + w·second). Exact for Lambert and for Cook–Torrance with
-  f0 = 1; otherwise Schlick's Fresnel becomes the conductor Fresnel closest to it.
-* **pbrt-v4** — ``diffuse`` (reflectance clamped to [0, 1]), ``conductor`` (Trowbridge–Reitz =
-  GGX D, height-correlated Smith G = 1/(1 + Λ(ω_i) + Λ(ω_o)), conductor Fresnel, no scale),
-  ``mix`` (a stochastic choice: (1 − amount)·first + amount·second on average) and
-  ``coateddiffuse`` (a rough dielectric coat over a Lambertian base, ``brdf_io/pbrt_coated.py``),
-  written instead of the mix for a diffuse base under a dielectric-like lobe (ks·f0 ≤ 0.25)
-  when it is the closer of the two. Exact for Lambert only.
-* **MaterialX** ``standard_surface`` — Lambert (``diffuse_roughness`` 0, ``specular`` 0) and a
-  GGX conductor (height-correlated G, Fresnel from Gulbrandsen's artistic IOR of ``base_color``
-  and the edge colour ``specular_color``·``specular``) mixed by ``metalness``; the diffuse and
-  the metal share ``base_color``. Exact for Lambert only.
-
-Public objects: :class:`Conductor`, :class:`ExportedMaterial`, :data:`MATERIAL_TARGETS`,
-:func:`to_target`, :func:`material_text`, :func:`mitsuba_dict`, :func:`write_material`,
-:func:`fresnel_conductor`, :func:`fit_conductor_fresnel`, :func:`lobe_fresnel_weight`, :func:`artistic_ior`,
-:func:`schlick`.
-
-References
-----------
-- W. Jakob et al., *Mitsuba 3* documentation, plugins ``diffuse``, ``roughconductor``,
-  ``blendbsdf`` (mitsuba 3.x, ``src/bsdfs/*.cpp``, ``include/mitsuba/render/microfacet.h``,
-  ``fresnel.h``).
-- M. Pharr, W. Jakob, G. Humphreys, *Physically Based Rendering*, 4th ed. (pbrt-v4), §9.6
-  (Trowbridge–Reitz, height-correlated masking-shadowing), §9.5 (``FrComplex``), §14.3
-  (``CoatedDiffuseBxDF``); the pbrt-v4 scene file format (``Material "conductor"``, ``"mix"``,
-  ``"coateddiffuse"``, ``MakeNamedMaterial``).
-- Autodesk Standard Surface 1.0.1 and the MaterialX 1.39 standard library
-  (``standard_surface.mtlx``, ``mx_artistic_ior``, ``mx_fresnel_conductor``).
-- O. Gulbrandsen, "Artist Friendly Metallic Fresnel", JCGT 3(4), 2014.
-- B. Walter, S. Marschner, H. Li, K. Torrance, "Microfacet Models for Refraction through
-  Rough Surfaces", EGSR 2007 (GGX, Smith G1).
+References: [Mitsuba3] (plugins ``diffuse``, ``roughconductor``, ``blendbsdf``); [PBRT4] §9.5
+(``FrComplex``), §9.6 (Trowbridge–Reitz, height-correlated masking-shadowing), §14.3
+(``CoatedDiffuseBxDF``) and the pbrt-v4 scene file format (``Material "conductor"``, ``"mix"``,
+``"coateddiffuse"``, ``MakeNamedMaterial``); [StdSurface] and [MaterialX] (``standard_surface.mtlx``,
+``mx_artistic_ior``, ``mx_fresnel_conductor``); [Gulbrandsen14]; [Walter07] (GGX, Smith G1).
+Citation keys: ``data_specs/bibliography.md``.
 """
 
 from __future__ import annotations
@@ -640,6 +609,24 @@ def _target(target: str) -> MaterialTarget:
 
 def to_target(brdf: BRDF, target: str) -> ExportedMaterial:
     """Convert a Lambert or Cook–Torrance model to ``target``'s closest material.
+
+    What each target offers (single scattering; the renderers' BSDF definitions):
+
+    * **Mitsuba 3** — ``diffuse`` (ρ = R/π), ``roughconductor`` (Beckmann or GGX D, separable
+      Smith G with the same exact GGX / Walter-rational Beckmann G1 as ours, conductor Fresnel of a
+      complex index η + ik, or F = 1 for ``material="none"``, times ``specular_reflectance``) and
+      ``blendbsdf`` ((1 − w)·first + w·second). Exact for Lambert and for Cook–Torrance with
+      f0 = 1; otherwise Schlick's Fresnel becomes the conductor Fresnel closest to it.
+    * **pbrt-v4** — ``diffuse`` (reflectance clamped to [0, 1]), ``conductor`` (Trowbridge–Reitz =
+      GGX D, height-correlated Smith G = 1/(1 + Λ(ω_i) + Λ(ω_o)), conductor Fresnel, no scale),
+      ``mix`` (a stochastic choice: (1 − amount)·first + amount·second on average) and
+      ``coateddiffuse`` (a rough dielectric coat over a Lambertian base, ``brdf_io/pbrt_coated.py``),
+      written instead of the mix for a diffuse base under a dielectric-like lobe (ks·f0 ≤ 0.25)
+      when it is the closer of the two. Exact for Lambert only.
+    * **MaterialX** ``standard_surface`` — Lambert (``diffuse_roughness`` 0, ``specular`` 0) and a
+      GGX conductor (height-correlated G, Fresnel from Gulbrandsen's artistic IOR of ``base_color``
+      and the edge colour ``specular_color``·``specular``) mixed by ``metalness``; the diffuse and
+      the metal share ``base_color``. Exact for Lambert only.
 
     Raises
     ------
