@@ -1,49 +1,20 @@
 """RGL measured materials (``.bsdf``, Mitsuba 3's ``tensor_file`` container): reader and
-evaluation.
+evaluation ([DJ18]).
 
 The EPFL RGL material database (rgl.epfl.ch/materials) stores each material in the
-adaptive parameterization of Dupuy & Jakob (2018): for every measured incident direction
-ω_i the outgoing directions are not tabulated on an angle grid but on a *warped* unit
-square, the preimage of the half-vector under the sampling map of the material's
-visible-normal distribution (VNDF). The container and the evaluation are specified in
-``data_specs/rgl_bsdf.md``; in short, for light L and view V (unit vectors, normal +z,
-both pointing away from the surface) with half vector H = normalize(L + V)::
+adaptive parameterization of [DJ18]: for every measured incident direction ω_i the outgoing
+directions are not tabulated on an angle grid but on a *warped* unit square, the preimage of the
+half-vector under the sampling map of the material's visible-normal distribution (VNDF).
+:func:`read_rgl` reads a file (:func:`read_tensor_file`, the container) into an :class:`RGLBRDF`,
+whose ``eval`` reproduces Mitsuba 3's ``measured`` plugin to float32 precision, with the table's
+incident direction ω_i played by the view by default, as Mitsuba renders it (``table_direction``;
+the formula, the choice and its sources: :class:`RGLBRDF` and ``data_specs/rgl_bsdf.md``).
 
-    u   = (sqrt(θ_h / (π/2)), frac((φ_h − φ_L + π) / 2π))     half vector in unit coordinates
-    s   = W⁻¹_{θ_L}(u)                                        inverse VNDF warp (``vndf`` field)
-    R   = rgb_{θ_L}(s)                                        bilinear in s, linear in θ_L
-    ρ(L, V) = R · D(u) / (4 σ(L) cos θ_V)                     D = ``ndf``, σ = ``sigma``
-
-(without the factor D/(4σ) when the file's ``jacobian`` flag is 0), written here with
-the table direction ω_i = L. The stored R is the Monte Carlo weight
-f_r cos θ_o / p(ω_o | ω_i) of VNDF sampling, whose density is p = D(ω_h) / (4 σ(ω_i)), so
-dividing by cos θ_o gives ρ without the cosine. R · D/(4σ) is what Mitsuba 3's
-``measured`` plugin (and the authors' reference code ``powitacq``) returns as
-``eval(si.wi, wo)`` = ρ · cos θ_o; this module reproduces it to float32 precision.
-
-**Which direction is ω_i.** Mitsuba's integrators call ``eval`` with ``si.wi`` pointing
-toward the camera (the previous path vertex) and ``wo`` toward the light, so Mitsuba
-renders the data with ω_i = V. The default ``table_direction="view"`` does the same
-(``eval(L, V)`` = the formula above at ω_i = V, ω_o = L), so renders agree with Mitsuba's;
-``table_direction="light"`` (ω_i = L, the direction the gonio-photometer lit the sample
-from) is the explicit alternative. The data are not reciprocal (8–19 % for the vinyls),
-so the two differ; the choice and its sources are in data_specs/rgl_bsdf.md. R does not
-vanish at the horizon, so ρ grows like 1/cos θ_o at grazing ω_o (floored at
-:data:`GRAZING_COS`); θ_i outside the measured range uses the nearest measured slice.
-
-Public objects: :class:`RGLBRDF`, :func:`read_rgl`, :func:`read_tensor_file`,
-:func:`write_tensor_file`, :func:`rgl_anisotropy`, :class:`RGLGamutWarning`, :data:`TENSOR_DTYPES`,
-:data:`GRAZING_COS`, :data:`RGL_INCIDENT`, :data:`DEFAULT_TABLE_DIRECTION`.
-
-References
-----------
-J. Dupuy, W. Jakob, "An Adaptive Parameterization for Efficient Material Acquisition and
-Rendering", ACM Trans. Graph. 37(6) (SIGGRAPH Asia 2018), doi:10.1145/3272127.3275059;
-Mitsuba 3, ``src/bsdfs/measured.cpp`` (the ``measured`` BSDF: ω_i = ``si.wi``),
-``include/mitsuba/render/interaction.h`` (``si.wi = to_local(-ray.d)``: toward the camera),
-``src/integrators/path.cpp`` (``bsdf->eval_pdf(ctx, si, wo = to_local(ds.d))``: wo toward the light),
-``include/mitsuba/core/distr_2d.h`` (``Marginal2D``, continuous variant) and
-``src/core/tensor.cpp`` (the ``tensor_file`` container).
+References: [DJ18]; [Mitsuba3]: ``src/bsdfs/measured.cpp`` (the ``measured`` BSDF: ω_i =
+``si.wi``), ``include/mitsuba/render/interaction.h`` (``si.wi = to_local(-ray.d)``: toward the
+camera), ``src/integrators/path.cpp`` (``bsdf->eval_pdf(ctx, si, wo = to_local(ds.d))``: wo toward
+the light), ``include/mitsuba/core/distr_2d.h`` (``Marginal2D``, continuous variant) and
+``src/core/tensor.cpp`` (the ``tensor_file`` container). Citation keys: ``data_specs/bibliography.md``.
 """
 
 from __future__ import annotations
@@ -450,7 +421,33 @@ def _check_grid(source: object, name: str, shape: tuple[int, ...]) -> None:
 
 
 class RGLBRDF(BRDF):
-    """An isotropic RGL measured material (Dupuy & Jakob 2018), RGB.
+    """An isotropic RGL measured material ([DJ18]), RGB.
+
+    The container and the evaluation are specified in
+    ``data_specs/rgl_bsdf.md``; in short, for light L and view V (unit vectors, normal +z,
+    both pointing away from the surface) with half vector H = normalize(L + V)::
+
+        u   = (sqrt(θ_h / (π/2)), frac((φ_h − φ_L + π) / 2π))     half vector in unit coordinates
+        s   = W⁻¹_{θ_L}(u)                                        inverse VNDF warp (``vndf`` field)
+        R   = rgb_{θ_L}(s)                                        bilinear in s, linear in θ_L
+        ρ(L, V) = R · D(u) / (4 σ(L) cos θ_V)                     D = ``ndf``, σ = ``sigma``
+
+    (without the factor D/(4σ) when the file's ``jacobian`` flag is 0), written here with
+    the table direction ω_i = L. The stored R is the Monte Carlo weight
+    f_r cos θ_o / p(ω_o | ω_i) of VNDF sampling, whose density is p = D(ω_h) / (4 σ(ω_i)), so
+    dividing by cos θ_o gives ρ without the cosine. R · D/(4σ) is what Mitsuba 3's
+    ``measured`` plugin (and the authors' reference code ``powitacq``) returns as
+    ``eval(si.wi, wo)`` = ρ · cos θ_o; this module reproduces it to float32 precision.
+
+    **Which direction is ω_i.** Mitsuba's integrators call ``eval`` with ``si.wi`` pointing
+    toward the camera (the previous path vertex) and ``wo`` toward the light, so Mitsuba
+    renders the data with ω_i = V. The default ``table_direction="view"`` does the same
+    (``eval(L, V)`` = the formula above at ω_i = V, ω_o = L), so renders agree with Mitsuba's;
+    ``table_direction="light"`` (ω_i = L, the direction the gonio-photometer lit the sample
+    from) is the explicit alternative. The data are not reciprocal (8–19 % for the vinyls),
+    so the two differ; the choice and its sources are in data_specs/rgl_bsdf.md. R does not
+    vanish at the horizon, so ρ grows like 1/cos θ_o at grazing ω_o (floored at
+    :data:`GRAZING_COS`); θ_i outside the measured range uses the nearest measured slice.
 
     ``eval(L, V)`` implements data_specs/rgl_bsdf.md, "Evaluation": the half vector is
     mapped through the inverse VNDF warp of the incident elevation θ_L, the RGB table is
