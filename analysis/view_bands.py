@@ -6,47 +6,14 @@ represented exactly there (DESIGN §4). This module states the error per band of
 elevation θ_v = θ_o'/2 (the angle between the view and the normal N = normalize(R + V'),
 [RH02] §3.1), from the coefficients alone — no brute force.
 
-**The identity.** Let T_lq(θ_o') = 2π ∫∫ ρ̂(θ_i', θ_o', φ') f_lq(θ_i') cos(qφ') sin θ_i' dθ_i' dφ'
-(the first and last passes of [RH02] Appendix C, without the θ_o' pass), so that
-T_lq(θ_o') = 2π Σ_p ρ̂_lpq f_pq(θ_o'). For the reflected field B = Σ L_lm ρ̂_lpq 𝒟^l_mq Y_pq
-(DESIGN §5), orthogonality of 𝒟^l_mq over R (∫|𝒟^l_mq|² dΩ = Λ_l²) and of e^{iqφ_o'}
-gives, at a fixed θ_o', the mean square over all reflection directions R and view azimuths
-
-    D(θ_o') = Σ_{l,q} mult_q Λ_l² a_l T_lq(θ_o')² / (2π) / (8π²),    a_l = Σ_m |L_lm|²,
-
-(mult_q = 1 for q = 0, 2 otherwise; the constant 8π² cancels in every ratio below). The
-error of a truncated, windowed SHRM is the same sum with T_lq − T̂_lq, where
-T̂_lq = 2π Σ_{p<=P} σ_lp ρ̂_lpq f_pq for l <= F and 0 beyond. The relative RMS in a band
-[θ_a, θ_b] of θ_v is sqrt(∫ D_err dθ_v / ∫ D dθ_v), with θ_v uniform in angle and R
-uniform on the sphere — exactly the distribution of
-:func:`~shrmkit.analysis.compare.sample_pairs`, so the stated number and the measured
-relative RMS of ``shrm compare`` are the same quantity. Each band is integrated by
-Gauss–Legendre nodes in θ_v, where ρ̂ is sampled afresh (the orders' grid in θ_i' and φ').
-
-**Lighting weights.** Λ_l² a_l = ∫∫ L(ω) L(ω') P_l(ω·ω') dω dω' <= (∫ L dω)² = Λ_0² a_0 for
-non-negative lighting (addition theorem, |P_l| <= 1). A single distant point light (a
-one-pixel sun) has Λ_l² a_l = Λ_0² a_0 for every l, so unit weights — the BRDF-only tables
-below — state the error under a point light, the hardest lighting. Where the lighting
-coefficients are not known (l beyond what the map or the computed lighting holds) the
-bound takes the ceiling Λ_0² a_0; the prediction takes the mean of the last known weights.
-
-**What else is counted** (the SHRM statement, :func:`shrm_view_bands`):
-- the energy the profile does not resolve (l > F0 or q > P0: the node's energy by direct
-  quadrature minus the resolved part — discrete Bessel, non-negative) is error;
-- bilinear lookup in an S × 2S map: the mean square error of a degree-l field is
-  κ_l ≈ (l(l+1))² h⁴/160, h = π/S (measured: 0.0035–0.0095 × (l(l+1))² h⁴ for
-  S = 32–128, l = 1..S−1), at degree l + p for view order p's share of the degree-l energy (the
-  global map of order p has degree up to l + p); the bound takes h⁴/100;
-- the area-averaging of large maps before the SHT (lighting amplitude error
-  δ_l ≈ l(l+1)h_L²/24 of a block h_L; the bound doubles it);
-- float32 storage ((P+1)² terms, each rounded to 2⁻²⁴ relative).
-The bound adds the map terms to the truncation in amplitude, (√a + √b)², divides by the
-resolved signal only and takes a :data:`BOUND_MARGIN` of 5 % for the band quadrature; the
-prediction adds energies and includes the estimated tail. Measured against brute force
-(``tests/analysis/test_view_bands.py``, ``benchmarks/view_bands.py``) the prediction agrees
-with the measured relative RMS to its Monte Carlo error.
+:func:`view_profile` resolves ρ̂ by view elevation (:class:`ViewProfile`: the identity that turns
+coefficients into a band's mean square error), :func:`band_eps_table` and :func:`brdf_view_bands`
+state a truncated BRDF's error per band under a point light, and :func:`shrm_view_bands` states an
+SHRM's (lighting weights, the map's lookup and storage, the unresolved energy; a prediction and a
+bound, :class:`BandStatement`). The bands and what a band states: ``data_specs/view_bands.md``.
 
 Reference: [RH02] §3.1, §5.1 and Appendices B–C (``data_specs/bibliography.md``).
+
 """
 
 from __future__ import annotations
@@ -124,6 +91,23 @@ def _mult(n: int) -> np.ndarray:
 class ViewProfile:
     """ρ̂ resolved by view elevation: T_lq(θ_o') at Gauss–Legendre nodes of each θ_v band.
 
+    **The identity.** Let T_lq(θ_o') = 2π ∫∫ ρ̂(θ_i', θ_o', φ') f_lq(θ_i') cos(qφ') sin θ_i' dθ_i' dφ'
+    (the first and last passes of [RH02] Appendix C, without the θ_o' pass), so that
+    T_lq(θ_o') = 2π Σ_p ρ̂_lpq f_pq(θ_o'). For the reflected field B = Σ L_lm ρ̂_lpq 𝒟^l_mq Y_pq
+    (DESIGN §5), orthogonality of 𝒟^l_mq over R (∫|𝒟^l_mq|² dΩ = Λ_l²) and of e^{iqφ_o'}
+    gives, at a fixed θ_o', the mean square over all reflection directions R and view azimuths
+
+        D(θ_o') = Σ_{l,q} mult_q Λ_l² a_l T_lq(θ_o')² / (2π) / (8π²),    a_l = Σ_m |L_lm|²,
+
+    (mult_q = 1 for q = 0, 2 otherwise; the constant 8π² cancels in every ratio below). The
+    error of a truncated, windowed SHRM is the same sum with T_lq − T̂_lq, where
+    T̂_lq = 2π Σ_{p<=P} σ_lp ρ̂_lpq f_pq for l <= F and 0 beyond. The relative RMS in a band
+    [θ_a, θ_b] of θ_v is sqrt(∫ D_err dθ_v / ∫ D dθ_v), with θ_v uniform in angle and R
+    uniform on the sphere — exactly the distribution of
+    :func:`~shrmkit.analysis.compare.sample_pairs`, so the stated number and the measured
+    relative RMS of ``shrm compare`` are the same quantity. Each band is integrated by
+    Gauss–Legendre nodes in θ_v, where ρ̂ is sampled afresh (the orders' grid in θ_i' and φ').
+
     Attributes
     ----------
     edges_deg
@@ -131,7 +115,7 @@ class ViewProfile:
     theta_v, weight, band
         Nodes θ_v (radians), their dθ_v quadrature weights and band index, each (K,).
     T
-        float64 (F0+1, K, P0+1, 3): T_lq at each node (module docs), q <= P0.
+        float64 (F0+1, K, P0+1, 3): T_lq at each node (above), q <= P0.
     beyond
         (K, 3): the energy density 𝓔(θ_o') − Σ_{l<=F0, q<=P0} mult T²/(2π) the table does
         not resolve (l > F0 or q > P0), >= 0.
@@ -236,7 +220,7 @@ def view_profile(
     brdf: BRDF, grid: ReparamGrid, F0: int, P0: int, edges_deg: tuple[float, ...] = DEFAULT_BAND_EDGES_DEG
 ) -> ViewProfile:
     """Sample ρ̂ at Gauss–Legendre nodes of every θ_v band (the θ_i' and φ' nodes of ``grid``)
-    and transform it in φ' and θ_i' to T_lq (module docs), l <= F0, q <= P0.
+    and transform it in φ' and θ_i' to T_lq (:class:`ViewProfile`), l <= F0, q <= P0.
 
     Cost: n_theta_i × K × n_phi BRDF evaluations (K ≈ 57 nodes for the default bands).
 
@@ -705,7 +689,34 @@ def shrm_view_bands(
     max_view_deg: float = DEFAULT_MAX_VIEW_DEG,
     signal_band_energy: np.ndarray | None = None,
 ) -> BandStatement:
-    """Predicted and bounded relative RMS error of an SHRM per θ_v band (module docs).
+    """Predicted and bounded relative RMS error of an SHRM per θ_v band (the identity of
+    :class:`ViewProfile`, with the terms below).
+
+    **Lighting weights.** Λ_l² a_l = ∫∫ L(ω) L(ω') P_l(ω·ω') dω dω' <= (∫ L dω)² = Λ_0² a_0 for
+    non-negative lighting (addition theorem, |P_l| <= 1). A single distant point light (a
+    one-pixel sun) has Λ_l² a_l = Λ_0² a_0 for every l, so unit weights — the BRDF-only tables
+    (:func:`band_eps_table`, :func:`brdf_view_bands`) — state the error under a point light, the
+    hardest lighting. Where the lighting
+    coefficients are not known (l beyond what the map or the computed lighting holds) the
+    bound takes the ceiling Λ_0² a_0; the prediction takes the mean of the last known weights.
+
+    **What else is counted**:
+
+    - the energy the profile does not resolve (l > F0 or q > P0: the node's energy by direct
+      quadrature minus the resolved part — discrete Bessel, non-negative) is error;
+    - bilinear lookup in an S × 2S map: the mean square error of a degree-l field is
+      κ_l ≈ (l(l+1))² h⁴/160, h = π/S (measured: 0.0035–0.0095 × (l(l+1))² h⁴ for
+      S = 32–128, l = 1..S−1), at degree l + p for view order p's share of the degree-l energy (the
+      global map of order p has degree up to l + p); the bound takes h⁴/100;
+    - the area-averaging of large maps before the SHT (lighting amplitude error
+      δ_l ≈ l(l+1)h_L²/24 of a block h_L; the bound doubles it);
+    - float32 storage ((P+1)² terms, each rounded to 2⁻²⁴ relative).
+
+    The bound adds the map terms to the truncation in amplitude, (√a + √b)², divides by the
+    resolved signal only and takes a :data:`BOUND_MARGIN` of 5 % for the band quadrature; the
+    prediction adds energies and includes the estimated tail. Measured against brute force
+    (``tests/analysis/test_view_bands.py``, ``benchmarks/view_bands.py``) the prediction agrees
+    with the measured relative RMS to its Monte Carlo error.
 
     Parameters
     ----------
