@@ -46,6 +46,11 @@ SHARED_DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
 
 
+#: modules whose tests share a cache made on first use, run as one unit of work under xdist: the
+#: import graph of tests/test_layers.py (1.6 s CPU to parse, once instead of once per worker)
+ONE_UNIT_MODULES = frozenset({"tests/test_layers.py"})
+
+
 @pytest.hookimpl(optionalhook=True)
 def pytest_xdist_make_scheduler(config, log):
     """xdist's ``load`` distribution with a test class as one unit of work (module docstring)."""
@@ -60,6 +65,8 @@ def pytest_xdist_make_scheduler(config, log):
 
         def _split_scope(self, nodeid: str) -> str:
             path, _, rest = nodeid.partition("::")
+            if path in ONE_UNIT_MODULES:
+                return path
             names = rest.split("[", 1)[0].split("::")
             return f"{path}::{names[0]}" if len(names) > 1 else nodeid
 
