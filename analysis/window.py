@@ -356,104 +356,142 @@ def choose_window(
     # RH02's projection rings in the view order p too: its window is in (l, p); the bands rule's
     # view fit does not need one in p, and one there would cost the grazing bands most
     sample.in_view = criterion == "rh02" or profile is None
+    search = _WindowSearch(sample, eps, criterion, profile, max_view_deg, band_energy, projected)
+    if window == "none":
+        before = undershoot(sample(F, False))
+        return search.done(F, 0.0, before, "requested")
+    if window == "lanczos":
+        return search.done(F, 1.0, None, "requested")
+    before = undershoot(sample(F, False))
+    if before <= WINDOW_THRESHOLD:
+        return search.done(F, 0.0, before,
+                           f"auto: undershoot {_pct(before)} of the peak <= threshold {WINDOW_THRESHOLD:.1%}")
+    rings = f"auto: undershoot {_pct(before)} of the peak > threshold {WINDOW_THRESHOLD:.1%}"
+    if criterion == "rh02" or profile is None or top is None or top <= F:
+        return _auto_at_orders(search, F, before, rings)
+    return _auto_raising_order(search, F, top, before, rings)
 
-    def shape(F_: int, t: float) -> np.ndarray | None:
-        return lanczos_sigma(F_, P, t, in_view=sample.in_view) if t > 0.0 else None
 
-    def measure(F_: int, t: float) -> tuple[float, float, float]:
+class _WindowSearch:
+    """One :func:`choose_window` call: the scene, its undershoot samples, and the measures of a
+    window of strength t at order F that the search compares (each sample synthesized once)."""
+
+    def __init__(self, sample: _Sample, eps: float, criterion: str, profile: ViewProfile | None,
+                 max_view_deg: float, band_energy: np.ndarray | None, projected: BRDFCoefficients | None) -> None:
+        self.sample, self.eps, self.criterion, self.profile = sample, eps, criterion, profile
+        self.max_view_deg, self.band_energy, self.projected = max_view_deg, band_energy, projected
+        self.found: dict[int, tuple[float, float]] = {}
+        self._inside: Any = None
+
+    def shape(self, F: int, t: float) -> np.ndarray | None:
+        """σ_lp of the Lanczos window at strength t (None for t = 0)."""
+        return lanczos_sigma(F, self.sample.P, t, in_view=self.sample.in_view) if t > 0.0 else None
+
+    def measure(self, F: int, t: float) -> tuple[float, float, float]:
         """(undershoot, share of negative pairs, undershoot of the normal views) at strength t."""
-        values = sample(F_, t == 1.0) if t in (0.0, 1.0) else _mix(sample(F_, False), sample(F_, True), t)
-        n_normal = sample.normal_pairs(F_)
+        sample = self.sample
+        values = sample(F, t == 1.0) if t in (0.0, 1.0) else _mix(sample(F, False), sample(F, True), t)
+        n_normal = sample.normal_pairs(F)
         return undershoot(values), float(np.mean(values.min(axis=0) < 0.0)), undershoot(values[:, :n_normal])
 
-    def done(F_: int, t: float, before: float | None, reason: str, capped: bool = False) -> WindowChoice:
-        after, fraction, normal = measure(F_, t)
-        sigma = shape(F_, t)
+    def done(self, F: int, t: float, before: float | None, reason: str, capped: bool = False) -> WindowChoice:
+        """The choice (F, t), with the undershoot the sample keeps at it."""
+        after, fraction, normal = self.measure(F, t)
+        sigma = self.shape(F, t)
         if after > 0.0:
             reason += (f"; undershoot left {_pct(after)} of the peak on {_pct(fraction)} of the sampled pairs, "
                        "clamped to 0 at the output")
-        pairs = sample(F_, t > 0.0).shape[1]
-        return WindowChoice(F=int(F_), strength=float(t), sigma=sigma, before=before, after=after,
+        pairs = self.sample(F, t > 0.0).shape[1]
+        return WindowChoice(F=int(F), strength=float(t), sigma=sigma, before=before, after=after,
                             negative_fraction=fraction, normal_after=normal, reason=reason, capped=capped,
-                            pairs=pairs, samples=sample.count)
+                            pairs=pairs, samples=self.sample.count)
 
-    if window == "none":
-        before = undershoot(sample(F, False))
-        return done(F, 0.0, before, "requested")
-    if window == "lanczos":
-        return done(F, 1.0, None, "requested")
-    before = undershoot(sample(F, False))
-    if before <= WINDOW_THRESHOLD:
-        return done(F, 0.0, before, f"auto: undershoot {_pct(before)} of the peak <= threshold {WINDOW_THRESHOLD:.1%}")
-    rings = f"auto: undershoot {_pct(before)} of the peak > threshold {WINDOW_THRESHOLD:.1%}"
-    if criterion == "rh02" or profile is None or top is None or top <= F:
-        # the orders stay: the strength is capped by the error budget
-        t_budget = _strength_budget(criterion, lighting, projected if projected is not None else coefficients,
-                                    coefficients, profile, band_energy, F, P, eps, q_max, max_view_deg, shape)
-        # no room for a window: the fully windowed sample is not needed
-        t = 0.0 if t_budget <= 0.0 else _strength_for(sample(F, False), sample(F, True), WINDOW_THRESHOLD, t_budget)
-        after, _, _ = measure(F, t)
-        reason = rings
-        if t == 0.0:
-            reason += (", not reduced by the Lanczos window" if t_budget > 0.0 else
-                       ", no window: the error budget leaves no room for one")
-        elif after > WINDOW_THRESHOLD:
-            reason += (f", strength capped by the error budget ({_budget_words(criterion)})"
-                       if t >= t_budget and t_budget < 1.0 else ", strength of the least undershoot")
-        capped = after > WINDOW_THRESHOLD and t_budget < 1.0 and t >= t_budget
-        return done(F, t, before, reason, capped=capped)
+    def budget(self, F: int, projected: BRDFCoefficients) -> float:
+        """The largest strength the error allows at F (:func:`_strength_budget`)."""
+        s = self.sample
+        return _strength_budget(self.criterion, s.lighting, projected, s.coefficients, self.profile,
+                                self.band_energy, F, s.P, self.eps, s.q_max, self.max_view_deg, self.shape)
 
-    inside = bands_inside(profile, max_view_deg)
+    def error(self, F: int, t: float) -> float:
+        """The predicted error energy of the worst view band inside the limit (``"bands"``)."""
+        assert self.band_energy is not None  # the "bands" rule is given the lighting's a_l
+        if self._inside is None:
+            self._inside = bands_inside(self.profile, self.max_view_deg)
+        s = self.sample
+        bands = shrm_view_bands(self.profile, s.coefficients, self.band_energy, F, s.P, sigma=self.shape(F, t),
+                                q_max=s.q_max).bands
+        return max(bands[b]["predicted_rel_rms"] ** 2 for b in self._inside)
 
-    def error(F_: int, t: float) -> float:
-        assert band_energy is not None  # the "bands" rule is given the lighting's a_l
-        bands = shrm_view_bands(profile, coefficients, band_energy, F_, P, sigma=shape(F_, t), q_max=q_max).bands
-        return max(bands[b]["predicted_rel_rms"] ** 2 for b in inside)
-
-    found: dict[int, tuple[float, float]] = {}
-
-    def evaluate(F_: int) -> tuple[float, float]:
+    def evaluate(self, F: int) -> tuple[float, float]:
         """(t(F), e(F, t(F))): the strength the undershoot needs at F (none when the bare field does
         not ring there) and the predicted worst-band error energy with it."""
-        if F_ not in found:
-            if undershoot(sample(F_, False)) <= WINDOW_THRESHOLD:
+        if F not in self.found:
+            sample = self.sample
+            if undershoot(sample(F, False)) <= WINDOW_THRESHOLD:
                 t = 0.0
             else:
-                t = _strength_for(sample(F_, False), sample(F_, True), WINDOW_THRESHOLD, 1.0)
-            found[F_] = (t, error(F_, t))
-        return found[F_]
+                t = _strength_for(sample(F, False), sample(F, True), WINDOW_THRESHOLD, 1.0)
+            self.found[F] = (t, self.error(F, t))
+        return self.found[F]
 
-    t0, e0 = evaluate(F)
+
+def _auto_at_orders(search: _WindowSearch, F: int, before: float, rings: str) -> WindowChoice:
+    """``auto`` at the scene's orders: the least strength that removes the undershoot, capped by the
+    error budget (``"rh02"``, or no view profile or no room above F_B)."""
+    sample = search.sample
+    t_budget = search.budget(F, search.projected if search.projected is not None else sample.coefficients)
+    # no room for a window: the fully windowed sample is not needed
+    t = 0.0 if t_budget <= 0.0 else _strength_for(sample(F, False), sample(F, True), WINDOW_THRESHOLD, t_budget)
+    after, _, _ = search.measure(F, t)
+    reason = rings
+    if t == 0.0:
+        reason += (", not reduced by the Lanczos window" if t_budget > 0.0 else
+                   ", no window: the error budget leaves no room for one")
+    elif after > WINDOW_THRESHOLD:
+        reason += (f", strength capped by the error budget ({_budget_words(search.criterion)})"
+                   if t >= t_budget and t_budget < 1.0 else ", strength of the least undershoot")
+    capped = after > WINDOW_THRESHOLD and t_budget < 1.0 and t >= t_budget
+    return search.done(F, t, before, reason, capped=capped)
+
+
+def _auto_raising_order(search: _WindowSearch, F: int, top: int, before: float, rings: str) -> WindowChoice:
+    """``auto`` under the ``"bands"`` rule: the smallest F' in [F_B, top] whose field, with the
+    window its undershoot needs, meets ε in every view band inside the limit (bisection)."""
+    eps = search.eps
+    t0, e0 = search.evaluate(F)
     if e0 <= eps:
-        return done(F, t0, before, rings + _strength_note(t0, measure(F, t0)[0]).replace(";", ",", 1))
+        return search.done(F, t0, before, rings + _strength_note(t0, search.measure(F, t0)[0]).replace(";", ",", 1))
     # the smallest F whose fully windowed field meets ε bounds the answer: there e(F, t) <= ε for
     # every t (each band's error is a convex quadratic in t, at most ε at both ends)
-    F_hi = _first_meeting(lambda f: error(f, 1.0) <= eps and error(f, 0.0) <= eps, F + 1, top)
-    if F_hi is None and evaluate(top)[1] <= eps:
+    F_hi = _first_meeting(lambda f: search.error(f, 1.0) <= eps and search.error(f, 0.0) <= eps, F + 1, top)
+    if F_hi is None and search.evaluate(top)[1] <= eps:
         F_hi = top  # no full window meets ε, but the field at the top order needs less of one
     if F_hi is None:
-        # no order the lighting holds meets ε with the window the undershoot needs: the accuracy
-        # comes first (strength capped by the error budget at the largest order)
-        t_budget = _strength_budget(criterion, lighting, coefficients, coefficients, profile, band_energy, top, P,
-                                    eps, q_max, max_view_deg, shape)
-        t_top = evaluate(top)[0]
-        t = min(t_top, t_budget)
-        note = (f"; capped (window budget): no F up to {top} meets eps {eps:g} in every view band with the window "
-                f"the undershoot needs, F_B raised from {F} to {top} with the strength the error budget allows")
-        return done(top, t, before, rings + note + _strength_note(t, measure(top, t)[0]), capped=True)
+        return _capped_at_top(search, F, top, before, rings)
     lo, hi = F, F_hi
-    evaluate(hi)
+    search.evaluate(hi)
     for _ in range(MAX_BISECTIONS):
         if hi - lo <= 1:
             break
         mid = (lo + hi) // 2
-        if evaluate(mid)[1] <= eps:
+        if search.evaluate(mid)[1] <= eps:
             hi = mid
         else:
             lo = mid
-    t, _ = found[hi]
+    t, _ = search.found[hi]
     raised = f"; F_B raised from {F} to {hi} so that the windowed field meets eps in every view band"
-    return done(hi, t, before, rings + raised + _strength_note(t, measure(hi, t)[0]))
+    return search.done(hi, t, before, rings + raised + _strength_note(t, search.measure(hi, t)[0]))
+
+
+def _capped_at_top(search: _WindowSearch, F: int, top: int, before: float, rings: str) -> WindowChoice:
+    """No order the lighting holds meets ε with the window the undershoot needs: the accuracy comes
+    first (the largest order, strength capped by the error budget there)."""
+    t_budget = search.budget(top, search.sample.coefficients)
+    t_top = search.evaluate(top)[0]
+    t = min(t_top, t_budget)
+    note = (f"; capped (window budget): no F up to {top} meets eps {search.eps:g} in every view band with the "
+            f"window the undershoot needs, F_B raised from {F} to {top} with the strength the error budget allows")
+    return search.done(top, t, before, rings + note + _strength_note(t, search.measure(top, t)[0]), capped=True)
 
 
 #: Bisection steps of :func:`choose_window` between the scene's F_B and the smallest F whose fully
