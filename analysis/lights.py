@@ -244,6 +244,41 @@ def extract_lights(env: EnvironmentMap, mode: str | int = DEFAULT_LIGHTS) -> Ext
     labels, n = _components(Y > threshold)
     if n == 0:
         return Extraction(LightSet.empty(), env, threshold, reference, 0, 0.0)
+    kept, skipped = _compact_regions(Y, row_omega, labels, n, limit)
+    if not kept:
+        return Extraction(LightSet.empty(), env, threshold, reference, skipped, 0.0)
+    residual, floor = _residual_start(env, kept)
+    samples_d, samples_e, samples_k, lights = [], [], [], []
+    pixels_d, pixels_e, pixels_k = [], [], []
+    total_flux = float(Y.astype(np.float64).sum(axis=1) @ row_omega)
+    bright = labels > 0
+    for k, (rows, cols, pix_dirs, centre) in enumerate(kept):
+        excess = _take_region(env, residual, rows, cols, bright, row_omega, floor)
+        d, e, merge = _median_cut(pix_dirs, excess, MAX_SAMPLES_PER_LIGHT)
+        pixels_d.append(pix_dirs)
+        pixels_e.append(excess)
+        pixels_k.append(np.full(len(pix_dirs), k))
+        samples_d.append(d)
+        samples_e.append(e)
+        samples_k.append(np.full(len(d), k))
+        lights.append(_light_record(rows, pix_dirs, centre, excess, row_omega, weights, total_flux, len(d), merge))
+    light_set = LightSet(np.concatenate(samples_d), np.concatenate(samples_e), np.concatenate(samples_k),
+                         tuple(lights))
+    residual_env = EnvironmentMap.derived(residual, name=env.name,
+                                          source=f"{env.source or env.name} without {len(lights)} light(s)")
+    share = float(sum(light.share for light in lights))
+    exact = None
+    if any(light.merge_deg > 0.0 for light in lights):
+        exact = LightSet(np.concatenate(pixels_d), np.concatenate(pixels_e), np.concatenate(pixels_k), tuple(lights))
+    return Extraction(light_set, residual_env, threshold, reference, skipped, share, exact)
+
+
+def _compact_regions(Y: np.ndarray, row_omega: np.ndarray, labels: np.ndarray, n: int, limit: int
+                     ) -> tuple[list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]], int]:
+    """The bright regions that are lights, brightest (by flux) first: those within a cap of
+    :data:`MAX_LIGHT_RADIUS_DEG` about their flux-weighted centre, at most ``limit`` of them, each
+    (rows, cols, pixel directions (m, 3), centre (3,)); and how many regions were left in the map."""
+    height, width = labels.shape
     # every region as its pixel indices (work in proportion to the bright pixels, not the map)
     regions = [np.nonzero(labels == label) for label in range(1, n + 1)] if n <= 4 else \
         [tuple(np.unravel_index(idx, labels.shape)) for idx in _label_indices(labels, n)]
@@ -259,10 +294,14 @@ def extract_lights(env: EnvironmentMap, mode: str | int = DEFAULT_LIGHTS) -> Ext
             skipped += 1
             continue
         kept.append((rows, cols, d, centre))
-    if not kept:
-        return Extraction(LightSet.empty(), env, threshold, reference, skipped, 0.0)
-    residual = env.radiance.copy()  # the map's own type: residual + lights = map to its rounding
-    lit = np.zeros((height, width), dtype=bool)
+    return kept, skipped
+
+
+def _residual_start(env: EnvironmentMap, kept: list[tuple[np.ndarray, ...]]) -> tuple[np.ndarray, float]:
+    """A copy of the map (its own type: residual + lights = map to its rounding) and the floor of
+    the residual: 0, or the smallest normal float32 outside the lights when they are all there is."""
+    residual = env.radiance.copy()
+    lit = np.zeros(residual.shape[:2], dtype=bool)
     for rows, cols, _, _ in kept:
         lit[rows, cols] = True
     floor = 0.0
@@ -271,49 +310,44 @@ def extract_lights(env: EnvironmentMap, mode: str | int = DEFAULT_LIGHTS) -> Ext
         # SHT has something to expand) rather than a black one, which analyses refuse
         floor = float(np.finfo(np.float32).tiny)
         residual[~lit] = floor
-    samples_d, samples_e, samples_k, lights = [], [], [], []
-    pixels_d, pixels_e, pixels_k = [], [], []
-    total_flux = float(Y.astype(np.float64).sum(axis=1) @ row_omega)
-    bright = labels > 0
-    for k, (rows, cols, pix_dirs, centre) in enumerate(kept):
-        ring_r, ring_c = _ring(rows, cols, height, width)
-        outside = ~bright[ring_r, ring_c]
-        ring_r, ring_c = ring_r[outside], ring_c[outside]
-        ring_w = row_omega[ring_r]
-        fill = (residual[ring_r, ring_c].astype(np.float64) * ring_w[:, None]).sum(axis=0) / ring_w.sum() \
-            if ring_r.size else np.zeros(3)
-        original = np.asarray(env.radiance[rows, cols], dtype=np.float64)
-        # rounded to the map's own type first, so that residual + lights = map holds to float64 rounding
-        residual[rows, cols] = np.minimum(original, np.maximum(fill, floor)[None, :])
-        excess = (original - residual[rows, cols].astype(np.float64)) * row_omega[rows][:, None]  # (m, 3) ≥ 0
-        d, e, merge = _median_cut(pix_dirs, excess, MAX_SAMPLES_PER_LIGHT)
-        pixels_d.append(pix_dirs)
-        pixels_e.append(excess)
-        pixels_k.append(np.full(len(pix_dirs), k))
-        samples_d.append(d)
-        samples_e.append(e)
-        samples_k.append(np.full(len(d), k))
-        lum = excess @ weights
-        centre = _centre(pix_dirs, lum) if lum.sum() > 0 else centre
-        el = float(np.degrees(np.arcsin(np.clip(centre[2], -1.0, 1.0))))
-        az = float(np.degrees(np.arctan2(centre[1], centre[0])) % 360.0) % 360.0
-        radius = float(np.degrees(np.arccos(np.clip((pix_dirs @ centre).min(), -1.0, 1.0))))
-        flux_rgb = excess.sum(axis=0)  # (3,) RGB
-        lights.append(Light(
-            direction=(float(centre[0]), float(centre[1]), float(centre[2])), elevation_deg=el, azimuth_deg=az,
-            power=(float(flux_rgb[0]), float(flux_rgb[1]), float(flux_rgb[2])), radius_deg=radius,
-            solid_angle=float(row_omega[rows].sum()), share=float(lum.sum() / total_flux) if total_flux > 0 else 0.0,
-            pixels=int(rows.size), samples=len(d), merge_deg=merge,
-        ))
-    light_set = LightSet(np.concatenate(samples_d), np.concatenate(samples_e), np.concatenate(samples_k),
-                         tuple(lights))
-    residual_env = EnvironmentMap.derived(residual, name=env.name,
-                                          source=f"{env.source or env.name} without {len(lights)} light(s)")
-    share = float(sum(light.share for light in lights))
-    exact = None
-    if any(light.merge_deg > 0.0 for light in lights):
-        exact = LightSet(np.concatenate(pixels_d), np.concatenate(pixels_e), np.concatenate(pixels_k), tuple(lights))
-    return Extraction(light_set, residual_env, threshold, reference, skipped, share, exact)
+    return residual, floor
+
+
+def _take_region(env: EnvironmentMap, residual: np.ndarray, rows: np.ndarray, cols: np.ndarray, bright: np.ndarray,
+                 row_omega: np.ndarray, floor: float) -> np.ndarray:
+    """Fill a light's pixels of ``residual`` (in place) with the solid-angle-weighted mean of the ring
+    of non-bright pixels around it (never above what the pixel held); the excess radiance times each
+    pixel's solid angle, (m, 3) ≥ 0, is the light's power per pixel."""
+    height, width = residual.shape[:2]
+    ring_r, ring_c = _ring(rows, cols, height, width)
+    outside = ~bright[ring_r, ring_c]
+    ring_r, ring_c = ring_r[outside], ring_c[outside]
+    ring_w = row_omega[ring_r]
+    fill = (residual[ring_r, ring_c].astype(np.float64) * ring_w[:, None]).sum(axis=0) / ring_w.sum() \
+        if ring_r.size else np.zeros(3)
+    original = np.asarray(env.radiance[rows, cols], dtype=np.float64)
+    # rounded to the map's own type first, so that residual + lights = map holds to float64 rounding
+    residual[rows, cols] = np.minimum(original, np.maximum(fill, floor)[None, :])
+    return (original - residual[rows, cols].astype(np.float64)) * row_omega[rows][:, None]  # (m, 3) ≥ 0
+
+
+def _light_record(rows: np.ndarray, pix_dirs: np.ndarray, centre: np.ndarray, excess: np.ndarray,
+                  row_omega: np.ndarray, weights: np.ndarray, total_flux: float, n_samples: int, merge: float
+                  ) -> Light:
+    """The :class:`Light` of one region: centre (flux-weighted over the excess), elevation and azimuth
+    in degrees, RGB power, angular radius, solid angle, share of the map's flux, pixels and samples."""
+    lum = excess @ weights
+    centre = _centre(pix_dirs, lum) if lum.sum() > 0 else centre
+    el = float(np.degrees(np.arcsin(np.clip(centre[2], -1.0, 1.0))))
+    az = float(np.degrees(np.arctan2(centre[1], centre[0])) % 360.0) % 360.0
+    radius = float(np.degrees(np.arccos(np.clip((pix_dirs @ centre).min(), -1.0, 1.0))))
+    flux_rgb = excess.sum(axis=0)  # (3,) RGB
+    return Light(
+        direction=(float(centre[0]), float(centre[1]), float(centre[2])), elevation_deg=el, azimuth_deg=az,
+        power=(float(flux_rgb[0]), float(flux_rgb[1]), float(flux_rgb[2])), radius_deg=radius,
+        solid_angle=float(row_omega[rows].sum()), share=float(lum.sum() / total_flux) if total_flux > 0 else 0.0,
+        pixels=int(rows.size), samples=n_samples, merge_deg=merge,
+    )
 
 
 #: (R, V) pairs per view band on which :func:`merge_error_by_band` measures the signal (the SHRM part).
