@@ -23,7 +23,6 @@ from typing import Any
 import ducc0
 import nlopt
 import numpy as np
-from scipy.special import ive
 
 from ...brdf_io.brdf import BRDF
 from ...brdf_io.errors import BadInputError
@@ -57,6 +56,8 @@ def sg_zonal_factors(sigma: float, lmax: int) -> np.ndarray:
     e^{−λ} i_l(λ) = sqrt(π/(2λ)) I_{l+½}(λ) e^{−λ} is evaluated with scipy's scaled Bessel
     function ``ive`` (no overflow for narrow lobes).
     """
+    from scipy.special import ive  # the Gaussian-lobe mode only: ~0.4 s of import every report would pay
+
     lam = 1.0 / float(sigma) ** 2
     l = np.arange(lmax + 1, dtype=np.float64)
     scaled = np.sqrt(np.pi / (2.0 * lam)) * ive(l + 0.5, lam)
