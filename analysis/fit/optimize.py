@@ -280,38 +280,11 @@ def fit_brdf(
     objective = ProjectedObjective(param, samples, metric, energy_conserving)
     if start is not None:
         start = np.atleast_2d(np.asarray(start, dtype=np.float64))
-        if start.ndim != 2 or start.shape[1] != param.dim or len(start) == 0 or not np.all(np.isfinite(start)):
-            raise BadInputError(None, f"start must hold rows of {param.dim} finite shape parameters of {model}, "
-                                f"got shape {start.shape}")
-        candidates = np.clip(start, param.lower, param.upper)
-        seeds = _pick_distinct(candidates, np.array([objective(x) for x in candidates]), param, starts)
+        seeds = _given_seeds(start, model, starts, param, objective)
     else:
         seeds = _global_seeds(brdf, model, lobes, metric, seed, starts, max_theta_deg, energy_conserving, xtol_rel,
                               max_evals, samples, param, objective)
-    total = len(seeds) + 1
-    span = param.upper - param.lower
-    best_x, best_f = seeds[0], np.inf
-    for i, x0 in enumerate(seeds):
-        x, f, _ = _local(objective, param, x0, 0.05 * span, xtol_rel, max_evals)
-        if f < best_f:
-            best_x, best_f = x, f
-        if progress is not None:
-            progress(i + 1, total)
-    x, f, code = _local(objective, param, best_x, 1e-3 * span, xtol_rel * 1e-2, max_evals)
-    if progress is not None:
-        progress(total, total)
-    x = param.canonical(x)
-    _, c = objective.weights(x)
-    fitted, params = param.build(x, c)
-    model_rho = fitted.eval(samples.L, samples.V)
-    errors = error_metrics(samples, model_rho)
-    bands = band_errors(samples, model_rho)
-    status = STATUS_NAMES.get(code, f"UNKNOWN({code})")
-    converged = code in _CONVERGED
-    worst = worst_band(bands)
-    at_bounds = tuple(param.bounds_reached(x, c))
-    nonzero, finite = bool(np.any(c > 0)), all(np.isfinite(v) for v in errors.values())
-    message, success = _verdict(errors, worst, nonzero, finite, status, converged, objective.evaluations, at_bounds)
+    x, code = _local_stage(objective, param, seeds, xtol_rel, max_evals, progress)
     options = {
         "model": model,
         "lobes": int(lobes) if model == "lafortune" else None,
@@ -325,6 +298,54 @@ def fit_brdf(
     }
     if start is not None:  # the local stage ran from given points, not from the global stage's seeds
         options["start"] = np.asarray(start, dtype=np.float64).tolist()
+    return _fit_result(model, param, objective, samples, x, code, seeds, options, t0)
+
+
+def _given_seeds(start: np.ndarray, model: str, starts: int, param: ModelParam, objective: ProjectedObjective
+                 ) -> list[np.ndarray]:
+    """The ``starts`` best distinct of the given starting points (k, dim), clipped to the box."""
+    if start.ndim != 2 or start.shape[1] != param.dim or len(start) == 0 or not np.all(np.isfinite(start)):
+        raise BadInputError(None, f"start must hold rows of {param.dim} finite shape parameters of {model}, "
+                            f"got shape {start.shape}")
+    candidates = np.clip(start, param.lower, param.upper)
+    return _pick_distinct(candidates, np.array([objective(x) for x in candidates]), param, starts)
+
+
+def _local_stage(objective: ProjectedObjective, param: ModelParam, seeds: list[np.ndarray], xtol_rel: float,
+                 max_evals: int, progress: ProgressCallback | None) -> tuple[np.ndarray, int]:
+    """BOBYQA from each seed (initial step 5 % of the box), then a polish of the best (0.1 %, 100×
+    tighter tolerance): the optimum's shape parameters and nlopt's result code of the polish."""
+    total = len(seeds) + 1
+    span = param.upper - param.lower
+    best_x, best_f = seeds[0], np.inf
+    for i, x0 in enumerate(seeds):
+        x, f, _ = _local(objective, param, x0, 0.05 * span, xtol_rel, max_evals)
+        if f < best_f:
+            best_x, best_f = x, f
+        if progress is not None:
+            progress(i + 1, total)
+    x, f, code = _local(objective, param, best_x, 1e-3 * span, xtol_rel * 1e-2, max_evals)
+    if progress is not None:
+        progress(total, total)
+    return x, code
+
+
+def _fit_result(model: str, param: ModelParam, objective: ProjectedObjective, samples: FitSamples, x: np.ndarray,
+                code: int, seeds: list[np.ndarray], options: dict[str, Any], t0: float) -> FitResult:
+    """The fitted model at the optimum x, its errors (overall and by view band), nlopt's status and
+    the verdict."""
+    x = param.canonical(x)
+    _, c = objective.weights(x)
+    fitted, params = param.build(x, c)
+    model_rho = fitted.eval(samples.L, samples.V)
+    errors = error_metrics(samples, model_rho)
+    bands = band_errors(samples, model_rho)
+    status = STATUS_NAMES.get(code, f"UNKNOWN({code})")
+    converged = code in _CONVERGED
+    worst = worst_band(bands)
+    at_bounds = tuple(param.bounds_reached(x, c))
+    nonzero, finite = bool(np.any(c > 0)), all(np.isfinite(v) for v in errors.values())
+    message, success = _verdict(errors, worst, nonzero, finite, status, converged, objective.evaluations, at_bounds)
     return FitResult(
         model=model,
         params=params,
