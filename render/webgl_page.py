@@ -725,13 +725,49 @@ def build_view(
         Bad view values or rotation, a mesh that cannot be loaded or decimated, a budget that
         cannot hold even one small map per environment, an entry of ``more`` that is not an SHRM.
     """
-    pairs = [(shrm, env), *[(s_k, e_k) for s_k, e_k in more]]
-    for k, (s_k, _) in enumerate(pairs):
-        if not isinstance(s_k, SHRM):
-            raise BadInputError(None, f"build_view needs an SHRM (environment {k}), got {type(s_k).__name__}")
+    pairs = _check_pairs(shrm, env, more)
     budget = ViewBudget() if budget is None else budget
     if still not in STILL_RENDERERS:
         raise BadInputError(None, f"still must be one of {', '.join(STILL_RENDERERS)}, got {still!r}")
+    view = _initial_view(env, mode, tone, exposure, azimuth, elevation, zoom, background, env_rotation, len(pairs))
+    is_sphere = mesh is None
+    source_mesh = load_mesh(DEFAULT_MESH if mesh is None else mesh) if not isinstance(mesh, Mesh) else mesh
+    notes: list[str] = []
+    page_mesh, mesh_note = _page_mesh(source_mesh, budget.mesh_bytes)
+    if mesh_note:
+        notes.append(mesh_note)
+    png, renderer, still_note, still_mode = (
+        (bytes(still_png), "given", None, mode) if still_png is not None
+        else _still(shrm, env, unit_mesh(source_mesh), is_sphere, view, budget.still_size, still))
+    if still_note:
+        notes.append(still_note)
+    brdf_name = str(shrm.meta.get("brdf", "BRDF"))
+    names = [str(s_k.meta.get("environment", e_k.name if e_k is not None else "environment")) for s_k, e_k in pairs]
+    title = title or f"{brdf_name} under {names[0]}"
+    env_rows = _background_rows(budget, len(pairs))
+    entries, stored_envs = _environment_entries(pairs, names, env_rows, budget, notes)
+    data = _page_data(title, brdf_name, view, entries, _mesh_payload(page_mesh), renderer, still_mode, notes, budget,
+                      env_rows)
+    sources = webgl_sources()
+    max_bytes = _coefficient_bytes(data, entries, pairs, png, sources, budget)
+    stored_pages: list[PageEnvironment] = []
+    for entry, (s_k, _), name, env_stored in zip(entries, pairs, names, stored_envs, strict=True):
+        entry["shrm"], page = _shrm_payload(s_k, name, env_stored, max_bytes, budget)
+        if page.fit.reduced:
+            notes.append(("" if len(pairs) == 1 else f"{name}: ") + _reduction_note(s_k, page.fit, budget))
+        stored_pages.append(page)
+    data["shrm"] = entries[0]["shrm"]
+    data["notes"] = notes
+    first = stored_pages[0]
+    return ViewPage(data, png, renderer, tuple(notes), first.coeffs, first.env_radiance, page_mesh, first.fit, title,
+                    sources, tuple(stored_pages))
+
+
+def _initial_view(env: EnvironmentMap | None, mode: str, tone: str, exposure: float | None, azimuth: float,
+                  elevation: float, zoom: float, background: bool, env_rotation: tuple[float, ...], n_envs: int
+                  ) -> dict[str, Any]:
+    """The page's initial view (checked): camera, exposure in stops (None: the preview rule, 0
+    without an environment), mode, tone map, background and the lighting's rotation in degrees."""
     _check_view(mode, tone, azimuth, elevation, zoom, exposure)
     rotation = _check_env_angles(env_rotation)
     if exposure is None:
@@ -739,31 +775,62 @@ def build_view(
     view = {"azimuth": float(azimuth), "elevation": float(elevation), "zoom": float(zoom),
             "exposure": round(float(exposure), 3), "mode": mode, "background": bool(background and env is not None),
             "tone": tone, "env_azimuth": rotation[0], "env_elevation": rotation[1], "env_roll": rotation[2]}
-    if len(pairs) > 1:
+    if n_envs > 1:
         view["env_index"] = 0
-    is_sphere = mesh is None
-    source_mesh = load_mesh(DEFAULT_MESH if mesh is None else mesh) if not isinstance(mesh, Mesh) else mesh
-    notes: list[str] = []
-    page_mesh, mesh_note = _page_mesh(source_mesh, budget.mesh_bytes)
-    if mesh_note:
-        notes.append(mesh_note)
-    if still_png is not None:
-        png, renderer, still_note, still_mode = bytes(still_png), "given", None, mode
-    else:
-        png, renderer, still_note, still_mode = _still(shrm, env, unit_mesh(source_mesh), is_sphere, view,
-                                                       budget.still_size, still)
-    if still_note:
-        notes.append(still_note)
-    meta = shrm.meta
-    brdf_name = str(meta.get("brdf", "BRDF"))
-    names = [str(s_k.meta.get("environment", e_k.name if e_k is not None else "environment")) for s_k, e_k in pairs]
-    env_name = names[0]
-    title = title or f"{brdf_name} under {env_name}"
-    # the backgrounds: together at most a quarter of the page when there are several
+    return view
+
+
+def _page_data(title: str, brdf_name: str, view: dict[str, Any], entries: list[dict[str, Any]],
+               mesh: dict[str, Any], renderer: str, still_mode: str, notes: list[str], budget: ViewBudget,
+               env_rows: int) -> dict[str, Any]:
+    """The page's data document (shrmkit-view version 1, ``data_specs/view_html.md``) before the coefficients:
+    the first environment's payloads at the top, every environment's under ``environments``."""
+    data: dict[str, Any] = {
+        "format": "shrmkit-view",
+        "version": 1,
+        "title": title,
+        "brdf": brdf_name,
+        "environment": entries[0]["name"],
+        "camera": {"distance": CAMERA_DISTANCE, "margin": CAMERA_MARGIN},
+        "view": view,
+        "shrm": None,
+        "env": entries[0]["env"],
+        "mesh": mesh,
+        "lights": entries[0]["lights"],
+        "still": {"renderer": renderer, "width": budget.still_size, "height": budget.still_size,
+                  "view": {**view, "mode": still_mode}},
+        "notes": notes,
+        "budget": {"page_bytes": budget.page_bytes, "mesh_bytes": budget.mesh_bytes, "env_rows": env_rows},
+    }
+    if len(entries) > 1:
+        data["environments"] = entries  # entries[0]'s payloads are data's own (the first environment)
+    return data
+
+
+def _check_pairs(shrm: SHRM, env: EnvironmentMap | None, more: Sequence[tuple[SHRM, EnvironmentMap | None]]
+                 ) -> list[tuple[SHRM, EnvironmentMap | None]]:
+    """The page's (SHRM, environment) pairs, the first one first; each must hold an SHRM."""
+    pairs = [(shrm, env), *[(s_k, e_k) for s_k, e_k in more]]
+    for k, (s_k, _) in enumerate(pairs):
+        if not isinstance(s_k, SHRM):
+            raise BadInputError(None, f"build_view needs an SHRM (environment {k}), got {type(s_k).__name__}")
+    return pairs
+
+
+def _background_rows(budget: ViewBudget, n_envs: int) -> int:
+    """Rows of each background map: ``budget.env_rows``, halved (down to 8) while several
+    backgrounds together pass a quarter of the page."""
     env_rows = budget.env_rows
-    if len(pairs) > 1:
-        while env_rows > 8 and len(pairs) * _b64_len(env_rows * 2 * env_rows * 6) > budget.page_bytes // 4:
+    if n_envs > 1:
+        while env_rows > 8 and n_envs * _b64_len(env_rows * 2 * env_rows * 6) > budget.page_bytes // 4:
             env_rows //= 2
+    return env_rows
+
+
+def _environment_entries(pairs: Sequence[tuple[SHRM, EnvironmentMap | None]], names: Sequence[str], env_rows: int,
+                         budget: ViewBudget, notes: list[str]) -> tuple[list[dict[str, Any]], list[np.ndarray | None]]:
+    """Each environment's page entry (name, background, lights; the SHRM comes later) and the
+    background radiance the page stores (None without one); lights' notes go to ``notes``."""
     entries: list[dict[str, Any]] = []
     stored_envs: list[np.ndarray | None] = []
     for (s_k, e_k), name in zip(pairs, names, strict=True):
@@ -773,74 +840,64 @@ def build_view(
             notes.append(lights_note if len(pairs) == 1 else f"{name}: {lights_note}")
         entries.append({"name": name, "shrm": None, "env": env_data, "lights": lights_data})
         stored_envs.append(env_stored)
-    data: dict[str, Any] = {
-        "format": "shrmkit-view",
-        "version": 1,
-        "title": title,
-        "brdf": brdf_name,
-        "environment": env_name,
-        "camera": {"distance": CAMERA_DISTANCE, "margin": CAMERA_MARGIN},
-        "view": view,
-        "shrm": None,
-        "env": entries[0]["env"],
-        "mesh": _mesh_payload(page_mesh),
-        "lights": entries[0]["lights"],
-        "still": {"renderer": renderer, "width": budget.still_size, "height": budget.still_size,
-                  "view": {**view, "mode": still_mode}},
-        "notes": notes,
-        "budget": {"page_bytes": budget.page_bytes, "mesh_bytes": budget.mesh_bytes, "env_rows": env_rows},
-    }
-    if len(pairs) > 1:
-        data["environments"] = entries  # entries[0]'s payloads are data's own (the first environment)
-    sources = webgl_sources()
+    return entries, stored_envs
 
-    def placeholder(s_k: SHRM) -> dict[str, Any]:
-        return {"F": s_k.F, "P": s_k.P, "source": {"P": s_k.P, "height": s_k.height, "width": s_k.width},
-                "height": s_k.height, "width": s_k.width, "cols": 0, "rows": 0, "scale": 1.0,
-                "added_rel_rms": 0.0, "texels": ""}
 
-    # what the page costs without the coefficients: the budget rule gets the rest, shared equally (the
-    # reduction notes and the numbers of the shrm entries are covered by the margin)
+def _shrm_placeholder(s_k: SHRM) -> dict[str, Any]:
+    """An SHRM entry without texels: what the page holds besides the coefficients is measured with it."""
+    return {"F": s_k.F, "P": s_k.P, "source": {"P": s_k.P, "height": s_k.height, "width": s_k.width},
+            "height": s_k.height, "width": s_k.width, "cols": 0, "rows": 0, "scale": 1.0,
+            "added_rel_rms": 0.0, "texels": ""}
+
+
+def _coefficient_bytes(data: dict[str, Any], entries: list[dict[str, Any]],
+                       pairs: Sequence[tuple[SHRM, EnvironmentMap | None]], png: bytes, sources: dict[str, str],
+                       budget: ViewBudget) -> int:
+    """Raw bytes each environment's coefficients may take: what the page costs without them is
+    measured, the budget rule gets the rest, shared equally (the reduction notes and the numbers of
+    the shrm entries are covered by the margin; base64 makes 4 bytes of 3)."""
     for entry, (s_k, _) in zip(entries, pairs, strict=True):
-        entry["shrm"] = placeholder(s_k)
+        entry["shrm"] = _shrm_placeholder(s_k)
     data["shrm"] = entries[0]["shrm"]
-    fixed = len(_render_page(title, data, png, sources).encode("utf-8"))
+    fixed = len(_render_page(data["title"], data, png, sources).encode("utf-8"))
     margin = 2048 * len(pairs)
     room = (budget.page_bytes - fixed - margin) // len(pairs)
     max_bytes = (room // 4) * 3
     if max_bytes <= 0:
         raise BadInputError(None, f"the page budget of {budget.page_bytes} bytes is used up before the SHRM "
                             f"({fixed} bytes for the viewer, mesh, background and still image)")
-    stored_pages: list[PageEnvironment] = []
-    for entry, (s_k, _), name, env_stored in zip(entries, pairs, names, stored_envs, strict=True):
-        fit = fit_coefficients(s_k.coeffs, s_k.P, max_bytes, max_edge=budget.max_edge, min_rows=budget.min_rows)
-        if fit.reduced:
-            H, W = fit.source_shape[1], fit.source_shape[2]
-            h, w = fit.coeffs.shape[1:3]
-            parts = []
-            if (h, w) != (H, W):
-                parts.append(f"coefficient maps {H}x{W} -> {h}x{w} texels")
-            if fit.P != s_k.P:
-                parts.append(f"view order P {s_k.P} -> {fit.P} ({(fit.P + 1) ** 2} of {(s_k.P + 1) ** 2} maps)")
-            notes.append(("" if len(pairs) == 1 else f"{name}: ")
-                         + f"reduced to fit the {budget.page_bytes / 2**20:.3g} MiB page budget: " + ", ".join(parts)
-                         + f"; estimated added error {100 * fit.added_rel_rms:.2g} % relative RMS over all (R, V)")
-        atlas = coefficient_atlas(fit.coeffs)
-        half, scale = _half(atlas)
-        cols, rows = atlas_layout((fit.P + 1) ** 2)
-        h, w = fit.coeffs.shape[1:3]
-        stored = (half.astype(np.float32) / np.float32(scale)).astype(np.float32)
-        stored_maps = np.stack([stored[(c // cols) * h:(c // cols + 1) * h, (c % cols) * w:(c % cols + 1) * w]
-                                for c in range((fit.P + 1) ** 2)])
-        entry["shrm"] = {"F": s_k.F, "P": fit.P, "source": {"P": s_k.P, "height": s_k.height, "width": s_k.width},
-                         "height": h, "width": w, "cols": cols, "rows": rows, "scale": scale,
-                         "added_rel_rms": fit.added_rel_rms, "texels": _b64(half)}
-        stored_pages.append(PageEnvironment(name, stored_maps, env_stored, fit))
-    data["shrm"] = entries[0]["shrm"]
-    data["notes"] = notes
-    first = stored_pages[0]
-    return ViewPage(data, png, renderer, tuple(notes), first.coeffs, first.env_radiance, page_mesh, first.fit, title,
-                    sources, tuple(stored_pages))
+    return max_bytes
+
+
+def _shrm_payload(s_k: SHRM, name: str, env_stored: np.ndarray | None, max_bytes: int, budget: ViewBudget
+                  ) -> tuple[dict[str, Any], PageEnvironment]:
+    """One SHRM fitted to ``max_bytes``: its page entry (half-float atlas in base64) and the maps
+    the page stores, (n_maps, h, w, 3) float32 as the viewer decodes them."""
+    fit = fit_coefficients(s_k.coeffs, s_k.P, max_bytes, max_edge=budget.max_edge, min_rows=budget.min_rows)
+    atlas = coefficient_atlas(fit.coeffs)
+    half, scale = _half(atlas)
+    cols, rows = atlas_layout((fit.P + 1) ** 2)
+    h, w = fit.coeffs.shape[1:3]
+    stored = (half.astype(np.float32) / np.float32(scale)).astype(np.float32)
+    stored_maps = np.stack([stored[(c // cols) * h:(c // cols + 1) * h, (c % cols) * w:(c % cols + 1) * w]
+                            for c in range((fit.P + 1) ** 2)])
+    entry = {"F": s_k.F, "P": fit.P, "source": {"P": s_k.P, "height": s_k.height, "width": s_k.width},
+             "height": h, "width": w, "cols": cols, "rows": rows, "scale": scale,
+             "added_rel_rms": fit.added_rel_rms, "texels": _b64(half)}
+    return entry, PageEnvironment(name, stored_maps, env_stored, fit)
+
+
+def _reduction_note(s_k: SHRM, fit: CoefficientFit, budget: ViewBudget) -> str:
+    """What the budget cut from an SHRM (texels, view order P) and the estimated added error."""
+    H, W = fit.source_shape[1], fit.source_shape[2]
+    h, w = fit.coeffs.shape[1:3]
+    parts = []
+    if (h, w) != (H, W):
+        parts.append(f"coefficient maps {H}x{W} -> {h}x{w} texels")
+    if fit.P != s_k.P:
+        parts.append(f"view order P {s_k.P} -> {fit.P} ({(fit.P + 1) ** 2} of {(s_k.P + 1) ** 2} maps)")
+    return (f"reduced to fit the {budget.page_bytes / 2**20:.3g} MiB page budget: " + ", ".join(parts)
+            + f"; estimated added error {100 * fit.added_rel_rms:.2g} % relative RMS over all (R, V)")
 
 
 def _check_env_angles(angles: Any) -> tuple[float, float, float]:
