@@ -124,6 +124,27 @@ def make_mesh(
         No vertices or no triangles, non-finite vertices, face indices out of range, or
         every face degenerate, naming ``name`` and the offending count.
     """
+    v, f, n = _checked_arrays(vertices, faces, normals, name)
+    f = _drop_degenerate(v, f, name)
+    # keep only the vertices the faces use (renumbering the faces), so that stray points
+    # do not decide the centre and the scale
+    used, f = np.unique(f, return_inverse=True)
+    f = f.reshape(-1, 3).astype(np.int64)
+    v = v[used]
+    if n is not None:
+        n = n[used]
+    n = _unit_normals(v, f, n)
+    if normalize:
+        center = 0.5 * (v.min(axis=0) + v.max(axis=0))
+        radius = float(np.max(np.linalg.norm(v - center, axis=1)))
+        v = (v - center) / radius
+    return Mesh(v, f, n, name)
+
+
+def _checked_arrays(vertices: np.ndarray, faces: np.ndarray, normals: np.ndarray | None, name: str
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """Vertices (n, 3) float64, faces (m, 3) int64 in range, and the normals (n, 3) float64 when
+    they are finite and one per vertex (None otherwise: computed from the faces)."""
     v = np.asarray(vertices, dtype=np.float64)
     f = np.asarray(faces)
     if v.ndim != 2 or v.shape[1] != 3 or v.shape[0] == 0:
@@ -144,6 +165,12 @@ def make_mesh(
     n = None if normals is None else np.asarray(normals, dtype=np.float64)
     if n is not None and (n.shape != v.shape or not np.all(np.isfinite(n))):
         n = None
+    return v, f, n
+
+
+def _drop_degenerate(v: np.ndarray, f: np.ndarray, name: str) -> np.ndarray:
+    """The faces without the degenerate ones (a repeated index, or an area at most 10⁻¹² × the
+    squared extent of the referenced vertices), with a :class:`MeshRepairWarning` giving their count."""
     n_faces = len(f)
     used = np.unique(f)
     extent = float(np.max(v[used].max(axis=0) - v[used].min(axis=0)))
@@ -162,16 +189,15 @@ def make_mesh(
             f"{name}: dropped {int(degenerate.sum())} of {n_faces} faces that are degenerate "
             f"(zero area or a repeated vertex), first is face {first}",
             MeshRepairWarning,
-            stacklevel=2,
+            stacklevel=3,  # make_mesh's caller
         )
         f = f[~degenerate]
-    # keep only the vertices the faces use (renumbering the faces), so that stray points
-    # do not decide the centre and the scale
-    used, f = np.unique(f, return_inverse=True)
-    f = f.reshape(-1, 3).astype(np.int64)
-    v = v[used]
-    if n is not None:
-        n = n[used]
+    return f
+
+
+def _unit_normals(v: np.ndarray, f: np.ndarray, n: np.ndarray | None) -> np.ndarray:
+    """Unit vertex normals (n, 3): the given ones, or area-weighted face averages where they are
+    missing or zero."""
     if n is None:
         n = _vertex_normals(v, f)
     length = np.linalg.norm(n, axis=1)
@@ -181,12 +207,7 @@ def make_mesh(
         length = np.linalg.norm(n, axis=1)
         if np.any(length <= 1e-300):
             length = np.where(length <= 1e-300, 1.0, length)
-    n = n / length[:, None]
-    if normalize:
-        center = 0.5 * (v.min(axis=0) + v.max(axis=0))
-        radius = float(np.max(np.linalg.norm(v - center, axis=1)))
-        v = (v - center) / radius
-    return Mesh(v, f, n, name)
+    return n / length[:, None]
 
 
 def _parse_params(spec: str, text: str, allowed: dict[str, type]) -> dict[str, float]:
