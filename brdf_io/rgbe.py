@@ -575,23 +575,42 @@ def read_hdr(path: str | Path, check_shape: Callable[[int, int], None] | None = 
     path = Path(path)
     data = read_bytes(path, "image")
     head = _parse_header(path, data)
+    _check_size(path, head, len(data), check_shape)
+    rgbe = _Decoder(path, data, head.pos, head.scanlines, head.scanline_length).run()
+    del data
+    matrix, transform = _pixel_transform(path, head)
+    image = np.empty((head.height, head.width, 3), dtype=np.float32)
+    target = image if head.ydecr else image[::-1]  # pix2loc: row 0 of the result is the top
+    if head.xdecr:
+        target = target[:, ::-1]
+    if not head.ymajor:
+        target = target.transpose(1, 0, 2)  # scanlines are columns
+    _scale_into(path, target, rgbe, matrix, transform)
+    return image
+
+
+def _check_size(path: Path, head: _Header, n_bytes: int, check_shape: Callable[[int, int], None] | None) -> None:
+    """The declared size against the pixel limit, ``check_shape``, the bytes the file holds after
+    the header (the most compact encoding of every scanline) and the memory limit."""
     check_pixels(path, head.height, head.width)
     if check_shape is not None:
         check_shape(head.height, head.width)
     scanlines, length = head.scanlines, head.scanline_length
-    available, needed = len(data) - head.pos, scanlines * _smallest_encoding(length)
+    available, needed = n_bytes - head.pos, scanlines * _smallest_encoding(length)
     if available < needed:
         raise BadInputError(
             path,
             f"truncated RGBE data: {available:,} bytes after the header, but {scanlines:,} scanlines of "
             f"{length:,} pixels need at least {needed:,} in any encoding",
         )
-    check_memory(path, len(data) + HDR_PEAK_BYTES_PER_PIXEL * head.height * head.width,
+    check_memory(path, n_bytes + HDR_PEAK_BYTES_PER_PIXEL * head.height * head.width,
                  f"decoding {head.width} x {head.height} pixels")
-    rgbe = _Decoder(path, data, head.pos, scanlines, length).run()
-    del data
 
-    # per-channel division (EXPOSURE, COLORCORR), then a colour matrix (XYZE, PRIMARIES)
+
+def _pixel_transform(path: Path, head: _Header) -> tuple[np.ndarray | None, np.ndarray | np.float32 | None]:
+    """The header's scalings as (colour matrix or None, transform): per-channel division by
+    EXPOSURE × COLORCORR, then the XYZE or PRIMARIES matrix; the transform is the float32 (3, 3)
+    matrix over the divisors, one divisor for all channels, three divisors, or None (none to apply)."""
     divisor = [head.exposure * c for c in head.colorcorr]
     if not all(math.isfinite(d) and d > 0 for d in divisor):
         raise BadInputError(path, f"EXPOSURE x COLORCORR = {' '.join(f'{d:g}' for d in divisor)} is not finite and > 0")
@@ -607,13 +626,14 @@ def read_hdr(path: str | Path, check_shape: Callable[[int, int], None] | None = 
             transform = None if divisor[0] == 1.0 else np.float32(divisor[0])
         else:
             transform = np.array(divisor, dtype=np.float32)
+    return matrix, transform
 
-    image = np.empty((head.height, head.width, 3), dtype=np.float32)
-    target = image if head.ydecr else image[::-1]  # pix2loc: row 0 of the result is the top
-    if head.xdecr:
-        target = target[:, ::-1]
-    if not head.ymajor:
-        target = target.transpose(1, 0, 2)  # scanlines are columns
+
+def _scale_into(path: Path, target: np.ndarray, rgbe: np.ndarray, matrix: np.ndarray | None,
+                transform: np.ndarray | np.float32 | None) -> None:
+    """Decoded RGBE scanlines (n, length, 4) uint8 into ``target`` (n, length, 3) float32, block by
+    block, with the header's scalings (:func:`_pixel_transform`); BadInputError on overflow."""
+    scanlines, length = rgbe.shape[:2]
     step = max(1, _BLOCK_BYTES // (4 * length))
     for s0 in range(0, scanlines, step):
         pixels = rgbe[s0 : s0 + step]
@@ -632,7 +652,6 @@ def read_hdr(path: str | Path, check_shape: Callable[[int, int], None] | None = 
         if not np.all(np.isfinite(block)):
             raise BadInputError(path, "pixel values overflow float32 after EXPOSURE / COLORCORR / colour conversion")
         target[s0 : s0 + step] = block
-    return image
 
 
 # ------------------------------------------------------------------------------------------- writing
