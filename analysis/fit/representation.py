@@ -282,33 +282,10 @@ def _choose(
     for model in candidates:
         try:
             if model == "zernike":
-                full = fit_zernike_cv(brdf, samples=samples, folds=folds, seed=seed, max_theta_deg=max_theta_deg)
-                # fit_zernike_cv's errors are already held out on the same split
-                worst, err = full.worst, float(full.errors["rel_rms"])
-                tw = full.params["training"]["worst_band"]
-                results.append(CandidateError(
-                    model=model, held_out_worst=worst, held_out_rel_rms=err,
-                    training_rel_rms=float(full.params["training"]["errors"]["rel_rms"]),
-                    training_worst=None if tw is None else BandError(**tw), success=full.success,
-                    detail=f"order {full.params['n_max']} ({full.params['n_coeffs']} terms), "
-                    f"ridge {full.params['ridge']:g}"))
+                result, full = _zernike_candidate(brdf, samples, folds, seed, max_theta_deg)
             else:
-                given = (fits or {}).get(model)
-                full = given if given is not None else fit_brdf(brdf, model, samples=samples, seed=seed,
-                                                                max_theta_deg=max_theta_deg)
-
-                # the folds start from the whole set's optimum and its global stage's seeds, ranked
-                # on the fold (the global stage, 32 · dim evaluations, is not repeated per fold)
-                shared = {} if full.shape is None else {"start": [full.shape, *full.seeds], "starts": FOLD_STARTS}
-
-                def predict(train: FitSamples, test: FitSamples, model: str = model,
-                            shared: dict[str, Any] = shared) -> np.ndarray:
-                    fold_fit = fit_brdf(brdf, model, samples=train, seed=seed, max_theta_deg=max_theta_deg,
-                                        **({"starts": FOLD_STARTS_GLOBAL} | shared))
-                    return fold_fit.brdf.eval(test.L, test.V)
-
-                held = held_out(samples, predict, folds, seed=seed)
-                results.append(_candidate(model, samples, held, full, f"nlopt {full.status}"))
+                result, full = _nlopt_candidate(brdf, model, samples, folds, seed, max_theta_deg, fits)
+            results.append(result)
             full_fits[model] = full
         except BadInputError as err:
             results.append(CandidateError(model=model, held_out_worst=None, held_out_rel_rms=float("nan"),
@@ -324,6 +301,53 @@ def _choose(
     # 1.02, against Cook–Torrance's 2.0 that overshoots a peak), while the energy-weighted error still
     # ranks the models by how much of the material they hold
     best = min(usable, key=lambda r: (not r.success, r.score if r.success else r.held_out_rel_rms))
+    iso, note = _isotropy(samples, isotropy, full_fits, folds, seed)
+    return RepresentationChoice(
+        brdf=full_fits[best.model].brdf, model=best.model, fit=full_fits[best.model], candidates=tuple(results),
+        isotropy=iso, isotropy_note=note, folds=int(folds), seed=int(seed), n_samples=len(samples),
+        seconds=time.perf_counter() - t0, options={"candidates": list(candidates), "max_theta_deg": max_theta_deg},
+    )
+
+
+def _zernike_candidate(brdf: BRDF, samples: FitSamples, folds: int, seed: int, max_theta_deg: float
+                       ) -> tuple[CandidateError, FitResult]:
+    """The Zernike expansion, its order and ridge chosen by cross-validation on the split (its
+    errors are already held out on it)."""
+    full = fit_zernike_cv(brdf, samples=samples, folds=folds, seed=seed, max_theta_deg=max_theta_deg)
+    # fit_zernike_cv's errors are already held out on the same split
+    worst, err = full.worst, float(full.errors["rel_rms"])
+    tw = full.params["training"]["worst_band"]
+    return CandidateError(
+        model="zernike", held_out_worst=worst, held_out_rel_rms=err,
+        training_rel_rms=float(full.params["training"]["errors"]["rel_rms"]),
+        training_worst=None if tw is None else BandError(**tw), success=full.success,
+        detail=f"order {full.params['n_max']} ({full.params['n_coeffs']} terms), "
+        f"ridge {full.params['ridge']:g}"), full
+
+
+def _nlopt_candidate(brdf: BRDF, model: str, samples: FitSamples, folds: int, seed: int, max_theta_deg: float,
+                     fits: Mapping[str, FitResult] | None) -> tuple[CandidateError, FitResult]:
+    """An nlopt model fitted to all samples (or the given fit), its held-out error from a fit per fold."""
+    given = (fits or {}).get(model)
+    full = given if given is not None else fit_brdf(brdf, model, samples=samples, seed=seed,
+                                                    max_theta_deg=max_theta_deg)
+
+    # the folds start from the whole set's optimum and its global stage's seeds, ranked
+    # on the fold (the global stage, 32 · dim evaluations, is not repeated per fold)
+    shared = {} if full.shape is None else {"start": [full.shape, *full.seeds], "starts": FOLD_STARTS}
+
+    def predict(train: FitSamples, test: FitSamples) -> np.ndarray:
+        fold_fit = fit_brdf(brdf, model, samples=train, seed=seed, max_theta_deg=max_theta_deg,
+                            **({"starts": FOLD_STARTS_GLOBAL} | shared))
+        return fold_fit.brdf.eval(test.L, test.V)
+
+    held = held_out(samples, predict, folds, seed=seed)
+    return _candidate(model, samples, held, full, f"nlopt {full.status}"), full
+
+
+def _isotropy(samples: FitSamples, isotropy: bool, full_fits: Mapping[str, FitResult], folds: int, seed: int
+              ) -> tuple[Isotropy | None, str]:
+    """The anisotropy measure (None when not asked, not measurable or refused) and a note saying why not."""
     iso, note = None, ""
     if not isotropy:
         note = "not asked"
@@ -335,8 +359,4 @@ def _choose(
             iso = measure_isotropy(samples, n_max, folds=folds, seed=seed)
         except BadInputError as err:
             note = err.problem
-    return RepresentationChoice(
-        brdf=full_fits[best.model].brdf, model=best.model, fit=full_fits[best.model], candidates=tuple(results),
-        isotropy=iso, isotropy_note=note, folds=int(folds), seed=int(seed), n_samples=len(samples),
-        seconds=time.perf_counter() - t0, options={"candidates": list(candidates), "max_theta_deg": max_theta_deg},
-    )
+    return iso, note
