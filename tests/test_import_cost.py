@@ -32,3 +32,17 @@ def test_prefilter_with_a_sun_imports_no_heavy_scipy() -> None:
     loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
     heavy = sorted({m for m in loaded for h in HEAVY if m == h or m.startswith(h + ".")})
     assert heavy == [], heavy
+
+
+def test_a_report_without_plots_never_imports_matplotlib(tmp_path) -> None:
+    """shrm report --no-plots (a census of a library, issue 22's report cost): every number and
+    table, no matplotlib (its import is ~0.5 s CPU); the same report with plots draws them."""
+    code = ("import sys\n"
+            "from shrmkit.cli.main import main\n"
+            "rc = main(['report', '--quick', 'phong:s=20', '--no-plots', '--preview', 'none', '--out', sys.argv[1],"
+            " '-q', '--no-progress', '--models', 'lafortune'])\n"
+            "print(rc, 'matplotlib' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code, str(tmp_path / "r")], capture_output=True, text=True,
+                         check=True).stdout.split()
+    assert out == ["0", "False"]
+    assert not list((tmp_path / "r").rglob("plot_*.png"))

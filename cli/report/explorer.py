@@ -52,7 +52,7 @@ from ...brdf_io.masked_grid import eval_with_mask
 from ...render.output import to_8bit
 from ...render.preview import PREVIEW_VIEW, PreviewImage
 from ...render.webgl_page import ViewBudget, build_view, view_fragment
-from .plots import image_row_plot
+from .images import image_row_plot
 
 if TYPE_CHECKING:
     from ...brdf_io.cornell import ScatteredBRDF

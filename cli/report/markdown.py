@@ -13,7 +13,7 @@ from collections.abc import Iterator, Sequence
 from typing import Any
 
 from ...analysis.fit.summary import FIT_FAIL_BAND_REL_RMS
-from .plots import PLOT_TITLES, plots_wanted
+from .plot_names import PLOT_TITLES, plots_wanted
 
 __all__ = ["fmt", "md_table", "report_sections", "report_markdown", "LIVE_VIEW_MARK", "live_view_mark"]
 

@@ -35,40 +35,15 @@ from matplotlib.cm import ScalarMappable
 from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
 from matplotlib.ticker import LogFormatter, MaxNLocator, NullLocator
-from PIL import Image, ImageDraw, ImageFont
 
 from ...brdf_io.colour import REC709_LUMA
+from .images import image_row_plot  # re-exported
+from .plot_names import EXPLORER_PLOTS, PLOT_TITLES, plots_wanted  # re-exported
 from .shared_state import MATPLOTLIB_LOCK
 
 __all__ = ["PLOT_TITLES", "EXPLORER_PLOTS", "plots_wanted", "make_plots", "energy_plot", "accuracy_by_p_plot",
            "speed_error_plot", "fit_slices_plot", "fit_bands_plot", "explorer_slice_plot", "explorer_samples_plot",
            "explorer_polar_plot", "explorer_albedo_plot", "image_row_plot", "MISSING_COLOUR", "BELOW_COLOUR"]
-
-PLOT_TITLES = {
-    "energy": "Captured energy against F (RH02 Fig. 6 style)",
-    "accuracy_by_p": "Error against P (RH02 Fig. 8 style, as ε on a log scale)",
-    "speed_error": "Speed against error",
-    "fit_slices": "Measured vs fitted slices (plane of incidence)",
-    "fit_bands": "Fit error by view-elevation band",
-    "explorer_slice": "Image slice θ_h × θ_d (BRDF Explorer)",
-    "explorer_samples": "Measured samples near the plane of incidence",
-    "explorer_polar": "Polar plots of the plane of incidence (BRDF Explorer)",
-    "explorer_albedo": "Directional albedo against θ_v (BRDF Explorer)",
-}
-#: The BRDF views' plots: drawn unless the report's options say ``explorer_plots: false`` (the quick
-#: profile); the others (RH02's energy and ε-by-P plots, speed against error, fit errors by band) are
-#: drawn whenever ``plots`` is.
-EXPLORER_PLOTS = ("fit_slices", "explorer_slice", "explorer_samples", "explorer_polar", "explorer_albedo")
-
-
-def plots_wanted(doc: dict[str, Any]) -> tuple[str, ...]:
-    """The keys of :data:`PLOT_TITLES` the report's options ask for (``plots``, ``explorer_plots``)."""
-    options = doc.get("options", {})
-    if not options.get("plots", True):
-        return ()
-    explorer = options.get("explorer_plots", True)
-    return tuple(k for k in PLOT_TITLES if explorer or k not in EXPLORER_PLOTS)
-
 
 #: Slice cells without a measurement, and cells with L or V below the surface.
 MISSING_COLOUR = (1.0, 0.0, 1.0, 1.0)
@@ -439,30 +414,6 @@ def explorer_albedo_plot(doc: dict[str, Any]) -> bytes:
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, loc="best", title="solid: luminance, dotted: largest channel", title_fontsize=6)
     return _png(fig)
-
-
-def image_row_plot(images: list[np.ndarray], titles: list[str]) -> bytes:
-    """8-bit images (H, W, 3) side by side on white with a title above each (the explorer's lit
-    spheres), as PNG bytes. Composed with Pillow (its bundled FreeType font): a matplotlib figure
-    cost a quick report ~0.3 s CPU for the same picture."""
-    if not images:
-        return b""
-    font = ImageFont.load_default(size=12)
-    gap, top, edge = 12, 20, 6
-    height = max(int(im.shape[0]) for im in images)
-    width = sum(int(im.shape[1]) for im in images) + gap * (len(images) - 1) + 2 * edge
-    canvas = Image.new("RGB", (width, height + top + edge), (255, 255, 255))
-    draw = ImageDraw.Draw(canvas)
-    x = edge
-    for image, title in zip(images, titles, strict=True):
-        tile = Image.fromarray(np.ascontiguousarray(np.asarray(image, np.uint8)[..., :3]))
-        canvas.paste(tile, (x, top))
-        text_width = draw.textlength(title, font=font)
-        draw.text((x + (tile.width - text_width) / 2.0, 3), title, fill=(0, 0, 0), font=font)
-        x += tile.width + gap
-    buf = io.BytesIO()
-    canvas.save(buf, format="PNG", compress_level=6)
-    return buf.getvalue()
 
 
 def make_plots(doc: dict[str, Any], keys: Sequence[str] | None = None) -> dict[str, bytes]:

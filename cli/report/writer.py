@@ -21,9 +21,16 @@ from ...brdf_io.atomic import atomic_path
 from .explorer import LiveView, ReportImage
 from .html import index_html, report_html
 from .markdown import report_markdown
-from .plots import make_plots, plots_wanted
+from .plot_names import plots_wanted
 
 __all__ = ["report_files", "write_folder", "summary_row", "summary_columns", "write_summary"]
+
+
+def _draw(doc: dict[str, Any], keys: Sequence[str]) -> dict[str, bytes]:
+    """``plots.make_plots``: matplotlib (~0.5 s CPU of import) is loaded by the first report that draws."""
+    from .plots import make_plots  # matplotlib: only for a report that draws plots
+
+    return make_plots(doc, keys)
 
 
 def report_files(doc: dict[str, Any], previews: Sequence[Any] = ()) -> dict[str, bytes]:
@@ -34,7 +41,8 @@ def report_files(doc: dict[str, Any], previews: Sequence[Any] = ()) -> dict[str,
     ``previews`` is what ``collect_report`` returns beside the document: preview images
     (``preview_<key>.png``), ``explorer.ReportImage`` (the lit spheres, under their own file
     name) and ``explorer.LiveView`` (live WebGL2 previews, embedded in ``report.html`` only)."""
-    drawn = make_plots(doc, plots_wanted(doc))  # the plots the options ask for
+    wanted = plots_wanted(doc)  # the plots the options ask for; matplotlib is imported only to draw some
+    drawn = _draw(doc, wanted) if wanted else {}
     pngs = {f"plot_{key}.png": data for key, data in drawn.items()}
     views = []
     for p in previews:
