@@ -252,14 +252,17 @@ def _environments(brdf: BRDF, options: ReportOptions, choices: dict[float, Order
         if name != env.name:
             env = dataclasses.replace(env, name=name)
         _stage(progress, f"reference {env.name}")
-        t0 = time.perf_counter()
-        reference = reference_radiance(env, brdf, R, V)
-        ref_seconds = time.perf_counter() - t0
         # per view band: pairs drawn per band, R importance-sampled from the map's bright pixels and
         # stratified, so the standard error matches the spread over seeds (analysis.compare.band_error)
         sample = band_sample(env.radiance, pairs_per_band(options.n_pairs, len(BAND_EDGES) - 1), BAND_EDGES,
                              seed=options.seed)
+        t0, c0 = time.perf_counter(), time.thread_time()
+        reference = reference_radiance(env, brdf, R, V)
+        ref_seconds = time.perf_counter() - t0
         reference_b = reference_radiance(env, brdf, sample.R, sample.V)
+        # the brute force's CPU per pair (this thread; both sets: every pair sums every pixel), the
+        # speed-up's numerator: CPU time, unlike wall time, does not follow the machine's load
+        ref_cpu_per_pair = (time.thread_time() - c0) / (len(R) + len(sample.R))
         lighting = lighting_coefficients(env.radiance, env.height - 1, name=env.name, nthreads=max(nthreads, 1))
         entry: dict[str, Any] = {
             "name": env.name,
@@ -274,12 +277,16 @@ def _environments(brdf: BRDF, options: ReportOptions, choices: dict[float, Order
         rows_before = len(speed_rows)
         for tol in order:
             _stage(progress, f"prefilter {env.name} eps={tol:g}")
+            c0 = time.process_time()  # every thread of the process: the SHTs' too (an upper bound in a threaded batch)
             shrm = prefilter(env, brdf, rule=options.rule.replace(eps=tol), window=options.window, nthreads=nthreads,
                              orders=choices[tol], lights=options.lights)
+            prefilter_cpu = time.process_time() - c0
             err = relative_rms(shrm.radiance(R, V), reference)  # clamped at 0, as rendered
             bands = beside_measured(band_error(shrm.radiance(sample.R, sample.V), reference_b, sample),
                                     shrm.meta["view_bands"])
             row = _speed_row(env.name, tol, shrm, bands, err, ref_seconds / options.n_pairs)
+            row.update(prefilter_cpu_seconds=prefilter_cpu,
+                       reference_map_cpu_seconds=ref_cpu_per_pair * (shrm.height * shrm.width))
             speed_rows.append(row)
             if tol == options.eps:
                 entry.update(_main_entry(row, shrm.info, options))
