@@ -61,6 +61,8 @@ def __getattr__(name: str) -> Any:
         value = getattr(importlib.import_module(_LAZY[name]), name)
         globals()[name] = value
         return value
+    if name in ("brdf_io", "analysis", "render", "cli"):  # the sub-packages, on first read
+        return importlib.import_module(f"shrmkit.{name}")
     raise AttributeError(f"module 'shrmkit' has no attribute {name!r}")
 
 

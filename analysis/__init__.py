@@ -12,11 +12,11 @@ in ``__all__``, importable from ``shrmkit.analysis``:
   :class:`BandStatement`, one view band's stated error (``data_specs/view_bands.md``).
 - The pieces of the pipeline: :func:`rho_lpq` ([RH02] eq. 13) → :class:`BRDFCoefficients`;
   :func:`lighting_coefficients` → :class:`LightingCoefficients`; :func:`scene_orders` →
-  :class:`SceneOrders` and :func:`residual_bound`; :func:`real_sph_harm` (the real SH basis of
-  DESIGN §2).
+  :class:`SceneOrders` and :func:`residual_bound`; :func:`real_sph_harm` (DESIGN §2's real basis).
 - Explicit lights beside the SHRM (DESIGN §5a): :func:`extract_lights`, :class:`LightSet`, :class:`Light`.
 - The brute-force reference (the ground truth of the tests): :func:`reference_radiance`,
-  :func:`reference_map`; the predicted error of a render's pixels: :func:`predicted_error`.
+  :func:`reference_map`; the predicted error of a render's pixels: :func:`predicted_error`; a band's
+  statement read over a region of reflection directions: :func:`region_bounds`.
 - BRDF checks and views: :func:`directional_albedo`, :func:`reciprocity_check`,
   :func:`halfdiff_slice` [Rus98], :func:`lit_sphere`.
 
@@ -39,6 +39,7 @@ _LAZY = {
     "SHRM": "shrmkit.analysis.shrm",
     "prefilter": "shrmkit.analysis.shrm",
     "load_shrm": "shrmkit.analysis.shrm",
+    "region_bounds": "shrmkit.analysis.pixels",
     "PrefilterInfo": "shrmkit.analysis.records",
     "WindowInfo": "shrmkit.analysis.records",
     "LightsInfo": "shrmkit.analysis.records",

@@ -12,7 +12,25 @@ import sys
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
-__all__ = ["lazy_exports"]
+__all__ = ["lazy_exports", "submodule"]
+
+
+def submodule(package: str, name: str) -> Any:
+    """The sub-package or module ``package.name``, imported on first read of the attribute (as after
+    ``import package.name``: ``shrmkit.render.RENDER_MODES`` works after a bare ``import shrmkit``).
+
+    Raises
+    ------
+    AttributeError
+        ``name`` is private (``_…``) or no such module exists.
+    """
+    if not name.startswith("_"):
+        try:
+            return importlib.import_module(f"{package}.{name}")
+        except ModuleNotFoundError as missing:
+            if missing.name != f"{package}.{name}":
+                raise  # the module exists and failed to import one of its own dependencies
+    raise AttributeError(f"module {package!r} has no attribute {name!r}")
 
 
 def lazy_exports(package: str, table: Mapping[str, str], names: Sequence[str]
@@ -24,7 +42,7 @@ def lazy_exports(package: str, table: Mapping[str, str], names: Sequence[str]
     Raises
     ------
     AttributeError
-        (from ``__getattr__``) a name the table does not hold.
+        (from ``__getattr__``) a name the table does not hold that is no module of the package either.
     """
 
     def __getattr__(name: str) -> Any:
@@ -32,7 +50,7 @@ def lazy_exports(package: str, table: Mapping[str, str], names: Sequence[str]
             value = getattr(importlib.import_module(table[name]), name)
             setattr(sys.modules[package], name, value)
             return value
-        raise AttributeError(f"module {package!r} has no attribute {name!r}")
+        return submodule(package, name)
 
     def __dir__() -> list[str]:
         return sorted(names)
