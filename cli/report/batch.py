@@ -393,78 +393,99 @@ def _processes(tasks: Sequence[ReportTask], workers: int, progress: BatchProgres
     time; outcomes as they come. A worker that dies is replaced by a new one, and its task
     queued again (:data:`TASK_TRIES`; ``retried`` collects a note per retry). Leaving the
     generator early (an exception, ``close()``) terminates the workers."""
-    context = multiprocessing.get_context("spawn")
-    threads = threads_per_worker(workers)
-    preview_mode = tasks[0].preview_mode if tasks else None
-    pending = deque(dataclasses.replace(task, nthreads=threads) for task in largest_first(tasks))
-    task: ReportTask | None  # below: the task a worker held, None when it held none
+    pool = _Pool(tasks, workers, progress, retried)
     if progress is not None:
-        for task in pending:
+        for task in pool.pending:
             progress("start", task.name, "queued")
-    tries: dict[str, int] = defaultdict(int)
-    running: list[_Worker] = []
-    stopping: list[_Worker] = []  # sent None: exiting by themselves
     finished = False
+    try:
+        while pool.pending or pool.running:
+            while pool.pending and len(pool.running) < workers:
+                pool.start_worker()
+            running = pool.running
+            ready = set(wait_ready([w.conn for w in running] + [w.process.sentinel for w in running]))
+            for worker in [w for w in running if w.conn in ready or w.process.sentinel in ready]:
+                outcome = pool.collect(worker)
+                if outcome is not None:
+                    yield outcome
+        finished = True
+    finally:
+        _stop(pool.running + pool.stopping, kill=not finished)
 
-    def give(worker: _Worker, task: ReportTask) -> None:
+
+class _Pool:
+    """The worker processes of :func:`_processes`: the tasks queued (largest first), the workers
+    running one task each, those told to exit, and how often each task was given out."""
+
+    def __init__(self, tasks: Sequence[ReportTask], workers: int, progress: BatchProgress | None,
+                 retried: list[str] | None) -> None:
+        self.context = multiprocessing.get_context("spawn")
+        self.threads = threads_per_worker(workers)
+        self.preview_mode = tasks[0].preview_mode if tasks else None
+        self.pending = deque(dataclasses.replace(task, nthreads=self.threads) for task in largest_first(tasks))
+        self.progress, self.retried = progress, retried
+        self.tries: dict[str, int] = defaultdict(int)
+        self.running: list[_Worker] = []
+        self.stopping: list[_Worker] = []  # sent None: exiting by themselves
+
+    def give(self, worker: _Worker, task: ReportTask) -> None:
+        """Send ``task`` to ``worker`` (a dead worker is found by the wait, and the task retried)."""
         worker.task = task
-        tries[task.name] += 1
+        self.tries[task.name] += 1
         try:
             worker.conn.send(task)
         except OSError:  # the worker is dead: found by the wait below, and the task retried
             pass
 
-    try:
-        while pending or running:
-            while pending and len(running) < workers:
-                parent_conn, child_conn = context.Pipe()
-                # the target's module imports nothing heavy: the parent-death signal is set before the
-                # report modules load (a driver killed during a worker's imports: worker_boot.py)
-                process = context.Process(target=worker_boot.boot, name="shrm-report-worker", daemon=True,
-                                          args=(WORKER_TARGET, os.getpid(), child_conn, threads, preview_mode,
-                                                os.getpid()))
-                worker = _Worker(process, parent_conn)
-                running.append(worker)  # before its start: a SIGTERM during the start still stops it
-                # multiprocessing's resource tracker, which a spawn starts first, started out of the block:
-                # its start unblocks SIGINT when done, and the worker started next would inherit that
-                resource_tracker.ensure_running()
-                with _sigint_blocked():
-                    process.start()
-                child_conn.close()
-                give(worker, pending.popleft())
-            ready = set(wait_ready([w.conn for w in running] + [w.process.sentinel for w in running]))
-            for worker in [w for w in running if w.conn in ready or w.process.sentinel in ready]:
-                try:
-                    outcome = worker.conn.recv() if worker.conn.poll() else None
-                except (EOFError, OSError):  # the pipe closed: the worker died
-                    outcome = None
-                task, worker.task = worker.task, None
-                if outcome is not None:
-                    if pending:
-                        give(worker, pending.popleft())
-                    else:
-                        running.remove(worker)
-                        stopping.append(worker)
-                        with contextlib.suppress(OSError):
-                            worker.conn.send(None)
-                    yield outcome
-                    continue
-                running.remove(worker)  # the worker died (its pipe closed without an outcome)
-                how = _death(worker.process)
-                worker.conn.close()
-                if task is None:
-                    continue
-                if tries[task.name] < TASK_TRIES:
-                    pending.appendleft(task)
-                    if retried is not None:
-                        retried.append(f"the worker process of {task.name} died ({how}); retried")
-                    if progress is not None:
-                        progress("retry", task.name, how)
-                else:
-                    yield _failed_outcome(task, f"its worker process died {tries[task.name]} times (last: {how})")
-        finished = True
-    finally:
-        _stop(running + stopping, kill=not finished)
+    def start_worker(self) -> None:
+        """Spawn a worker process and give it the next queued task."""
+        parent_conn, child_conn = self.context.Pipe()
+        # the target's module imports nothing heavy: the parent-death signal is set before the
+        # report modules load (a driver killed during a worker's imports: worker_boot.py)
+        process = self.context.Process(target=worker_boot.boot, name="shrm-report-worker", daemon=True,
+                                       args=(WORKER_TARGET, os.getpid(), child_conn, self.threads, self.preview_mode,
+                                             os.getpid()))
+        worker = _Worker(process, parent_conn)
+        self.running.append(worker)  # before its start: a SIGTERM during the start still stops it
+        # multiprocessing's resource tracker, which a spawn starts first, started out of the block:
+        # its start unblocks SIGINT when done, and the worker started next would inherit that
+        resource_tracker.ensure_running()
+        with _sigint_blocked():
+            process.start()
+        child_conn.close()
+        self.give(worker, self.pending.popleft())
+
+    def collect(self, worker: _Worker) -> ReportOutcome | None:
+        """A worker the wait found ready: its outcome (it gets the next task, or is told to exit),
+        or, when it died, None with its task queued again — or the task's failed outcome after
+        :data:`TASK_TRIES` deaths."""
+        try:
+            outcome = worker.conn.recv() if worker.conn.poll() else None
+        except (EOFError, OSError):  # the pipe closed: the worker died
+            outcome = None
+        task, worker.task = worker.task, None
+        if outcome is not None:
+            if self.pending:
+                self.give(worker, self.pending.popleft())
+            else:
+                self.running.remove(worker)
+                self.stopping.append(worker)
+                with contextlib.suppress(OSError):
+                    worker.conn.send(None)
+            return outcome
+        self.running.remove(worker)  # the worker died (its pipe closed without an outcome)
+        how = _death(worker.process)
+        worker.conn.close()
+        if task is None:
+            return None
+        if self.tries[task.name] < TASK_TRIES:
+            self.pending.appendleft(task)
+            if self.retried is not None:
+                self.retried.append(f"the worker process of {task.name} died ({how}); retried")
+            if self.progress is not None:
+                self.progress("retry", task.name, how)
+            return None
+        return _failed_outcome(task, f"its worker process died {self.tries[task.name]} times (last: {how})")
 
 
 # ------------------------------------------------------------------------------------- Dask
@@ -613,43 +634,10 @@ def _dask_run(client: Any, dask_completed: Any, function: Callable[..., ReportOu
                              key=f"shrm-report-{task.name}", priority=len(ordered) - i)
                for i, task in enumerate(ordered)]
     running = {future.key: (future, task) for future, task in zip(futures, ordered, strict=True)}
-    by_key = {key: task for key, (_, task) in running.items()}
     if progress is not None:
         for task in ordered:
             progress("start", task.name, "submitted")
-    deaths: dict[str, int] = defaultdict(int)
-    seen: set[tuple[float, str]] = set()
-    disconnected: float | None = None
-
-    def deaths_seen(final: bool = False) -> Iterator[ReportOutcome]:
-        """Count the task deaths of the workers removed since the last look: a first is one retry line
-        (also for a task whose second run has finished meanwhile), a second a failed report."""
-        nonlocal disconnected
-        try:
-            removed = _removed_workers(client, since, seen)
-            disconnected = None
-        except Exception as err:  # noqa: BLE001 - any comm failure: the scheduler is gone or restarting
-            if final:
-                return
-            disconnected = disconnected or time.monotonic()
-            if time.monotonic() - disconnected > DASK_SCHEDULER_LOST_SECONDS or client.status in ("closed", "closing"):
-                raise RuntimeError(f"lost the Dask scheduler {scheduler} ({type(err).__name__}: "
-                                   f"{str(err).splitlines()[0][:120] if str(err) else 'no answer'})") from None
-            return
-        for worker, keys in removed:
-            for key in sorted(keys & set(by_key)):
-                task = by_key[key]
-                deaths[key] += 1
-                if deaths[key] < TASK_TRIES:
-                    if retried is not None:
-                        retried.append(f"the Dask worker of {task.name} died ({worker}); retried on another worker")
-                    if progress is not None:
-                        progress("retry", task.name, f"Dask worker {worker} was lost")
-                elif key in running:
-                    future, _ = running.pop(key)
-                    future.cancel()
-                    yield _failed_outcome(task, f"its Dask worker died {deaths[key]} times (last: {worker})")
-
+    deaths_seen = _DaskDeaths(client, since, scheduler, running, progress, retried)
     completed = dask_completed(futures, loop=client.loop)
     while running:
         batch = completed.next_batch(block=False)
@@ -657,21 +645,70 @@ def _dask_run(client: Any, dask_completed: Any, function: Callable[..., ReportOu
             entry = running.pop(future.key, None)
             if entry is None:  # cancelled here after a second death: already reported
                 continue
-            task = entry[1]
-            if future.status == "finished":
-                yield future.result()
-                continue
-            if future.status == "cancelled" and client.status != "running":  # the client gave up reconnecting
-                raise RuntimeError(f"lost the Dask scheduler {scheduler} (the client could not reconnect)")
-            err = future.exception() if future.status == "error" else None
-            why = (f"its Dask worker died too often (KilledWorker: {err})" if type(err).__name__ == "KilledWorker"
-                   else f"{type(err).__name__}: {err}" if err is not None else f"the Dask task was {future.status}")
-            yield _failed_outcome(task, why)
+            yield _dask_outcome(client, scheduler, future, entry[1])
         if running:
             yield from deaths_seen()
             if not batch:
                 time.sleep(DASK_POLL_SECONDS)
     yield from deaths_seen(final=True)  # deaths of tasks whose retry finished between two looks
+
+
+def _dask_outcome(client: Any, scheduler: str, future: Any, task: ReportTask) -> ReportOutcome:
+    """The outcome of a Dask future that is done: its result, or a failed report saying why
+    (``KilledWorker``, the task's exception, a cancelled task); a ``RuntimeError`` when the client
+    gave up reconnecting to the scheduler."""
+    if future.status == "finished":
+        return future.result()
+    if future.status == "cancelled" and client.status != "running":  # the client gave up reconnecting
+        raise RuntimeError(f"lost the Dask scheduler {scheduler} (the client could not reconnect)")
+    err = future.exception() if future.status == "error" else None
+    why = (f"its Dask worker died too often (KilledWorker: {err})" if type(err).__name__ == "KilledWorker"
+           else f"{type(err).__name__}: {err}" if err is not None else f"the Dask task was {future.status}")
+    return _failed_outcome(task, why)
+
+
+class _DaskDeaths:
+    """The deaths of report tasks on a Dask cluster, counted at each look (:meth:`__call__`) from the
+    scheduler's ``remove-worker`` events; the scheduler's silence is timed here too."""
+
+    def __init__(self, client: Any, since: float, scheduler: str, running: dict[str, tuple[Any, ReportTask]],
+                 progress: BatchProgress | None, retried: list[str] | None) -> None:
+        self.client, self.since, self.scheduler, self.running = client, since, scheduler, running
+        self.progress, self.retried = progress, retried
+        self.by_key = {key: task for key, (_, task) in running.items()}
+        self.deaths: dict[str, int] = defaultdict(int)
+        self.seen: set[tuple[float, str]] = set()
+        self.disconnected: float | None = None
+
+    def __call__(self, final: bool = False) -> Iterator[ReportOutcome]:
+        """Count the task deaths of the workers removed since the last look: a first is one retry line
+        (also for a task whose second run has finished meanwhile), a second a failed report."""
+        try:
+            removed = _removed_workers(self.client, self.since, self.seen)
+            self.disconnected = None
+        except Exception as err:  # noqa: BLE001 - any comm failure: the scheduler is gone or restarting
+            if final:
+                return
+            self.disconnected = self.disconnected or time.monotonic()
+            if (time.monotonic() - self.disconnected > DASK_SCHEDULER_LOST_SECONDS
+                    or self.client.status in ("closed", "closing")):
+                raise RuntimeError(f"lost the Dask scheduler {self.scheduler} ({type(err).__name__}: "
+                                   f"{str(err).splitlines()[0][:120] if str(err) else 'no answer'})") from None
+            return
+        for worker, keys in removed:
+            for key in sorted(keys & set(self.by_key)):
+                task = self.by_key[key]
+                self.deaths[key] += 1
+                if self.deaths[key] < TASK_TRIES:
+                    if self.retried is not None:
+                        self.retried.append(f"the Dask worker of {task.name} died ({worker}); retried on another "
+                                            "worker")
+                    if self.progress is not None:
+                        self.progress("retry", task.name, f"Dask worker {worker} was lost")
+                elif key in self.running:
+                    future, _ = self.running.pop(key)
+                    future.cancel()
+                    yield _failed_outcome(task, f"its Dask worker died {self.deaths[key]} times (last: {worker})")
 
 
 def run_batch(
@@ -759,7 +796,6 @@ def run_batch(
       alive: each run holds a lock on its own ``.shrm-report-run.XXXXXXXX.lock`` there, removed
       when it ends (:func:`_remove_stale_temporaries`).
     """
-
     if not sources:
         raise BadInputError(None, "no BRDF given")
     if workers < 1:
@@ -777,26 +813,12 @@ def run_batch(
     lock = _lock_run(out)
     try:
         _remove_stale_temporaries(out, lock[1] if lock else None)
-        if scheduler:
-            outcomes, engine = _dask(tasks, scheduler, progress, retried), f"dask ({scheduler})"
-        elif workers > 1 and len(tasks) > 1:
-            n = min(workers, len(tasks))
-            engine = f"{workers} processes, {threads_per_worker(n)} thread(s) each"
-            outcomes = _processes(tasks, n, progress, retried)
-        else:
-            outcomes, engine = _serial(tasks, progress), "serial"
+        outcomes, engine = _engine(tasks, workers, scheduler, progress, retried)
         broken = None
         try:
             for outcome in outcomes:
-                row, ok = outcome.row, outcome.ok
-                try:
-                    write_folder(out, outcome.name, outcome.files)
-                    written += 1
-                except OSError as err:  # this folder alone: the batch goes on
-                    ok = False
-                    row = _failed_row(outcome.name, row.get("source", ""), row.get("total_seconds"),
-                                      f"cannot write the report folder {out / outcome.name}: {err.strerror or err}")
-                rows[outcome.name] = row
+                rows[outcome.name], ok, wrote = _write_outcome(out, outcome)
+                written += wrote
                 if progress is not None:
                     progress("done", outcome.name, "ok" if ok else "failed")
         except Exception as err:  # the engine broke (the Dask cluster went away): the rest fail, the summary is written
@@ -806,32 +828,76 @@ def run_batch(
             broken = f"the {engine} engine stopped: {reason}"
         finally:
             _close(outcomes)  # the engine's workers stop (an exception here, or a generator left early)
-        for task in tasks:
-            if task.name not in rows:
-                rows[task.name] = _failed_row(task.name, task.source, None, f"no result: {broken}")
-                if progress is not None:
-                    progress("done", task.name, "failed")
+        _fail_unfinished(tasks, rows, broken, progress)
         ordered = [rows[n] for n in names]
-        notes = [f"{len(ordered)} BRDFs, engine: {engine}, profile {options.profile}, eps {options.eps:g}."]
-        if note:
-            notes.append(note)
-        notes.extend(f"{r[0].upper()}{r[1:]}." for r in retried)
-        if broken:
-            notes.append(f"Incomplete: {broken}.")
-        _write_index(out, ordered, notes)
+        _write_index(out, ordered, _summary_notes(len(ordered), engine, options, note, retried, broken))
         n_failed = sum(1 for r in ordered if r["status"] != "ok")
         return BatchResult(out, ordered, n_failed, time.perf_counter() - t0, engine)
     except KeyboardInterrupt as stop:  # SIGINT, or SIGTERM turned into BatchInterrupted by `shrm report`
         _close(outcomes)
-        interrupted = BatchInterrupted(getattr(stop, "signum", signal.SIGINT), written, len(tasks), out)
-        done = [rows[n] for n in names if n in rows]
-        notes = [f"Interrupted ({interrupted.signal_name}) after {written} of {len(tasks)} reports: "
-                 "this run's reports so far, then the other report folders already here."]
-        with contextlib.suppress(Exception):  # best effort, never waiting on a lock held by another run
-            _write_index(out, done, notes, wait=False)
-        raise interrupted from None
+        raise _interrupted(stop, out, [rows[n] for n in names if n in rows], written, len(tasks)) from None
     finally:
         _unlock_run(lock)
+
+
+def _summary_notes(n_reports: int, engine: str, options: ReportOptions, preview_note: str,
+                   retried: list[str], broken: str | None) -> list[str]:
+    """The summary's notes: the run (engine, profile, ε), the preview's note, each retry, and why
+    the batch is incomplete when the engine stopped."""
+    notes = [f"{n_reports} BRDFs, engine: {engine}, profile {options.profile}, eps {options.eps:g}."]
+    if preview_note:
+        notes.append(preview_note)
+    notes.extend(f"{r[0].upper()}{r[1:]}." for r in retried)
+    if broken:
+        notes.append(f"Incomplete: {broken}.")
+    return notes
+
+
+def _engine(tasks: list[ReportTask], workers: int, scheduler: str | None, progress: BatchProgress | None,
+            retried: list[str]) -> tuple[Iterable[ReportOutcome], str]:
+    """The outcomes of the engine that runs the batch (Dask, worker processes or serial) and its
+    description for the summary."""
+    if scheduler:
+        return _dask(tasks, scheduler, progress, retried), f"dask ({scheduler})"
+    if workers > 1 and len(tasks) > 1:
+        n = min(workers, len(tasks))
+        engine = f"{workers} processes, {threads_per_worker(n)} thread(s) each"
+        return _processes(tasks, n, progress, retried), engine
+    return _serial(tasks, progress), "serial"
+
+
+def _write_outcome(out: Path, outcome: ReportOutcome) -> tuple[dict[str, Any], bool, bool]:
+    """Write one report's folder: its summary row, whether the report is ok and whether its folder
+    was written (a folder that cannot be written fails this BRDF alone, its row says why)."""
+    row = outcome.row
+    try:
+        write_folder(out, outcome.name, outcome.files)
+    except OSError as err:  # this folder alone: the batch goes on
+        return _failed_row(outcome.name, row.get("source", ""), row.get("total_seconds"),
+                           f"cannot write the report folder {out / outcome.name}: {err.strerror or err}"), False, False
+    return row, outcome.ok, True
+
+
+def _fail_unfinished(tasks: Sequence[ReportTask], rows: dict[str, dict[str, Any]], broken: str | None,
+                     progress: BatchProgress | None) -> None:
+    """A failed row for every task without a result (the engine stopped: ``broken`` says why)."""
+    for task in tasks:
+        if task.name not in rows:
+            rows[task.name] = _failed_row(task.name, task.source, None, f"no result: {broken}")
+            if progress is not None:
+                progress("done", task.name, "failed")
+
+
+def _interrupted(stop: KeyboardInterrupt, out: Path, done: list[dict[str, Any]], written: int, n_tasks: int
+                 ) -> BatchInterrupted:
+    """The :class:`BatchInterrupted` of a stopped batch, once the summary lists the reports written
+    so far (best effort, never waiting on a lock held by another run)."""
+    interrupted = BatchInterrupted(getattr(stop, "signum", signal.SIGINT), written, n_tasks, out)
+    notes = [f"Interrupted ({interrupted.signal_name}) after {written} of {n_tasks} reports: "
+             "this run's reports so far, then the other report folders already here."]
+    with contextlib.suppress(Exception):  # best effort, never waiting on a lock held by another run
+        _write_index(out, done, notes, wait=False)
+    return interrupted
 
 
 def _close(outcomes: Iterable[ReportOutcome]) -> None:

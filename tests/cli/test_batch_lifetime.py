@@ -527,4 +527,4 @@ def test_worker_target_module_sets_the_parent_death_signal_before_heavy_imports(
     code = f"import sys, shrmkit.cli.report.worker_boot; print(sorted(m for m in {heavy} if m in sys.modules))"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert out.returncode == 0 and out.stdout.strip() == "[]", out.stderr[-2000:]
-    assert batch._processes.__code__.co_names.count("worker_boot") >= 1  # the target the driver starts
+    assert batch._Pool.start_worker.__code__.co_names.count("worker_boot") >= 1  # the target the driver starts
