@@ -97,7 +97,8 @@ class Report:
                 continue
             rows.append((f"{row['env']} at ε {main:g}",
                          f"F_B={row['F_B']} P_B={row['P_B']}; worst band stated {row['predicted_rel_rms']:.3g} "
-                         f"(bound {row['bound_rel_rms']:.3g}), measured {row['measured_rel_rms']:.3g} (rel. RMS); "
+                         f"(bound {row['bound_rel_rms']:.3g}), worst band measured "
+                         f"{row.get('measured_worst_band_rel_rms', row['measured_rel_rms']):.3g} (rel. RMS); "
                          f"prefilter {row['prefilter_seconds']:.3g} s"))
         for fit in doc["fits"]:
             band = fit.get("worst_band")

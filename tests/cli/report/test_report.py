@@ -54,6 +54,7 @@ OK_SCHEMA = {
                         "bound": NUM, "sqrt_eps_B": NUM, "measured_rel_rms": NUM, "prefilter_seconds": NUM,
                         "orders_seconds": NUM, "lighting_seconds": NUM, "synthesis_seconds": NUM,
                         "reference_map_seconds": NUM, "prefilter_cpu_seconds": NUM,
+                        "measured_worst_band_rel_rms": NUM, "measured_worst_band_stderr": NUM,
                         "reference_map_cpu_seconds": NUM}],
     "fits": [{"model": STR, "spec": STR, "params": dict, "errors": {"rel_rms": NUM, "log_rms": NUM},
               "bands": [{"lo_deg": NUM, "hi_deg": NUM, "n": int, "rel_rms": NUM, "log_rms": NUM}],
@@ -186,6 +187,11 @@ class TestPhongReport:
             for b in r["view_bands"]:
                 assert b["measured_rel_rms"] - 3 * b["measured_stderr"] <= b["bound_rel_rms"], b
         assert rows[-1]["measured_rel_rms"] < rows[0]["measured_rel_rms"]
+        for r in rows:  # the headline's measure is the worst band's, the one its bound states
+            worst = max((b for b in r["view_bands"] if b["inside"]), key=lambda b: b["measured_rel_rms"])
+            assert r["measured_worst_band_rel_rms"] == worst["measured_rel_rms"]
+            assert r["measured_worst_band_stderr"] == worst["measured_stderr"]
+            assert r["measured_worst_band_rel_rms"] - 3 * r["measured_worst_band_stderr"] <= r["bound_rel_rms"]
 
     def test_fit_slice_of_phong_peaks_at_the_mirror_direction(self, phong_report):
         """Measured slice = the BRDF on the plane of incidence: Phong's ρ̂ = ρ cos θ_i is

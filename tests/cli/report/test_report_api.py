@@ -28,7 +28,7 @@ def test_report_returns_the_document_and_writes_the_folder(tmp_path: Path) -> No
     assert r.summary()["F@0.03"] == choice.F
     html = r._repr_html_()
     row = r.doc["speed_vs_error"][-1]
-    assert f"measured {row['measured_rel_rms']:.3g}" in html and "# BRDF report" in html
+    assert f"measured {row['measured_worst_band_rel_rms']:.3g}" in html and "# BRDF report" in html
 
 
 def test_report_refuses_unknown_options() -> None:

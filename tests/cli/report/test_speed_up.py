@@ -23,3 +23,15 @@ def test_headline_states_cpu_seconds_and_their_ratio() -> None:
     assert "prefilter 0.8 s CPU against ≈ 12 s CPU" in line and "(15× less CPU)" in line
     old = environment_line({"main": {"tolerance": 0.03}, "speed_vs_error": [_row()]}, env)
     assert "prefilter 0.5 s against ≈ 20 s" in old and "(40× faster)" in old
+
+
+def test_headline_sets_the_worst_band_measured_beside_the_bound() -> None:
+    """A new user read 'bound 0.0283, measured 0.0349' as a broken bound: the pooled all-pairs
+    error beside a worst-band bound. The headline now states the worst band's measured value (± s.e.)
+    and names the pooled one."""
+    env = {"name": "pisa", "height": 32, "width": 64, "F_B": 9, "P_B": 0, "predicted_rel_rms": 0.0222,
+           "bound_rel_rms": 0.0283, "measured_rel_rms": 0.0349, "measured_worst_band_rel_rms": 0.0271,
+           "measured_worst_band_stderr": 0.0031, "n_pairs": 150}
+    line = environment_line({"main": {"tolerance": 0.03}, "speed_vs_error": []}, env)
+    assert "bound 0.0283, **measured 0.0271 ± 0.0031** (the worst band measured" in line
+    assert "all 150 pairs pooled: 0.0349" in line
