@@ -62,9 +62,15 @@ def export_format(name: str | None, path: str | os.PathLike[str]) -> ExportForma
     Raises
     ------
     BadInputError
-        An unknown name, a suffix no format (or more than one) writes, or a suffix that
-        contradicts ``name``.
+        An unknown name, a suffix no format (or more than one) writes, a suffix that
+        contradicts ``name``, or a file name with no stem (``.ktx2``, a hidden file name).
     """
+    file_name = Path(path).name
+    if file_name.startswith(".") and not Path(path).suffix:  # ".ktx2": Python reads a hidden file's name as its stem
+        known = any(f.suffix == file_name.lower() for f in EXPORT_FORMATS.values())
+        example = f", e.g. sky{file_name}" if known else ""
+        raise BadInputError(path, f"the file name {file_name!r} has no stem (a hidden file name, no suffix): "
+                                  f"name the file{example}")
     suffix = Path(path).suffix.lower()
     if name is not None:
         if name not in EXPORT_FORMATS:

@@ -509,22 +509,32 @@ def mitsuba_dict(material: ExportedMaterial) -> dict[str, Any]:
     return convert(material.native)
 
 
-def _header(material: ExportedMaterial, comment: str, error: str | None) -> list[str]:
+def _header(material: ExportedMaterial, comment: str, error: str | None, model_note: str | None) -> list[str]:
+    """The snippet's comment lines: what the JSON of ``shrm export`` states (``exact`` only when the
+    renderer's BSDF is the source BRDF: no closest model, no approximate mapping)."""
     lines = [f"exported by shrmkit from {material.source}"]
-    lines.append("exact: the renderer's BSDF equals the model" if material.exact else f"not exact: {material.note}")
+    if model_note:
+        lines.append(f"not exact: {model_note}")
+    if not material.exact:
+        lines.append(f"not exact: {material.note}")
+    elif not model_note:
+        lines.append("exact: the renderer's BSDF equals the model")
     if error:
         lines.append(error)
     return [f"{comment} {line}" for line in lines]
 
 
-def _text_mitsuba(material: ExportedMaterial, name: str, error: str | None) -> str:
-    comments = "\n".join(f"    <!-- {c[2:].replace('--', '-')} -->" for c in _header(material, "# ", error))
+def _text_mitsuba(material: ExportedMaterial, name: str, error: str | None,
+                 model_note: str | None = None) -> str:
+    comments = "\n".join(f"    <!-- {c[2:].replace('--', '-')} -->" for c in _header(material, "# ", error, model_note))
     return "\n".join(['<?xml version="1.0" encoding="utf-8"?>', '<scene version="3.0.0">', comments,
                       *_mitsuba_xml(material.native, "    ", name), "</scene>", ""])
 
 
-def _text_mitsuba_dict(material: ExportedMaterial, name: str, error: str | None) -> str:
-    doc = {"format": "shrmkit-mitsuba-dict", "name": name, "source": material.source, "exact": material.exact,
+def _text_mitsuba_dict(material: ExportedMaterial, name: str, error: str | None,
+                      model_note: str | None = None) -> str:
+    doc = {"format": "shrmkit-mitsuba-dict", "name": name, "source": material.source,
+           "exact": material.exact and not model_note, "model_note": model_note or None,
            "note": material.note, "error": error, "bsdf": mitsuba_dict(material)}
     return json.dumps(doc, indent=2) + "\n"
 
@@ -545,8 +555,9 @@ def _pbrt_params(node: dict[str, Any]) -> str:
     return " ".join(parts)
 
 
-def _text_pbrt(material: ExportedMaterial, name: str, error: str | None) -> str:
-    lines = _header(material, "#", error)
+def _text_pbrt(material: ExportedMaterial, name: str, error: str | None,
+              model_note: str | None = None) -> str:
+    lines = _header(material, "#", error, model_note)
     node = material.native
     if node["type"] == "mix":
         names = [f"{name}-diffuse", f"{name}-conductor"]
@@ -560,9 +571,10 @@ def _text_pbrt(material: ExportedMaterial, name: str, error: str | None) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _text_materialx(material: ExportedMaterial, name: str, error: str | None) -> str:
+def _text_materialx(material: ExportedMaterial, name: str, error: str | None,
+                   model_note: str | None = None) -> str:
     lines = ['<?xml version="1.0"?>', '<materialx version="1.38">']
-    lines += [f"  <!-- {c[2:].replace('--', '-')} -->" for c in _header(material, "# ", error)]
+    lines += [f"  <!-- {c[2:].replace('--', '-')} -->" for c in _header(material, "# ", error, model_note)]
     shader = f"SR_{name}"
     lines.append(f'  <standard_surface name={quoteattr(shader)} type="surfaceshader">')
     for key, value in material.native.items():
@@ -584,7 +596,7 @@ class MaterialTarget:
     name: str
     suffix: str
     convert: Callable[[BRDF], ExportedMaterial]
-    text: Callable[[ExportedMaterial, str, str | None], str]
+    text: Callable[[ExportedMaterial, str, str | None, str | None], str]
     description: str
 
 
@@ -637,12 +649,15 @@ def to_target(brdf: BRDF, target: str) -> ExportedMaterial:
     return replace(_target(target).convert(brdf), target=target)
 
 
-def material_text(material: ExportedMaterial, name: str, error: str | None = None) -> str:
+def material_text(material: ExportedMaterial, name: str, error: str | None = None, *,
+                  model_note: str | None = None) -> str:
     """The snippet of ``material`` in its target's syntax, the material called ``name``;
-    ``error`` (one line, the measured error) is written as a comment."""
+    ``error`` (one line, the measured error) is written as a comment, and ``model_note`` (why the
+    material is a closest model of the source BRDF, ``ExportResult.model_note``) as a "not exact"
+    comment: the comments state what the JSON of ``shrm export`` states (``exact`` false then)."""
     if not name or any(ch in name for ch in "\"'<>&\n\r\t"):
         raise BadInputError(None, f"material name {name!r}: use letters, digits, '-', '_' or '.'")
-    return _target(material.target).text(material, name, error)
+    return _target(material.target).text(material, name, error, model_note)
 
 
 def write_material(path: str | os.PathLike[str], text: str) -> Path:

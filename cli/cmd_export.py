@@ -53,6 +53,19 @@ def _material_name(args: argparse.Namespace, out: Path) -> str:
     return name
 
 
+def _check_outputs(paths: list[Path]) -> None:
+    """Every output path writable before the work starts (``data_specs/export.md``, output paths):
+    not a folder, no file where a folder of the path should be (one line naming it); a missing
+    folder is created, as every verb's ``-o`` does (``brdf_io.atomic.check_writable``)."""
+    for path in paths:
+        for folder in path.parents:
+            if folder.exists() or folder.is_symlink():
+                if not folder.is_dir():
+                    raise BadInputError(path, f"{folder} is a file, not a folder")
+                break
+        check_writable(path)
+
+
 def run(args: argparse.Namespace) -> int:
     out = Path(args.output)
     fmt = export_format(args.to, out)
@@ -62,7 +75,7 @@ def run(args: argparse.Namespace) -> int:
                 raise BadInputError(None, f"{option} is for --to dds or ktx2, not {fmt.name}")
     elif args.env is None:
         raise BadInputError(None, f"--to {fmt.name} needs --env (the environment to prefilter)")
-    check_writable(out)
+    _check_outputs([out, _sidecar(out)] if fmt.kind == "cube-mip-chain" else [out])
     representation = None
     if fmt.kind == "brdf-table":  # a table needs values everywhere: scattered data through their representation
         source_brdf, brdf, choice = load_analysis_brdf(args.brdf, args, quiet=args.json)
@@ -85,7 +98,7 @@ def run(args: argparse.Namespace) -> int:
 def _export_material(args: argparse.Namespace, target: str, out: Path, brdf: Any) -> dict[str, Any]:
     name = _material_name(args, out)
     result = export_material(brdf, target)
-    write_material(out, material_text(result.material, name, result.error_line()))
+    write_material(out, material_text(result.material, name, result.error_line(), model_note=result.model_note))
     if not args.json:
         if result.model_note:
             stdout.print(result.model_note, markup=False, soft_wrap=True)
@@ -123,6 +136,11 @@ def _export_merl(args: argparse.Namespace, out: Path, brdf: Any) -> dict[str, An
     return {"missing_samples": missing, "readback_max_rel": readback, "bytes": out.stat().st_size, "note": note}
 
 
+def _sidecar(out: Path) -> Path:
+    """The side file of a cube chain: ``OUTPUT.json`` beside it."""
+    return out.with_name(out.name + ".json")
+
+
 def _export_dds(args: argparse.Namespace, out: Path, brdf: Any) -> dict[str, Any]:
     size = int(args.face_size)
     if size & (size - 1):
@@ -131,9 +149,9 @@ def _export_dds(args: argparse.Namespace, out: Path, brdf: Any) -> dict[str, Any
     model, note = closest_shared_model(brdf)
     alpha = float(model.alpha) if isinstance(model, CookTorrance) and np.any(np.asarray(model.ks) > 0) else None
     chain = ggx_cube_chain(env, face_size=size, n_levels=args.levels)
+    sidecar = _sidecar(out)
     n = len(chain.levels)
     lod = None if alpha is None else material_lod(min(alpha, 1.0), n)
-    sidecar = out.with_name(out.name + ".json")
     doc = {
         "format": "shrmkit-cube-chain", "format_version": 1, "file": out.name, "dds_format": args.dds_format,
         "environment": env.name, "face_size": size, "faces": ["+X", "-X", "+Y", "-Y", "+Z", "-Z"],
@@ -146,7 +164,11 @@ def _export_dds(args: argparse.Namespace, out: Path, brdf: Any) -> dict[str, Any
         "brdf": brdf.name, "brdf_model": model.to_spec(), "brdf_model_note": note or None,
         "brdf_alpha": alpha, "brdf_lod": lod, "seconds": chain.seconds,
     }
-    if alpha is not None and alpha > 1.0:
+    if alpha is not None and n == 1:
+        doc["roughness_rule"] = "one level: roughness 0 (the environment itself), no rougher level"
+        doc["brdf_note"] = (f"a one-level chain holds roughness 0 only: it cannot represent the material's "
+                            f"roughness {np.sqrt(alpha):.3g} (GGX alpha {alpha:.3g}); use --levels 2 or more")
+    elif alpha is not None and alpha > 1.0:
         doc["brdf_note"] = f"alpha {alpha:.3g} is rougher than the last level (alpha 1): it reads level {n - 1}"
     with atomic_paths([out, sidecar]) as (tmp, tmp_json):
         export_format(args.to, out).write_cube(tmp, chain.levels, fmt=args.dds_format)  # DDS or KTX2
@@ -164,6 +186,8 @@ def _export_dds(args: argparse.Namespace, out: Path, brdf: Any) -> dict[str, Any
         if lod is None:
             stdout.print(f"{brdf.name} has no specular lobe: it reads no level of the chain", markup=False,
                          soft_wrap=True)
+        elif n == 1:
+            stdout.print(f"note: {doc['brdf_note']}", markup=False, soft_wrap=True)
         else:
             stdout.print(f"{model.to_spec()}: GGX alpha {alpha:.4g} reads level {lod:.3g} of 0..{n - 1}",
                          markup=False, soft_wrap=True)
