@@ -202,6 +202,7 @@ def _numbers(path: Path, line: bytes, key: str, count: int) -> list[float]:
 
 
 def _parse_header(path: Path, data: bytes) -> _Header:
+    """The header (magic, FORMAT, EXPOSURE, COLORCORR, PRIMARIES) and the resolution line."""
     if not data.startswith(b"#?"):
         raise BadInputError(path, "not a Radiance .hdr file (missing '#?RADIANCE' magic)")
     end = _HEADER_END_RE.search(data)
@@ -213,35 +214,45 @@ def _parse_header(path: Path, data: bytes) -> _Header:
     head.colorcorr = [1.0, 1.0, 1.0]
     head.primaries = None
     for raw in data[: end.start()].split(b"\n")[1:]:
-        line = raw.rstrip(b"\r")
-        if line.startswith(b"FORMAT="):
-            value = line[7:].split()
-            fmt = value[0] if value else b""
-            if fmt in (b"32-bit_rle_rgbe", b"32-bit_rle_xyze"):
-                head.xyz = fmt == b"32-bit_rle_xyze"
-            else:
-                raise BadInputError(
-                    path,
-                    f"unsupported Radiance pixel format {line[:60].decode(errors='replace')!r} "
-                    "(need 32-bit_rle_rgbe or 32-bit_rle_xyze)",
-                )
-        elif line.startswith(b"EXPOSURE="):
-            head.exposure *= _numbers(path, line, "EXPOSURE=", 1)[0]
-        elif line.startswith(b"COLORCORR="):
-            head.colorcorr = [a * b for a, b in zip(head.colorcorr, _numbers(path, line, "COLORCORR=", 3), strict=True)]
-        elif line.startswith(b"PRIMARIES="):
-            try:
-                values = _numbers(path, line, "PRIMARIES=", 8)
-            except BadInputError:  # Radiance's primsval() fails: the line is ignored
-                continue
-            head.primaries = tuple(zip(values[0::2], values[1::2], strict=True))
-        # PIXASPECT=, VIEW=, SOFTWARE=, CAPDATE=, GAMMA= ... do not change pixel values
+        _header_line(path, raw.rstrip(b"\r"), head)
     if not (math.isfinite(head.exposure) and head.exposure > 0):
         raise BadInputError(path, f"EXPOSURE product {head.exposure:g} is not a positive number")
     if not all(math.isfinite(c) and c > 0 for c in head.colorcorr):
         raise BadInputError(path, f"COLORCORR product {' '.join(f'{c:g}' for c in head.colorcorr)} is not positive")
+    _resolution_line(path, data, end.end(), head)
+    return head
 
-    start = end.end()
+
+def _header_line(path: Path, line: bytes, head: _Header) -> None:
+    """One header line into ``head``: FORMAT (RGBE or XYZE), EXPOSURE and COLORCORR (products),
+    PRIMARIES (a line Radiance cannot read is ignored); other lines do not change pixel values."""
+    if line.startswith(b"FORMAT="):
+        value = line[7:].split()
+        fmt = value[0] if value else b""
+        if fmt in (b"32-bit_rle_rgbe", b"32-bit_rle_xyze"):
+            head.xyz = fmt == b"32-bit_rle_xyze"
+        else:
+            raise BadInputError(
+                path,
+                f"unsupported Radiance pixel format {line[:60].decode(errors='replace')!r} "
+                "(need 32-bit_rle_rgbe or 32-bit_rle_xyze)",
+            )
+    elif line.startswith(b"EXPOSURE="):
+        head.exposure *= _numbers(path, line, "EXPOSURE=", 1)[0]
+    elif line.startswith(b"COLORCORR="):
+        head.colorcorr = [a * b for a, b in zip(head.colorcorr, _numbers(path, line, "COLORCORR=", 3), strict=True)]
+    elif line.startswith(b"PRIMARIES="):
+        try:
+            values = _numbers(path, line, "PRIMARIES=", 8)
+        except BadInputError:  # Radiance's primsval() fails: the line is ignored
+            return
+        head.primaries = tuple(zip(values[0::2], values[1::2], strict=True))
+    # PIXASPECT=, VIEW=, SOFTWARE=, CAPDATE=, GAMMA= ... do not change pixel values
+
+
+def _resolution_line(path: Path, data: bytes, start: int, head: _Header) -> None:
+    """The resolution line at ``start`` into ``head``: size, scanline axis, axis directions and the
+    offset of the first scanline (any of the eight orientations, ``resolu.c``)."""
     stop = data.find(b"\n", start, start + _RESOLUTION_MAX_BYTES)
     if stop < 0:
         if len(data) - start < _RESOLUTION_MAX_BYTES:
@@ -261,8 +272,6 @@ def _parse_header(path: Path, data: bytes) -> _Header:
     head.ydecr = y_axis[0] == b"-"
     head.width, head.height = x_axis[2], y_axis[2]
     head.pos = stop + 1
-    return head
-
 
 # ------------------------------------------------------------------------------------------ decoding
 class _Decoder:
