@@ -100,13 +100,31 @@ class _Parser(argparse.ArgumentParser):
                      for close in [difflib.get_close_matches(word.split("=")[0], options, n=1)] if close]
             if hints:
                 message += f" (did you mean {', '.join(hints)}?)"
-        if "arguments are required" in message and any(
-                a.nargs in ("+", "*") and a.option_strings for a in self._actions):
-            greedy = sorted(o for a in self._actions if a.nargs in ("+", "*") for o in a.option_strings
-                            if o.startswith("--"))
+        greedy = self._greedy_options_given(message)
+        if greedy:
             verb = "takes every value after it" if len(greedy) == 1 else "take every value after them"
             message += f" ({'/'.join(greedy)} {verb}: give the positional arguments first, or end the list with --)"
         super().error(message)
+
+    def _greedy_options_given(self, message: str) -> list[str]:
+        """The list-taking options (``--env A B …``) given on this command line, when ``message``
+        says a positional argument is missing: one of them may have swallowed it. Empty otherwise
+        (a missing ``-o/--output`` is not their doing, nor anything when none was given, when given
+        as ``--env=A`` (one value), or when ``--`` ended the list)."""
+        missing = re.search(r"arguments are required: (.*)", message)
+        argv = list(getattr(self, "argv", []))
+        if not missing or "--" in argv or all(name.startswith("-") for name in missing.group(1).split(", ")):
+            return []
+        given = []
+        for action in self._actions:
+            if action.nargs not in ("+", "*") or not action.option_strings:
+                continue
+            longs = [o for o in action.option_strings if o.startswith("--")]
+            if any(word in action.option_strings
+                   or (word.startswith("--") and len(word) > 2 and any(o.startswith(word) for o in longs))
+                   for word in argv):
+                given.append((longs or action.option_strings)[0])
+        return sorted(given)
 
 
 class _VerbParser(_Parser):
@@ -128,6 +146,7 @@ class _VerbParser(_Parser):
 
     def parse_known_args(self, args=None, namespace=None):
         self.load()
+        self.argv = list(sys.argv[1:] if args is None else args)  # what error() looks through
         return super().parse_known_args(args, namespace)
 
 

@@ -112,6 +112,8 @@ def test_unwritable_outputs_exit_2_without_traceback(tmp_path, run_each):
     (["ordres", "phong:s=4"], "did you mean 'orders'?"),
     (["orders", "phong:s=4", "--epss", "0.1"], "did you mean '--epss' → '--eps'?"),
     (["report", "--env", "builtin:sky", "builtin:studio", "--quick"], "--env takes every value after it"),
+    (["render", "--env", "builtin:sky", "builtin:sphere", "--brdf", "phong:s=3", "-o", "x.png"],
+     "required: MESH (--env takes every value after it"),
 ])
 def test_usage_errors_suggest_the_fix(argv, hint, capsys):
     from shrmkit.cli.main import main
@@ -120,6 +122,22 @@ def test_usage_errors_suggest_the_fix(argv, hint, capsys):
         main(argv)
     err = capsys.readouterr().err
     assert stop.value.code == 2 and hint in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize("argv", [
+    ["view", "phong:s=32"],  # -o missing, no --env given (issue 26: the hint named --env all the same)
+    ["render", "builtin:sphere", "--brdf", "phong:s=32"],
+    ["report", "--env=builtin:sky"],  # one value: nothing swallowed
+    ["report", "--env", "builtin:sky", "--"],  # the list ended by --
+])
+def test_the_greedy_option_hint_only_when_it_could_have_swallowed_a_positional(argv, capsys):
+    from shrmkit.cli.main import main
+
+    with pytest.raises(SystemExit) as stop:
+        main(argv)
+    err = capsys.readouterr().err
+    assert stop.value.code == 2 and "arguments are required" in err
+    assert "takes every value" not in err and "--env" not in err.splitlines()[-1]
 
 
 def test_end_of_a_greedy_list_keeps_the_positionals():
