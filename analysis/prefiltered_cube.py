@@ -10,7 +10,9 @@ prefilter L̄_α(R) = ∫ L(ω) D_α(h) max(R·ω, 0) dω / ∫ D_α(h) max(R·�
 pixel of the lat-long map (:func:`~shrmkit.analysis.baselines.split_sum.ggx_prefiltered`, exact
 pixel weights, no sampling noise) on a grid fine enough for the level's texels, then looked up
 bilinearly at the texel centres; level 0 is the map averaged over 4 × 4 bilinear sub-samples
-per texel.
+per texel. A map of fewer than 64 rows is replicated (each pixel k × k times) to 64 rows or more
+before the prefilter, so that the lobe is summed over a grid that tells its directions apart
+(:data:`MIN_PREFILTER_ROWS`). A black map (zero everywhere) is refused.
 
 Cube frame: the faces (px, nx, py, ny, pz, nz) and texel directions of
 ``brdf_io/cubemap.py`` in the y-up frame of cube-map files (:data:`~shrmkit.brdf_io.cubemap.CUBE_TO_PROJECT`:
@@ -78,6 +80,20 @@ def material_lod(alpha: float, n_levels: int) -> float:
     return float(np.sqrt(alpha) * (n_levels - 1))
 
 
+#: Rows below which a map is replicated (each pixel k × k times) before it is prefiltered: the
+#: prefilter's grid is a divisor of the map's rows, and a lobe must be summed over a grid fine
+#: enough to tell its directions apart (a 1 × 2 map's roughness-1 level is the cosine-weighted
+#: average of both halves, not the pixel a texel falls in). Replication keeps every pixel's
+#: radiance over its own solid angle (the map is piecewise constant, DESIGN §2).
+MIN_PREFILTER_ROWS = 64
+
+
+def _replicated(radiance: np.ndarray) -> np.ndarray:
+    """The map with each pixel repeated k × k times, k = ⌈64 / H⌉ (the map itself when H ≥ 64)."""
+    k = -(-MIN_PREFILTER_ROWS // radiance.shape[0])
+    return radiance if k == 1 else np.repeat(np.repeat(radiance, k, axis=0), k, axis=1)
+
+
 def _rows_for(height: int, alpha: float, face: int) -> int:
     """Smallest divisor of the map's rows H that is at least min(4π/α, 4·S_m) and 64: a pixel
     pitch of α/4 for the lobe (``default_level_rows``), never finer than needed for the level's
@@ -116,7 +132,7 @@ def ggx_cube_chain(env: object, *, face_size: int = 128, n_levels: int | None = 
     ------
     BadInputError
         A face size that is not a power of two, a level count outside 1..log2(S) + 1, a map
-        that is not 2:1.
+        that is not 2:1, a black map (zero everywhere, as ``shrm prefilter`` refuses it).
     """
     t0 = time.perf_counter()
     radiance = np.asarray(getattr(env, "radiance", env), dtype=np.float64)
@@ -124,11 +140,15 @@ def ggx_cube_chain(env: object, *, face_size: int = 128, n_levels: int | None = 
         raise BadInputError(getattr(env, "name", None), f"need an (H, 2H, 3) lat-long map, got {radiance.shape}")
     if not (1 <= face_size <= MAX_FACE_SIZE) or face_size & (face_size - 1):
         raise BadInputError(None, f"cube face size {face_size}: must be a power of two in 1..{MAX_FACE_SIZE}")
+    if not np.any(radiance != 0):
+        raise BadInputError(getattr(env, "name", None),
+                            "the environment map is black (zero everywhere): nothing to prefilter")
     full = int(np.log2(face_size)) + 1
     n_levels = full if n_levels is None else int(n_levels)
     if not 1 <= n_levels <= full:
         raise BadInputError(None, f"{n_levels} mip levels: a {face_size}-texel face has 1..{full}")
     rough = chain_roughness(n_levels)
+    fine = _replicated(radiance) if np.any(rough > 0) else radiance
     height = radiance.shape[0]
     levels, rows = [], []
     for m, r in enumerate(rough):
@@ -139,8 +159,8 @@ def ggx_cube_chain(env: object, *, face_size: int = 128, n_levels: int | None = 
             level = bilinear_lookup(radiance, d).mean(axis=-2)
             rows.append(height)
         else:
-            n = _rows_for(height, alpha, size)
-            pre = ggx_prefiltered(radiance, alpha, n)
+            n = _rows_for(fine.shape[0], alpha, size)
+            pre = ggx_prefiltered(fine, alpha, n)
             level = bilinear_lookup(pre, _texel_directions(size))
             rows.append(n)
         levels.append(np.ascontiguousarray(level, dtype=np.float32))

@@ -138,3 +138,28 @@ def test_docstring_example_runs():
 
     result = doctest.testmod(dds, optionflags=doctest.NORMALIZE_WHITESPACE, report=False)
     assert result.attempted >= 5 and result.failed == 0
+
+
+def test_tiny_map_roughness_one_level_averages_over_the_sphere():
+    """A 1 × 2 map (500 on the half-space y > 0, 0 on y < 0) at roughness 1 (GGX α = 1: D = 1/π,
+    Karis's weight is max(R·ω, 0)): the cosine-weighted average over the hemisphere around R,
+    closed form 500 (1 + R_y)/2 (the view factor of a tilted plane to a half-space) at every texel
+    of the 4 × 4 level, not a blend of the two pixels the texel falls between (that was off by up
+    to 66); the 1 × 1 level's face centres: ±Y of the cube (zenith, nadir) read 250."""
+    from shrmkit.analysis.prefiltered_cube import _texel_directions
+
+    radiance = np.zeros((1, 2, 3))
+    radiance[0, 0] = 500.0  # column 0: φ in [0, π), y > 0
+    for face_size in (8, 2):
+        chain = ggx_cube_chain(radiance, face_size=face_size, n_levels=2)
+        level = chain.levels[-1]
+        assert chain.roughness[-1] == 1.0 and level.shape == (6, face_size // 2, face_size // 2, 3)
+        expected = 500.0 * (1.0 + _texel_directions(face_size // 2)[..., 1]) / 2.0
+        assert np.allclose(level, expected[..., None], atol=0.5)
+    assert np.allclose(level[2:4, 0, 0, :], 250.0, atol=0.01)
+
+
+def test_black_map_is_refused():
+    """An all-zero map is refused as shrm prefilter refuses it (no black chain)."""
+    with pytest.raises(BadInputError, match="black"):
+        ggx_cube_chain(np.zeros((8, 16, 3)), face_size=4)

@@ -10,6 +10,7 @@ and its texels compared with the DDS file's; the snippet re-parsed as XML.
 from __future__ import annotations
 
 import json
+import re
 import struct
 import xml.etree.ElementTree as ET
 
@@ -133,3 +134,76 @@ def test_bad_input_one_line_exit_2(tmp_path, monkeypatch, run_main, args, messag
     code, err = run_main("export", *args)
     assert code == 2 and message in err and len(err.strip().splitlines()) == 1
     assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("suffix", [".ktx2", ".dds"])
+def test_side_file_path_checked_before_the_work(tmp_path, monkeypatch, run_main, suffix):
+    """A folder where the side file OUTPUT.json goes: refused before the work, one line naming it,
+    and no container left on disk (it used to be written, then the side file failed)."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / f"s{suffix}.json").mkdir()
+    code, err = run_main("export", "phong:s=32", "--env", "builtin:sky", "-o", f"s{suffix}", "--face-size", "8")
+    assert code == 2 and f"s{suffix}.json: is a folder" in err and len(err.strip().splitlines()) == 1
+    assert [p.name for p in tmp_path.iterdir()] == [f"s{suffix}.json"]
+    assert not list((tmp_path / f"s{suffix}.json").iterdir())
+
+
+@pytest.mark.parametrize(("output", "message"), [
+    ("afile/x.ktx2", "afile/x.ktx2: afile is a file, not a folder"),
+    ("afile/sub/x.xml", "afile/sub/x.xml: afile is a file, not a folder"),
+    (".ktx2", "the file name '.ktx2' has no stem (a hidden file name, no suffix): name the file, e.g. sky.ktx2"),
+])
+def test_output_path_messages(tmp_path, monkeypatch, run_main, output, message):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "afile").write_text("x")
+    code, err = run_main("export", "phong:s=32", "--env", "builtin:sky", "-o", output, "--face-size", "8") \
+        if output.endswith(".ktx2") else run_main("export", "lambert:albedo=0.5", "-o", output)
+    assert code == 2 and message in err and len(err.strip().splitlines()) == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["afile"]
+
+
+def test_missing_output_folder_is_created_as_every_verb_does(tmp_path, capsys):
+    out = tmp_path / "new" / "deeper" / "sky.ktx2"
+    assert main(["export", "lambert:albedo=0.5", "--env", "builtin:sky,height=64", "-o", str(out), "--face-size", "2",
+                 "-q"]) == 0
+    assert out.is_file() and (out.parent / "sky.ktx2.json").is_file()
+
+
+def test_black_map_refused(tmp_path, monkeypatch, run_main):
+    """An all-zero map is refused as shrm prefilter refuses it ("black"), nothing written."""
+    from shrmkit.brdf_io.rgbe import write_hdr
+
+    write_hdr(tmp_path / "black.hdr", np.zeros((8, 16, 3), np.float32))
+    monkeypatch.chdir(tmp_path)
+    code, err = run_main("export", "lambert:albedo=0.5", "--env", "black.hdr", "-o", "b.ktx2", "--face-size", "4")
+    assert code == 2 and "black" in err and len(err.strip().splitlines()) == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["black.hdr"]
+
+
+def test_one_level_chain_says_it_cannot_hold_the_roughness(tmp_path, capsys):
+    """--levels 1 holds roughness 0 only: the material's roughness √0.3 cannot be represented; the
+    line and the side file say so (the rule m/(N − 1) is 0/0 there)."""
+    out = tmp_path / "one.ktx2"
+    assert main(["export", CT, "--env", "builtin:sky", "-o", str(out), "--face-size", "1", "--levels", "1"]) == 0
+    text = capsys.readouterr().out
+    assert "note: a one-level chain holds roughness 0 only: it cannot represent the material's roughness 0.548" in text
+    assert "reads level" not in text
+    side = json.loads((tmp_path / "one.ktx2.json").read_text())
+    assert side["brdf_lod"] == 0.0 and [lv["roughness"] for lv in side["levels"]] == [0.0]
+    assert "cannot represent the material's roughness 0.548 (GGX alpha 0.3)" in side["brdf_note"]
+    assert side["roughness_rule"].startswith("one level: roughness 0")
+
+
+def test_snippet_comments_state_what_the_json_states(tmp_path, capsys):
+    """phong:s=100 is exported as its closest Cook-Torrance fit: the JSON says exact false, and so do
+    the XML comment and the mitsuba-dict file (they used to say "exact" from the fit's own mapping)."""
+    out = tmp_path / "p.xml"
+    assert main(["export", "phong:s=100", "-o", str(out), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["exact"] is False and doc["model_note"].startswith("no exact counterpart for PhongLobe")
+    comments = re.findall(r"<!--(.*?)-->", out.read_text())
+    assert not any("exact: the renderer's BSDF equals" in c for c in comments)
+    assert any(c.strip() == f"not exact: {doc['model_note']}" for c in comments)
+    assert main(["export", "phong:s=100", "-o", str(tmp_path / "p.json"), "-q"]) == 0
+    side = json.loads((tmp_path / "p.json").read_text())
+    assert side["exact"] is False and side["model_note"] == doc["model_note"]
