@@ -170,6 +170,15 @@ class DeclaredAPI(SphinxDirective):
         return node.children
 
 
+def _skip_rule_mirrors(app, what, name, obj, skip, options):
+    """Options classes' properties that read their ``OrderRule``'s fields (``rule.criterion`` …) are
+    documented by the rule: listed too, they made ``:ivar criterion:`` of every class ambiguous."""
+    if isinstance(obj, property) and "``rule." in (obj.__doc__ or ""):
+        return True
+    return None
+
+
 def setup(app):
     app.add_directive("declared-api", DeclaredAPI)
+    app.connect("autodoc-skip-member", _skip_rule_mirrors)
     app.connect("autodoc-process-docstring", _process_docstring, priority=400)  # before napoleon (500)
