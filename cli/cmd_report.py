@@ -24,7 +24,7 @@ from ..brdf_io.errors import BadInputError
 from ..brdf_io.specs import brdf_sources
 from ..render.mesh import load_mesh
 from .common import (
-    orientation_note,
+    orientation_notes,
     print_json,
     rgl_brdf_arg,
     stderr,
@@ -151,11 +151,11 @@ def _check_brdf_files(sources: list[str]) -> None:
 def _check_shared_inputs(options, show: bool = True) -> None:
     """Inputs every BRDF of the batch uses (environments, mesh) are checked once, up front:
     a bad one is a usage error (exit 2), not one failure per BRDF. A lat-long map file read with
-    the default orientation says so (``orientation_note``), as every other verb does."""
+    the default orientation says so (``orientation_notes``: one line), as every other verb does."""
     orientation = argparse.Namespace(env_up=options.env_up, env_flip=options.env_flip, env_azimuth=options.env_azimuth)
-    for spec in options.envs:
-        note = orientation_note(load_report_env(spec, options), orientation)
-        if note and show:
-            say(note)
+    read = [(env.name, env.source) for env in map(lambda spec: load_report_env(spec, options), options.envs)]
+    note = orientation_notes([argparse.Namespace(name=name, source=source) for name, source in read], orientation)
+    if note and show:
+        say(note)  # one line for every map file read y-up
     if options.mesh:
         load_mesh(options.mesh)

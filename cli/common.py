@@ -9,6 +9,7 @@ import contextlib
 import glob
 import json
 import sys
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -211,18 +212,49 @@ def load_env_arg(spec: str, args: argparse.Namespace, **kwargs: Any):
     return env
 
 
+def _default_oriented(env: Any, args: argparse.Namespace) -> bool:
+    """Whether ``env`` is a lat-long map *file* read with the default orientation (y-up), no
+    ``--env-up`` given."""
+    return getattr(args, "env_up", None) is None and "[latlong, up=y" in str(getattr(env, "source", ""))
+
+
+def _orientation_tail(args: argparse.Namespace, them: str = "it") -> str:
+    """What was applied beyond the default (``--env-flip``, ``--env-azimuth``), the convention, and
+    the options *not* given that change the reading (an option given is not offered again)."""
+    flip = bool(getattr(args, "env_flip", False))
+    azimuth = float(getattr(args, "env_azimuth", 0.0) or 0.0)
+    done = ((", rows flipped (--env-flip)" if flip else "")
+            + (f", turned {azimuth:g} deg (--env-azimuth)" if azimuth else ""))
+    ways = [f"--env-up z reads {them} as stored (z-up)"]
+    if not flip:
+        ways.append(f"--env-flip turns {them} upside down")
+    if not azimuth:
+        ways.append(f"--env-azimuth DEG turns {them} about the vertical")
+    return (f"{done}, as Blender and three.js place panoramas (image centre facing +x; "
+            f"data_specs/environment_maps.md); {', '.join(ways)}")
+
+
 def orientation_note(env: Any, args: argparse.Namespace) -> str | None:
     """One line when a lat-long map *file* was read with the default orientation (y-up, the
     convention of panoramas in the wild: Poly Haven, three.js, Blender, Mitsuba 3), naming it and
-    how to change it, so the guess is never silent. None for built-ins, cube maps, probes, OpenEXR
-    ``envmap`` files (their format states the orientation) and an explicit ``--env-up``."""
-    if getattr(args, "env_up", None) is not None or "[latlong, up=y" not in str(getattr(env, "source", "")):
+    how to change it (the orientation options not given), so the guess is never silent. None for
+    built-ins, cube maps, probes, OpenEXR ``envmap`` files (their format states the orientation)
+    and an explicit ``--env-up``."""
+    if not _default_oriented(env, args):
         return None
-    flip = ", rows flipped" if getattr(args, "env_flip", False) else ""
-    turn = f", turned {args.env_azimuth:g} deg" if getattr(args, "env_azimuth", 0.0) else ""
-    return (f"environment {env.name}: a lat-long file read y-up{flip}{turn}, as Blender and three.js place "
-            "panoramas (image centre facing +x; data_specs/environment_maps.md); --env-up z reads it as stored "
-            "(z-up), --env-flip turns it upside down, --env-azimuth DEG about the vertical")
+    return f"environment {env.name}: a lat-long file read y-up{_orientation_tail(args)}"
+
+
+def orientation_notes(envs: Sequence[Any], args: argparse.Namespace) -> str | None:
+    """:func:`orientation_note` of several maps (a sequence, a folder, ``shrm report --env A B``)
+    as one line: how many lat-long files were read y-up (the first and last named) and how to
+    change it; the single map's line when only one was; None when none was."""
+    files = [env for env in envs if _default_oriented(env, args)]
+    if len(files) <= 1:
+        return orientation_note(files[0], args) if files else None
+    names = f"{files[0].name} … {files[-1].name}" if len(files) > 2 else f"{files[0].name}, {files[-1].name}"
+    of = f" of {len(envs)}" if len(files) < len(envs) else ""
+    return f"environments: {len(files)}{of} lat-long files ({names}) read y-up{_orientation_tail(args, 'them')}"
 
 
 _GLOB_CHARS = frozenset("*?[")
@@ -272,5 +304,11 @@ def env_sources_arg(tokens: str | list[str]) -> tuple[list[str], bool]:
 
 def load_env_sequence(sources: list[str], args: argparse.Namespace, **kwargs: Any) -> list:
     """:func:`load_env_arg` of every source, all before any is used: the first unreadable one raises
-    its :class:`BadInputError` (one line naming the file) and nothing has been computed or written."""
-    return [load_env_arg(source, args, **kwargs) for source in sources]
+    its :class:`BadInputError` (one line naming the file) and nothing has been computed or written.
+    The maps read with the default orientation are stated in one line (:func:`orientation_notes`),
+    not one per map."""
+    envs = [load_oriented_env(source, **env_orientation(args), **kwargs) for source in sources]
+    note = orientation_notes(envs, args)
+    if note and not getattr(args, "json", False):
+        stdout.print(note, markup=False, soft_wrap=True)
+    return envs

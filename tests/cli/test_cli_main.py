@@ -191,6 +191,33 @@ def test_default_orientation_of_a_lat_long_file_is_never_silent(tmp_path, capsys
     json.loads(capsys.readouterr().out)  # the JSON alone
 
 
+def test_the_orientation_note_offers_only_the_options_not_given_and_one_line_per_sequence(tmp_path, capsys):
+    """--env-flip given: the note says the rows were flipped and does not offer --env-flip again
+    (issue 26); a folder of maps (a sequence) gets one note naming how many files, not one per map."""
+    import argparse
+    import shutil
+
+    from shrmkit.cli.common import load_env_sequence, orientation_note
+    from shrmkit.cli.main import build_parser
+
+    hdr = Path(__file__).parents[1] / "resources" / "tiny_4x8.hdr"
+    for k in range(3):
+        shutil.copy(hdr, tmp_path / f"frame_{k}.hdr")
+    args = build_parser().parse_args(["render", "builtin:sphere", "--env", str(tmp_path), "--env-flip",
+                                      "--brdf", "phong:s=8", "-o", "x.png"])
+    assert load_env_sequence([str(p) for p in sorted(tmp_path.iterdir())], args)
+    out = capsys.readouterr().out.splitlines()
+    assert len(out) == 1 and out[0].startswith("environments: 3 lat-long files (frame_0 … frame_2) read y-up, "
+                                               "rows flipped (--env-flip)")
+    assert "--env-up z reads them" in out[0] and "--env-flip turns" not in out[0]
+    env = load_env_sequence([str(hdr)], args)[0]
+    single = capsys.readouterr().out.splitlines()
+    assert single == [orientation_note(env, args)] and "--env-flip turns" not in single[0]
+    turned = argparse.Namespace(env_up=None, env_flip=False, env_azimuth=30.0)
+    note = orientation_note(env, turned)
+    assert "turned 30 deg" in note and "--env-flip turns it upside down" in note and "--env-azimuth DEG" not in note
+
+
 def test_report_states_the_default_orientation_of_its_map_files(capsys):
     """shrm report checks its maps once before the batch and, like every verb, names the y-up
     reading of a lat-long file (not with --json, nor for an explicit --env-up)."""
@@ -201,6 +228,9 @@ def test_report_states_the_default_orientation_of_its_map_files(capsys):
     _check_shared_inputs(profile("quick", envs=(hdr, "builtin:sky")), show=True)
     out = capsys.readouterr().out.splitlines()
     assert len(out) == 1 and out[0].startswith("environment tiny_4x8: a lat-long file read y-up")
+    _check_shared_inputs(profile("quick", envs=(hdr, "builtin:sky", hdr)), show=True)
+    out = capsys.readouterr().out.splitlines()
+    assert len(out) == 1 and out[0].startswith("environments: 2 of 3 lat-long files (tiny_4x8, tiny_4x8) read y-up")
     _check_shared_inputs(profile("quick", envs=(hdr,)), show=False)
     _check_shared_inputs(profile("quick", envs=(hdr,), env_up="z"), show=True)
     assert capsys.readouterr().out == ""
