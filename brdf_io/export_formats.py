@@ -67,8 +67,8 @@ def export_format(name: str | None, path: str | os.PathLike[str]) -> ExportForma
     """
     file_name = Path(path).name
     if file_name.startswith(".") and not Path(path).suffix:  # ".ktx2": Python reads a hidden file's name as its stem
-        known = any(f.suffix == file_name.lower() for f in EXPORT_FORMATS.values())
-        example = f", e.g. sky{file_name}" if known else ""
+        written = any(f.suffix == file_name.lower() for f in EXPORT_FORMATS.values())
+        example = f", e.g. sky{file_name}" if written else ""
         raise BadInputError(path, f"the file name {file_name!r} has no stem (a hidden file name, no suffix): "
                                   f"name the file{example}")
     suffix = Path(path).suffix.lower()

@@ -170,9 +170,18 @@ def _export_dds(args: argparse.Namespace, out: Path, brdf: Any) -> dict[str, Any
                             f"roughness {np.sqrt(alpha):.3g} (GGX alpha {alpha:.3g}); use --levels 2 or more")
     elif alpha is not None and alpha > 1.0:
         doc["brdf_note"] = f"alpha {alpha:.3g} is rougher than the last level (alpha 1): it reads level {n - 1}"
-    with atomic_paths([out, sidecar]) as (tmp, tmp_json):
-        export_format(args.to, out).write_cube(tmp, chain.levels, fmt=args.dds_format)  # DDS or KTX2
-        tmp_json.write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
+    new = [path for path in (out, sidecar) if not path.exists() and not path.is_symlink()]
+    try:
+        with atomic_paths([out, sidecar]) as (tmp, tmp_json):
+            export_format(args.to, out).write_cube(tmp, chain.levels, fmt=args.dds_format)  # DDS or KTX2
+            tmp_json.write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
+    except BadInputError:
+        # the container moved into place and then its side file failed (a folder made since the
+        # check): take back what this run created, so that the pair appears together or not at all
+        for path in new:
+            if path.is_file() and not path.is_symlink():
+                path.unlink(missing_ok=True)
+        raise
     if not args.json:
         if note:
             stdout.print(note, markup=False, soft_wrap=True)

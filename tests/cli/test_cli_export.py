@@ -207,3 +207,17 @@ def test_snippet_comments_state_what_the_json_states(tmp_path, capsys):
     assert main(["export", "phong:s=100", "-o", str(tmp_path / "p.json"), "-q"]) == 0
     side = json.loads((tmp_path / "p.json").read_text())
     assert side["exact"] is False and side["model_note"] == doc["model_note"]
+
+
+def test_container_taken_back_when_its_side_file_fails_after_the_check(tmp_path, monkeypatch, run_main):
+    """The side file fails after the early check (a folder made in between, here with the check
+    skipped): the container this run moved into place is removed, nothing is left."""
+    import shrmkit.cli.cmd_export as cmd_export
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(cmd_export, "_check_outputs", lambda paths: None)
+    (tmp_path / "s.ktx2.json").mkdir()
+    code, err = run_main("export", "lambert:albedo=0.5", "--env", "builtin:sky,height=64", "-o", "s.ktx2",
+                         "--face-size", "2")
+    assert code == 2 and "s.ktx2.json: cannot write" in err and len(err.strip().splitlines()) == 1
+    assert [p.name for p in tmp_path.iterdir()] == ["s.ktx2.json"]
