@@ -52,6 +52,7 @@ from ..brdf_io.specs import BRDF_FILE_TYPES, load_brdf
 from .common import (
     print_json,
     print_table,
+    progress_shown,
     rgl_brdf_arg,
     say,
     stderr,
@@ -89,7 +90,7 @@ def run(args: argparse.Namespace) -> int:
     if not sources:
         raise BadInputError(", ".join(args.brdfs), "no BRDF files found (suffixes " + ", ".join(BRDF_FILE_TYPES) + ")")
     check_writable(out / CSV_NAME)  # before the long work (creates the folder)
-    show = not (args.json or args.quiet)
+    show = progress_shown(args)
     columns = (TextColumn("[bold]census"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                TextColumn("{task.fields[last]}"))
     with Progress(*columns, console=stderr, transient=True, disable=not show) as bar:

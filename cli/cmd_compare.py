@@ -29,6 +29,7 @@ from .common import (
     load_env_arg,
     print_json,
     print_table,
+    progress_shown,
     stderr,
     stdout,
 )
@@ -80,7 +81,7 @@ def run(args: argparse.Namespace) -> int:
             check_writable(path)
     env = load_env_arg(args.env, args)
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=stderr,
-                  disable=args.json) as bar:
+                  disable=not progress_shown(args)) as bar:
         task = bar.add_task("comparing", total=None)
 
         def progress(stage: str) -> None:

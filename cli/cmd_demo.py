@@ -11,7 +11,7 @@ import argparse
 import time
 
 from ..brdf_io.errors import BadInputError
-from .common import print_json, say, stderr
+from .common import print_json, progress_shown, say, stderr
 from .report.demo import run_demo
 
 
@@ -19,7 +19,7 @@ def run(args: argparse.Namespace) -> int:
     if not 32 <= args.size <= 2048:
         raise BadInputError(None, f"--size must be in [32, 2048], got {args.size}")
     t0 = time.perf_counter()
-    show = not (args.no_progress or args.json)
+    show = progress_shown(args)
 
     def progress(step: str) -> None:
         if show:

@@ -25,7 +25,7 @@ from ..analysis.fit.fit_file import fit_document, write_fit_json
 from ..analysis.fit.zernike import fit_zernike_cv
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.specs import load_brdf
-from .common import print_json, print_table, rgl_brdf_arg, stderr, stdout
+from .common import print_json, print_table, progress_shown, rgl_brdf_arg, stderr, stdout
 
 
 def run(args: argparse.Namespace) -> int:
@@ -41,7 +41,7 @@ def run(args: argparse.Namespace) -> int:
     with Progress(
         TextColumn("[progress.description]{task.description}"), BarColumn(),
         TextColumn("{task.completed}/{task.total}"), TimeElapsedColumn(),
-        console=stderr, transient=True, disable=args.json or not stderr.is_terminal,
+        console=stderr, transient=True, disable=not progress_shown(args) or not stderr.is_terminal,
     ) as progress:
         task = progress.add_task(f"fitting {model} to {brdf.name}", total=None)
 

@@ -27,6 +27,7 @@ from .common import (
     order_rule,
     print_json,
     print_table,
+    progress_shown,
     stderr,
     stdout,
 )
@@ -34,9 +35,9 @@ from .view_bands_table import print_view_bands
 
 
 def run(args: argparse.Namespace) -> int:
-    source_brdf, brdf, choice = load_analysis_brdf(args.brdf, args, quiet=args.json)
-    busy = contextlib.nullcontext() if args.json else stderr.status(f"choosing orders for {brdf.name} ...",
-                                                                    spinner="dots")
+    source_brdf, brdf, choice = load_analysis_brdf(args.brdf, args)
+    busy = (stderr.status(f"choosing orders for {brdf.name} ...", spinner="dots") if progress_shown(args)
+            else contextlib.nullcontext())
     with busy:
         rule = OrderRule(eps=args.eps, max_F=args.max_F, max_P=args.max_P, **order_rule(args))
         orders = choose_orders(brdf, rule=rule)

@@ -24,6 +24,7 @@ from .common import (
     order_rule,
     print_json,
     print_table,
+    progress_shown,
     stderr,
     stdout,
 )
@@ -42,7 +43,7 @@ def run(args: argparse.Namespace) -> int:
     env = load_env_arg(args.env, args)
     source_brdf, brdf, choice = load_analysis_brdf(args.brdf, args, quiet=args.json)
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=stderr,
-                  disable=args.json) as bar:
+                  disable=not progress_shown(args)) as bar:
         task = bar.add_task("prefiltering", total=None)
         shrm = prefilter(
             env, brdf, rule=OrderRule(eps=args.eps, max_F=args.max_F, max_P=args.max_P, **order_rule(args)),

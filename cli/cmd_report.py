@@ -26,6 +26,7 @@ from ..render.mesh import load_mesh
 from .common import (
     orientation_notes,
     print_json,
+    progress_shown,
     rgl_brdf_arg,
     stderr,
     stdout,
@@ -90,7 +91,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         with _signals_stop_the_batch():
             result = run_with_progress(sources, args.out, options, workers=args.workers,
-                                       scheduler=args.dask_scheduler, show=not (args.no_progress or args.json))
+                                       scheduler=args.dask_scheduler, show=progress_shown(args))
     except BatchInterrupted as stop:
         stderr.print(f"shrm report: interrupted ({stop.signal_name}): {stop.written} of {stop.total} reports written "
                      f"to {stop.out_dir or args.out}; rerun to make the rest", soft_wrap=True, markup=False,

@@ -127,6 +127,13 @@ def rgl_brdf_arg(source: str, args: argparse.Namespace) -> str:
     return text
 
 
+def progress_shown(args: argparse.Namespace) -> bool:
+    """Whether a verb shows progress (spinners, bars, step lines) on stderr: not with ``--json``,
+    ``-q/--quiet`` or ``--no-progress`` (issue 26: ``-q`` left a spinner frame in a log). The one
+    rule of every verb."""
+    return not any(getattr(args, key, False) for key in ("json", "quiet", "no_progress"))
+
+
 def load_analysis_brdf(source: str, args: argparse.Namespace, *, quiet: bool = False
                        ) -> tuple[BRDF, BRDF, RepresentationChoice | None]:
     """The BRDF a verb analyses: (what the file holds, what is analysed, the representation choice).
@@ -136,7 +143,7 @@ def load_analysis_brdf(source: str, args: argparse.Namespace, *, quiet: bool = F
     the representation with the smallest held-out worst-view-band error
     (``analysis.fit.representation.choose_representation``), whose one line the verb prints beside
     its orders and whose ``as_dict()`` its ``--json`` carries as ``representation``
-    (data_specs/representation_json.md). ``quiet``: no spinner (``--json``).
+    (data_specs/representation_json.md). ``quiet``: no spinner (nor without :func:`progress_shown`).
 
     Raises
     ------
@@ -146,7 +153,7 @@ def load_analysis_brdf(source: str, args: argparse.Namespace, *, quiet: bool = F
     brdf = load_brdf(rgl_brdf_arg(source, args))
     if getattr(brdf, "kind", None) != "scattered":
         return brdf, brdf, None
-    busy = contextlib.nullcontext() if quiet else stderr.status(
+    busy = contextlib.nullcontext() if quiet or not progress_shown(args) else stderr.status(
         f"{brdf.name}: scattered measurements; choosing a representation by held-out error ...", spinner="dots")
     with busy:
         choice = choose_representation(brdf)

@@ -234,3 +234,27 @@ def test_report_states_the_default_orientation_of_its_map_files(capsys):
     _check_shared_inputs(profile("quick", envs=(hdr,)), show=False)
     _check_shared_inputs(profile("quick", envs=(hdr,), env_up="z"), show=True)
     assert capsys.readouterr().out == ""
+
+
+@pytest.mark.parametrize("argv", [
+    ["prefilter", "--env", "builtin:sky,height=16", "--brdf", "phong:s=8", "--eps", "0.1", "-o", "{tmp}/a.shrm.npz"],
+    ["orders", "phong:s=8", "--eps", "0.1"],
+])
+def test_quiet_silences_progress_too(argv, tmp_path, capsys, monkeypatch):
+    """-q: no spinner frame on stderr (issue 26: shrm prefilter … -q 2>log wrote "⠦ prefiltering …");
+    the same command without -q draws one on a terminal (the check can fail)."""
+    import io
+
+    from shrmkit.cli.common import stderr
+    from shrmkit.cli.main import main
+
+    argv = [a.replace("{tmp}", str(tmp_path)) for a in argv]
+    terminal = io.StringIO()
+    monkeypatch.setattr(stderr, "_force_terminal", True)
+    monkeypatch.setattr(stderr, "_file", terminal)
+    assert main(argv) == 0
+    assert terminal.getvalue().strip(), "the spinner is drawn without -q"
+    terminal.seek(0)
+    terminal.truncate()
+    assert main([*argv, "-q"]) == 0
+    assert terminal.getvalue() == "" and capsys.readouterr().err == ""
