@@ -11,6 +11,7 @@ Large lights are cut into samples by median cut [Debevec05]. Rules: ``data_specs
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -297,7 +298,7 @@ def _compact_regions(Y: np.ndarray, row_omega: np.ndarray, labels: np.ndarray, n
     return kept, skipped
 
 
-def _residual_start(env: EnvironmentMap, kept: list[tuple[np.ndarray, ...]]) -> tuple[np.ndarray, float]:
+def _residual_start(env: EnvironmentMap, kept: Sequence[tuple[np.ndarray, ...]]) -> tuple[np.ndarray, float]:
     """A copy of the map (its own type: residual + lights = map to its rounding) and the floor of
     the residual: 0, or the smallest normal float32 outside the lights when they are all there is."""
     residual = env.radiance.copy()

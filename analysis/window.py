@@ -415,6 +415,7 @@ class _WindowSearch:
     def error(self, F: int, t: float) -> float:
         """The predicted error energy of the worst view band inside the limit (``"bands"``)."""
         assert self.band_energy is not None  # the "bands" rule is given the lighting's a_l
+        assert self.profile is not None  # and the BRDF's view profile
         if self._inside is None:
             self._inside = bands_inside(self.profile, self.max_view_deg)
         s = self.sample

@@ -160,8 +160,8 @@ class RenderOptions:
         BadInputError
             ``eps``, ``criterion`` or ``max_view_deg`` out of range.
         """
-        return OrderRule(criterion=self.criterion, max_view_deg=self.max_view_deg,
-                         **({} if eps is None else {"eps": eps}))
+        rule = OrderRule(criterion=self.criterion, max_view_deg=self.max_view_deg)
+        return rule if eps is None else rule.replace(eps=eps)
 
     def rotations(self) -> np.ndarray | list[np.ndarray] | None:
         """``env_rotation`` as ``render_frames`` takes it: None, one (3, 3) matrix, or a list of them."""
@@ -325,8 +325,8 @@ def stated_line(shrm: SHRM, eps: float) -> str:
     bands = shrm.info.bands_inside()
     if not bands:
         return f"eps {eps:g}, predicted eps_B {shrm.eps['reflected']:.3g} over all views"
-    worst = max(band.bound_rel_rms for band in bands)
-    predicted = max(band.predicted_rel_rms for band in bands)
+    worst = max((b.bound_rel_rms for b in bands if b.bound_rel_rms is not None), default=float("nan"))
+    predicted = max((b.predicted_rel_rms for b in bands if b.predicted_rel_rms is not None), default=float("nan"))
     return (f"eps {eps:g}: worst view band to {shrm.info.max_view_deg:g} deg, relative RMS predicted "
             f"{predicted:.3g}, bound {worst:.3g}; sqrt(eps) {eps ** 0.5:.3g}")
 

@@ -334,7 +334,7 @@ def _nlopt_candidate(brdf: BRDF, model: str, samples: FitSamples, folds: int, se
 
     # the folds start from the whole set's optimum and its global stage's seeds, ranked
     # on the fold (the global stage, 32 · dim evaluations, is not repeated per fold)
-    shared = {} if full.shape is None else {"start": [full.shape, *full.seeds], "starts": FOLD_STARTS}
+    shared: dict[str, Any] = {} if full.shape is None else {"start": [full.shape, *full.seeds], "starts": FOLD_STARTS}
 
     def predict(train: FitSamples, test: FitSamples) -> np.ndarray:
         fold_fit = fit_brdf(brdf, model, samples=train, seed=seed, max_theta_deg=max_theta_deg,

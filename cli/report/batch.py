@@ -844,7 +844,7 @@ def _summary_notes(n_reports: int, engine: str, options: ReportOptions, preview_
                    retried: list[str], broken: str | None) -> list[str]:
     """The summary's notes: the run (engine, profile, ε), the preview's note, each retry, and why
     the batch is incomplete when the engine stopped."""
-    notes = [f"{n_reports} BRDFs, engine: {engine}, profile {options.profile}, eps {options.eps:g}."]
+    notes = [f"{n_reports} BRDFs, engine: {engine}, profile {options.profile}, eps {options.rule.eps:g}."]
     if preview_note:
         notes.append(preview_note)
     notes.extend(f"{r[0].upper()}{r[1:]}." for r in retried)

@@ -243,7 +243,7 @@ def unique_names(names: list[str]) -> list[str]:
 def _environments(brdf: BRDF, options: ReportOptions, choices: dict[float, OrderChoice], progress: Progress | None,
                   nthreads: int = 0):
     # the headline measured error: pairs inside the view limit (the sampler of `shrm compare`)
-    R, V, _ = sample_pairs(options.n_pairs, seed=options.seed, max_view_deg=options.max_view_deg)
+    R, V, _ = sample_pairs(options.n_pairs, seed=options.seed, max_view_deg=options.rule.max_view_deg)
     env_entries, main_shrms = [], []
     speed_rows: list[dict[str, Any]] = []
     envs = [load_report_env(spec, options) for spec in options.envs]
@@ -273,7 +273,7 @@ def _environments(brdf: BRDF, options: ReportOptions, choices: dict[float, Order
             "reference_seconds": ref_seconds,
         }
         # the main tolerance last: its SHRM is kept (previews), so no other map is made beside it
-        order = [t for t in options.all_tolerances if t != options.eps] + [options.eps]
+        order = [t for t in options.all_tolerances if t != options.rule.eps] + [options.rule.eps]
         rows_before = len(speed_rows)
         for tol in order:
             _stage(progress, f"prefilter {env.name} eps={tol:g}")
@@ -288,7 +288,7 @@ def _environments(brdf: BRDF, options: ReportOptions, choices: dict[float, Order
             row.update(prefilter_cpu_seconds=prefilter_cpu,
                        reference_map_cpu_seconds=ref_cpu_per_pair * (shrm.height * shrm.width))
             speed_rows.append(row)
-            if tol == options.eps:
+            if tol == options.rule.eps:
                 entry.update(_main_entry(row, shrm.info, options))
                 main_shrms.append((env, shrm))
             del shrm
@@ -304,6 +304,7 @@ def _speed_row(env_name: str, tol: float, shrm: SHRM, bands: list[dict], err: fl
     timings (``SHRM.info``), beside the measured error ``err`` and the per-band records ``bands``."""
     info, eps = shrm.info, shrm.eps
     w, t = info.window, info.timings
+    assert info.pixel_errors is not None  # a prefilter states them (only an old file's SHRM lacks them)
     return {
         "env": env_name, "tolerance": tol, "F_rho": info.F_rho, "P_rho": info.P_rho, "F_L": info.F_L,
         "F_B": shrm.F, "P_B": shrm.P, "size": [shrm.height, shrm.width],
@@ -352,7 +353,7 @@ def _main_entry(row: dict[str, Any], info: PrefilterInfo, options: ReportOptions
                "window_strength", "negative_after"),
         "lights": list(info.lights.lights), "lights_flux_share": info.lights.flux_share,
         **pick("capped", "capped_by", "map_budget"), "pixel_errors": info.pixel_errors,
-        "pixel_rule": info.pixel_rule, "n_pairs": options.n_pairs, "max_view_deg": options.max_view_deg,
+        "pixel_rule": info.pixel_rule, "n_pairs": options.n_pairs, "max_view_deg": options.rule.max_view_deg,
     }
 
 
@@ -471,9 +472,9 @@ def collect_report(
     _stage(progress, "orders")
     order_rows, eps_table, choices = _orders(analysed, options)
     by_tolerance = dict(zip(options.all_tolerances, choices, strict=True))
-    main_choice = by_tolerance[options.eps]
+    main_choice = by_tolerance[options.rule.eps]
     env_entries, speed_rows, main_shrms = _environments(analysed, options, by_tolerance, progress, nthreads)
-    main_orders = {"tolerance": options.eps, "F": main_choice.F, "P": main_choice.P, "eps": main_choice.eps}
+    main_orders = {"tolerance": options.rule.eps, "F": main_choice.F, "P": main_choice.P, "eps": main_choice.eps}
     # the order searches' quadrature grids (their view profiles) are not read after this: let them go before
     # the preview's OpenGL context (~190 MB) is made (RGL iris: 16 MB less at the preview, measured)
     del choices, by_tolerance, main_choice
@@ -492,7 +493,7 @@ def collect_report(
     preview_block = {
         "mode": mode,
         "env": env0.name,
-        "tolerance": options.eps,
+        "tolerance": options.rule.eps,
         "F": shrm0.F,
         "P": shrm0.P,
         "images": [{"key": p.key, "file": f"preview_{p.key}.png", "renderer": p.renderer} for p in previews],

@@ -251,7 +251,7 @@ def _sphere_block(brdf: BRDF, fits: Sequence[tuple[str, BRDF | None]], scattered
         entries.append({"label": label, "max_lum": float(lum.max()), "mean_lum": float(lum.mean())})
     files = []
     if images:
-        files.append(ReportImage(SPHERE_FILE, image_row_plot(images, [e["label"] for e in entries])))
+        files.append(ReportImage(SPHERE_FILE, image_row_plot(images, [str(e["label"]) for e in entries])))
     block = {"file": SPHERE_FILE if images else None, "size": SPHERE_SIZE,
              "light": list(map(float, np.asarray(SPHERE_LIGHT) / np.linalg.norm(SPHERE_LIGHT))),
              "view": [0.0, 0.0, 1.0], "irradiance": math.pi, "tone": "filmic", "exposure": 0.0,

@@ -160,7 +160,7 @@ class ReportOptions:
     @property
     def all_tolerances(self) -> tuple[float, ...]:
         """``tolerances`` and ``eps``, without repeats, loosest first."""
-        return tuple(sorted({float(t) for t in (*self.tolerances, self.eps)}, reverse=True))
+        return tuple(sorted({float(t) for t in (*self.tolerances, self.rule.eps)}, reverse=True))
 
     def with_changes(self, **changes: Any) -> ReportOptions:
         """A copy with some options changed (validated again)."""
