@@ -5,11 +5,13 @@ the options of :func:`~shrmkit.cli.report.options.profile` (``eps``, ``envs``, `
 ``n_pairs`` …, as :class:`~shrmkit.cli.report.options.ReportOptions` names them), the document of
 :func:`~shrmkit.cli.report.collect.collect_report` (``report.json``, data_specs/report_json.md),
 and with ``out=`` the report folder ``out/<name>/`` written as ``shrm report`` writes it
-(:func:`~shrmkit.cli.report.writer.report_files`, :func:`~shrmkit.cli.report.writer.write_folder`).
+(:func:`~shrmkit.cli.report.writer.report_files`, :func:`~shrmkit.cli.report.writer.write_folder`),
+named as ``shrm report`` names it (:func:`~shrmkit.cli.report.batch.report_names`: the file stem or
+the sanitized spec, ``phong:s=100`` → ``phong_s_100``; no ``:`` reaches a path).
 The object shows itself in a notebook (``_repr_html_``): the preview, the key numbers, and the
 first lines of ``report.md``.
 
-Public objects: :func:`report`, :class:`Report`.
+Public objects: :func:`report`, :class:`Report`, :func:`folder_name`.
 """
 
 from __future__ import annotations
@@ -23,12 +25,13 @@ from typing import Any
 from ...brdf_io.brdf import BRDF
 from ...brdf_io.errors import BadInputError
 from ...brdf_io.notebook import card, html_table, png_img
+from .batch import report_names
 from .collect import collect_report
 from .markdown import report_markdown
 from .options import profile as report_profile
 from .writer import report_files, summary_row, write_folder
 
-__all__ = ["report", "Report", "SUMMARY_LINES"]
+__all__ = ["report", "Report", "folder_name", "SUMMARY_LINES"]
 
 #: Lines of ``report.md`` the notebook card shows.
 SUMMARY_LINES = 12
@@ -46,7 +49,7 @@ class Report:
         What the report shows beside the document: preview images, lit spheres, live views
         (as :func:`~shrmkit.cli.report.writer.report_files` takes them).
     folder
-        The report folder written (``out/<name>/``), or None.
+        The report folder written (``out/<name>/``, ``name`` as :func:`folder_name` makes it), or None.
     """
 
     doc: dict[str, Any]
@@ -55,7 +58,7 @@ class Report:
 
     @property
     def name(self) -> str:
-        """The report's name (the BRDF's, or the one given)."""
+        """The report's name: its folder's (:func:`folder_name` of the BRDF's file or spec, or of the one given)."""
         return str(self.doc["name"])
 
     @property
@@ -73,8 +76,9 @@ class Report:
         return summary_row(self.doc)
 
     def write(self, out: str | Path) -> Path:
-        """Write the report folder ``out/<name>/`` atomically; returns its path."""
-        return write_folder(out, self.name, self.files())
+        """Write the report folder ``out/<name>/`` atomically (``name`` as :func:`folder_name` makes
+        it: no ``:`` or ``/`` of a spec reaches the path); returns its path."""
+        return write_folder(out, folder_name(self.name), self.files())
 
     def _preview_png(self) -> bytes | None:
         for p in self.previews:
@@ -134,6 +138,14 @@ class Report:
         return f"<Report {self.name!r} ({self.doc['status']}{where})>"
 
 
+def folder_name(name: str | Path) -> str:
+    """The report folder's name for a BRDF source or report name, as ``shrm report`` names its
+    folders (:func:`~shrmkit.cli.report.batch.report_names`, the one home of that rule): a file's
+    stem, or the spec with every run of characters other than letters, digits and ``._-`` made
+    ``_`` (``"microfacet:sigma=0.2"`` → ``"microfacet_sigma_0.2"``), cut to 100 characters with a hash."""
+    return report_names([str(name)])[0]
+
+
 def _source(brdf: BRDF | str | Path) -> str | Path:
     """What ``collect_report`` loads: a spec or path as given; a loaded BRDF by the file it came from
     (``source``) or its name when that is a spec."""
@@ -166,7 +178,8 @@ def report(
     profile
         ``"full"`` (the defaults of ``shrm report``) or ``"quick"`` (``shrm report --quick``).
     name
-        The report's name (default: the BRDF's).
+        The report's name (default: the BRDF's file stem or spec); as the report folder's name and
+        ``report.json``'s ``name``, made safe for a path as ``shrm report`` does (:func:`folder_name`).
     progress
         Optional callable told each stage (``"load"``, ``"fits"``, ``"orders"`` …).
     **options
@@ -192,7 +205,9 @@ def report(
         chosen = report_profile(profile, **options)
     except TypeError as err:  # an unknown keyword: name it in the terms of this call
         raise BadInputError(None, f"shrmkit.report: {err}") from None
-    doc, previews = collect_report(_source(brdf), chosen, name=name, progress=progress)
+    source = _source(brdf)
+    doc, previews = collect_report(source, chosen, name=folder_name(source if name is None else name),
+                                   progress=progress)
     result = Report(doc, tuple(previews))
     if out is None:
         return result
