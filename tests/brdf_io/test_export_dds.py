@@ -163,3 +163,33 @@ def test_black_map_is_refused():
     """An all-zero map is refused as shrm prefilter refuses it (no black chain)."""
     with pytest.raises(BadInputError, match="black"):
         ggx_cube_chain(np.zeros((8, 16, 3)), face_size=4)
+
+
+def test_cube_frame_against_threejs_and_the_engines_formulas(tmp_path):
+    """The exported cube's frame (data_specs/export.md, cube frame per engine): a y-up panorama
+    written with three.js' ``equirectUv`` (u = atan2(d_z, d_x)/2π + ½, v = asin(d_y)/π + ½, v = 1
+    at the top row) holding f(d) = 2 + d·a, loaded with the defaults and exported: the texel at the
+    OpenGL/Vulkan/KTX cube-table direction c (written out here, faces +X … −Z) holds f(c_z, c_y, c_x),
+    the mapping of Filament's ``equirectangularToCubemap`` (u = atan2(c_x, c_z)/2π + ½) — not
+    f(c), glTF-IBL-Sampler's ``panoramaToCubeMap`` (u = atan2(c_z, c_x)/2π + ½), a mirror image."""
+    from shrmkit.brdf_io.envmap import load_env
+    from shrmkit.brdf_io.rgbe import write_hdr
+
+    h, w = 32, 64
+    v_top = (np.arange(h) + 0.5) / h
+    psi = 2 * np.pi * ((np.arange(w) + 0.5) / w - 0.5)
+    sin_el = np.cos(np.pi * v_top)[:, None]
+    cos_el = np.sqrt(1 - sin_el**2)
+    d = np.stack([cos_el * np.cos(psi), np.broadcast_to(sin_el, (h, w)), cos_el * np.sin(psi)], axis=-1)
+    a = np.array([0.9, 0.5, -0.3])
+    write_hdr(tmp_path / "pano.hdr", np.repeat((2 + d @ a)[..., None], 3, axis=-1).astype(np.float32))
+    level = ggx_cube_chain(load_env(tmp_path / "pano.hdr"), face_size=8, n_levels=1).levels[0][..., 0]
+    s = 2 * (np.arange(8) + 0.5) / 8 - 1
+    sc, tc = np.meshgrid(s, s)  # columns, rows (rows top to bottom)
+    one = np.ones_like(sc)
+    table = [(one, -tc, -sc), (-one, -tc, sc), (sc, one, tc), (sc, -one, -tc), (sc, -tc, one), (-sc, -tc, -one)]
+    c = np.stack([np.stack(face, axis=-1) for face in table])
+    c /= np.linalg.norm(c, axis=-1, keepdims=True)
+    ours = 2 + c[..., [2, 1, 0]] @ a
+    assert np.abs(level - ours).max() < 0.02
+    assert np.abs(level - (2 + c @ a)).max() > 0.5
