@@ -14,7 +14,7 @@ import numpy as np
 import OpenEXR
 import pytest
 
-import shrmkit.analysis.shrm as shrm_module
+import shrmkit.analysis._prefilter as shrm_module  # prefilter's orders stage
 import shrmkit.render.api as api_module
 from shrmkit.brdf_io.envmap import load_env
 from shrmkit.brdf_io.errors import BadInputError
