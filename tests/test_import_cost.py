@@ -11,15 +11,20 @@ HEAVY = ("scipy.special", "scipy.fft", "scipy.ndimage", "scipy.spatial", "scipy.
          "scipy.sparse.linalg", "scipy.sparse.csgraph", "scipy.stats", "scipy.interpolate")
 
 
+def _heavy_loaded(code: str) -> list[str]:
+    """The heavy SciPy sub-packages loaded by a fresh interpreter running ``code`` (which prints the
+    loaded ``scipy.*`` module names)."""
+    loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    return sorted({m for m in loaded for h in HEAVY if m == h or m.startswith(h + ".")})
+
+
 def test_default_path_modules_import_no_heavy_scipy() -> None:
     code = ("import sys\n"
             "import shrmkit.cli.cmd_report, shrmkit.cli.report.collect, shrmkit.cli.report.writer\n"
             "import shrmkit.cli.cmd_prefilter, shrmkit.cli.cmd_render, shrmkit.render.vtk_renderer\n"
             "import shrmkit.analysis.orders, shrmkit.analysis.lights, shrmkit.analysis.baselines.methods\n"
             "print(' '.join(sorted(m for m in sys.modules if m.startswith('scipy.'))))")
-    loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
-    heavy = sorted({m for m in loaded for h in HEAVY if m == h or m.startswith(h + ".")})
-    assert heavy == [], heavy
+    assert _heavy_loaded(code) == []
 
 
 def test_prefilter_with_a_sun_imports_no_heavy_scipy() -> None:
@@ -29,9 +34,7 @@ def test_prefilter_with_a_sun_imports_no_heavy_scipy() -> None:
             "m = prefilter('builtin:sky,height=32', 'microfacet:sigma=0.2', eps=0.1)\n"
             "assert m.has_lights\n"
             "print(' '.join(sorted(m for m in sys.modules if m.startswith('scipy.'))))")
-    loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
-    heavy = sorted({m for m in loaded for h in HEAVY if m == h or m.startswith(h + ".")})
-    assert heavy == [], heavy
+    assert _heavy_loaded(code) == []
 
 
 def test_a_report_without_plots_never_imports_matplotlib(tmp_path) -> None:
