@@ -575,7 +575,7 @@ def target_quick_report(spec: str, label: str, limit_s: float, repeats: int) -> 
     costs = []
     for _ in range(repeats):
         with tempfile.TemporaryDirectory() as out:
-            costs.append(_child_cost("from shrmkit.cli.main import main; sys.exit(main(sys.argv[1:]))", "report",
+            costs.append(_child_cost("from shrmkit.cli.main import console_main; console_main()", "report",
                                      "--quick", spec, "--out", out, "-q", "--no-progress"))
     cpu, peak = min(c[0] for c in costs), min(c[1] for c in costs)
     imports = min(_child_cost(REPORT_IMPORTS)[0] for _ in range(repeats))

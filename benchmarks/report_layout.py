@@ -30,7 +30,9 @@ import sys
 import tempfile
 from pathlib import Path
 
-SHRM = [sys.executable, "-c", "import sys; from shrmkit.cli.main import main; sys.exit(main())"]
+#: the console script's code (``console_main``; an older checkout without it: ``main``)
+SHRM = [sys.executable, "-c", "import sys; from shrmkit.cli import main as m; "
+        "sys.exit(m.console_main() if hasattr(m, 'console_main') else m.main())"]
 
 #: (folder, BRDF arguments) of the two runs
 RUNS = (("one", ["microfacet:sigma=0.1"]), ("batch", ["microfacet:sigma=0.1", "phong:s=30"]))

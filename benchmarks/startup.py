@@ -34,7 +34,9 @@ import time
 from pathlib import Path
 
 #: what the ``shrm`` console script runs (pyproject ``[project.scripts]``)
-SHRM = [sys.executable, "-c", "import sys; from shrmkit.cli.main import main; sys.exit(main())"]
+#: the console script's code (``console_main``; an older checkout without it: ``main``)
+SHRM = [sys.executable, "-c", "import sys; from shrmkit.cli import main as m; "
+        "sys.exit(m.console_main() if hasattr(m, 'console_main') else m.main())"]
 
 #: (label, argv, expected exit status, held to the target)
 COMMANDS = [

@@ -4,8 +4,8 @@ format. The top of the stack: nothing imports it.
 
 Public API:
 
-- The command ``shrm`` (entry point ``shrmkit.cli.main:main``): its verbs, options, exit
-  statuses and ``--json`` documents (``data_specs/``) are the interface of this layer.
+- The command ``shrm`` (entry point ``shrmkit.cli.main:console_main``, which calls ``main``): its
+  verbs, options, exit statuses and ``--json`` documents (``data_specs/``) are the interface of this layer.
 - From Python — the names in ``__all__``, importable from ``shrmkit.cli``: :class:`Report`
   (one BRDF's report, as ``shrmkit.report(...)`` returns it), :func:`run_batch` (``shrm report``
   over many BRDFs, on worker processes or a Dask cluster) → :class:`BatchResult`, with

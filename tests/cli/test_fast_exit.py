@@ -1,0 +1,52 @@
+"""The ``shrm`` console script ends without the interpreter's teardown only when that is safe
+(``cli/main.py``: ``fast_exit``): its output, exit code and ``atexit`` handlers are kept, and a
+live thread or child process gets the ordinary exit."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+#: wraps os._exit so that a run says whether it took the fast exit, then runs console_main
+_HARNESS = """
+import atexit, os, sys, threading, time
+real = os._exit
+def marked(code):
+    sys.stderr.write("FAST-EXIT\\n"); sys.stderr.flush(); real(code)
+os._exit = marked
+atexit.register(lambda: print("atexit ran", file=sys.stderr))
+{setup}
+sys.argv = ["shrm", *{argv!r}]
+from shrmkit.cli.main import console_main
+console_main()
+"""
+
+
+def _run(argv: list[str], setup: str = "") -> subprocess.CompletedProcess[str]:
+    code = _HARNESS.format(setup=setup, argv=argv)
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+
+
+def test_help_through_a_pipe_is_whole_and_atexit_handlers_run() -> None:
+    proc = _run([])
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.startswith("usage: shrm") and "report" in proc.stdout
+    assert proc.stdout.rstrip().splitlines()[-1].strip(), "the help's last line was lost"
+    assert "atexit ran" in proc.stderr and "FAST-EXIT" in proc.stderr
+
+
+def test_an_error_keeps_its_line_and_exit_code_2() -> None:
+    proc = _run(["orders", "no-such-model:x=1"])
+    assert proc.returncode == 2
+    assert "shrm orders: error:" in proc.stderr and "no-such-model" in proc.stderr
+    assert "atexit ran" in proc.stderr and "FAST-EXIT" in proc.stderr
+
+
+def test_a_live_thread_gets_the_ordinary_exit() -> None:
+    # a non-daemon thread still running when main returns: os._exit would kill it mid-work
+    setup = ("threading.Thread(target=lambda: (time.sleep(0.5), print('thread finished', file=sys.stderr)))"
+             ".start()")
+    proc = _run([], setup=setup)
+    assert proc.returncode == 0
+    assert "thread finished" in proc.stderr and "atexit ran" in proc.stderr
+    assert "FAST-EXIT" not in proc.stderr
