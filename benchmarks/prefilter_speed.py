@@ -54,6 +54,7 @@ from __future__ import annotations
 import argparse
 import cProfile
 import inspect
+import json
 import os
 import pstats
 import subprocess
@@ -569,6 +570,49 @@ def _child_cost(code: str, *args: str) -> tuple[float, float]:
     return usage.ru_utime + usage.ru_stime, int(peak[-1]) / 1024.0
 
 
+#: run in a child: one quick report in this process, CPU seconds (every thread: process_time) of its
+#: stages printed as one JSON line on stderr — where a quick report's time goes
+_STAGES = """
+import functools, importlib, json, os, sys, tempfile, time
+t0 = time.process_time()
+import shrmkit.cli.cmd_report, shrmkit.cli.report.collect, shrmkit.cli.report.writer
+from shrmkit.cli.main import main
+cpu = {"imports (report modules)": time.process_time() - t0}
+STAGES = {"shrmkit.cli.report.collect": {"_fits": "fits", "explore": "BRDF views", "_orders": "orders",
+                                         "_environments": "references and prefilters", "render_previews": "preview"},
+          "shrmkit.cli.report.writer": {"_draw": "plots (matplotlib import included)"}}
+def clocked(f, name):
+    @functools.wraps(f)
+    def run(*a, **k):
+        t = time.process_time()
+        try:
+            return f(*a, **k)
+        finally:
+            cpu[name] = cpu.get(name, 0.0) + time.process_time() - t
+    return run
+for module, names in STAGES.items():
+    mod = importlib.import_module(module)
+    for attr, name in names.items():
+        setattr(mod, attr, clocked(getattr(mod, attr), name))
+shrmkit.cli.report.explorer.build_view = clocked(shrmkit.cli.report.explorer.build_view, "live view")
+t1 = time.process_time()
+with tempfile.TemporaryDirectory() as out:
+    main(["report", "--quick", sys.argv[1], "--out", out, "-q", "--no-progress"])
+cpu["rest (loading, checks, files)"] = time.process_time() - t1 - sum(v for k, v in cpu.items() if k[:7] != "imports")
+print("STAGES " + json.dumps(cpu), file=sys.stderr)
+"""
+
+
+def _report_stages(spec: str) -> dict[str, float]:
+    """CPU seconds by stage of one quick report of ``spec`` (:data:`_STAGES`, in a child process)."""
+    proc = subprocess.run([sys.executable, "-c", _STAGES, spec], capture_output=True, text=True,
+                          cwd=tempfile.gettempdir(), check=False)
+    line = next((x for x in proc.stderr.splitlines() if x.startswith("STAGES ")), None)
+    if proc.returncode != 0 or line is None:
+        raise RuntimeError(f"stages of {spec} failed: {proc.stderr[-500:]}")
+    return json.loads(line[len("STAGES "):])
+
+
 def target_quick_report(spec: str, label: str, limit_s: float, repeats: int) -> Target:
     """``shrm report --quick SPEC`` in a fresh process: min CPU (user + sys) and peak RSS over
     ``repeats`` runs, beside the CPU of the imports alone (what no report can go below)."""
@@ -580,9 +624,13 @@ def target_quick_report(spec: str, label: str, limit_s: float, repeats: int) -> 
     cpu, peak = min(c[0] for c in costs), min(c[1] for c in costs)
     imports = min(_child_cost(REPORT_IMPORTS)[0] for _ in range(repeats))
     met = cpu <= limit_s and peak <= QUICK_PEAK_MB
+    stages = _report_stages(spec)
+    where = ", ".join(f"{name} {fmt_time(sec)}" for name, sec in sorted(stages.items(), key=lambda kv: -kv[1])
+                      if sec >= 0.05)
     return Target(f"shrm report --quick, {label}", f"{fmt_time(cpu)} CPU, {peak:.0f} MiB peak",
                   f"<= {limit_s:g} s, <= {QUICK_PEAK_MB} MiB", met,
-                  f"of which the imports alone (report modules, matplotlib, VTK): {fmt_time(imports)} CPU",
+                  f"the imports alone (report modules, matplotlib, VTK): {fmt_time(imports)} CPU; by stage (CPU, "
+                  f"one run in-process): {where}",
                   key=f"quick report {label.split()[0]}")
 
 
