@@ -38,10 +38,9 @@ from .defaults import CENSUS_THRESHOLD as DEFAULT_THRESHOLD
 from .fit.crossval import DEFAULT_FOLDS
 from .fit.representation import CANDIDATES, RepresentationChoice, choose_representation
 from .fit.summary import FIT_FAIL_BAND_REL_RMS
+from .order_rule import OrderRule, RuleFields, resolve_rule
 from .orders import DEFAULT_MAX_F, DEFAULT_MAX_P, OrderChoice, choose_orders, orders_on_grid_for
 from .threads import single_threaded_blas
-from .tolerance import DEFAULT_EPS, check_eps
-from .view_bands import DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG, check_criterion, check_max_view
 
 __all__ = [
     "CSV_COLUMNS",
@@ -204,7 +203,7 @@ class CensusRow:
 
 
 @dataclass(frozen=True)
-class Census:
+class Census(RuleFields):
     """The outcome of :func:`run_census`: one row per material and the settings.
 
     Attributes
@@ -213,8 +212,10 @@ class Census:
         One :class:`CensusRow` per source, in the order given.
     F, P, threshold
         The orders asked and the accuracy mark (RH02 Fig. 8: 30, 5, 0.9).
-    eps, criterion, max_view_deg, max_F, max_P
-        The order rule of ``F_needed``/``P_needed`` (``choose_orders``).
+    rule
+        The order rule of ``F_needed``/``P_needed`` (:class:`~shrmkit.analysis.order_rule.OrderRule`,
+        ``choose_orders``); its fields read back as ``eps``, ``criterion``, ``max_view_deg``,
+        ``max_F``, ``max_P``.
     fit
         The representation settings: ``candidates``, ``folds``, ``seed``, ``max_theta_deg``.
     seconds
@@ -225,11 +226,7 @@ class Census:
     F: int
     P: int
     threshold: float
-    eps: float
-    criterion: str
-    max_view_deg: float
-    max_F: int
-    max_P: int
+    rule: OrderRule
     fit: dict[str, Any]
     seconds: float
 
@@ -431,9 +428,8 @@ def _reasons(row: dict[str, Any], choice: RepresentationChoice | None, threshold
 
 
 def _census_row(
-    source: str, *, F: int, P: int, threshold: float, eps: float, criterion: str, max_view_deg: float,
-    max_F: int, max_P: int, fit: dict[str, Any], load: Callable[[str], BRDF],
-    represent: tuple[str, Callable[[BRDF], BRDF]] | None,
+    source: str, *, F: int, P: int, threshold: float, rule: OrderRule, fit: dict[str, Any],
+    load: Callable[[str], BRDF], represent: tuple[str, Callable[[BRDF], BRDF]] | None,
 ) -> CensusRow:
     t0 = time.perf_counter()
     try:
@@ -450,9 +446,9 @@ def _census_row(
             choice = choose_representation(brdf, candidates=tuple(fit["candidates"]), folds=fit["folds"],
                                            seed=fit["seed"], max_theta_deg=fit["max_theta_deg"])
             analysed = choice.brdf
-        grid = orders_on_grid_for(analysed, F, P, criterion="bands", max_view_deg=max_view_deg)
-        needed = choose_orders(analysed, eps=eps, criterion=criterion, max_view_deg=max_view_deg, max_F=max_F,
-                               max_P=max_P)
+        # the accuracy table on the grid of (F, P): the bands rule at its default tolerance and caps
+        grid = orders_on_grid_for(analysed, F, P, rule=OrderRule(criterion="bands", max_view_deg=rule.max_view_deg))
+        needed = choose_orders(analysed, rule=rule)
         acc_r = tuple(float(v) for v in 1.0 - grid.rh02_table[F, : P + 1])
         acc_b = tuple(float(v) for v in 1.0 - grid.table[F, : P + 1])
         # scattered data: the representation fills between the measurements, and its held-out error
@@ -467,7 +463,7 @@ def _census_row(
         }
     except _ROW_ERRORS as err:
         return _failed(source, name, kind, err, t0)
-    codes, text = _reasons(row, choice, threshold, max_view_deg)
+    codes, text = _reasons(row, choice, threshold, rule.max_view_deg)
     worst = None if choice is None or choice.chosen.held_out_worst is None else choice.chosen.held_out_worst.as_dict()
     if choice is not None:
         representation = choice.label()
@@ -505,11 +501,7 @@ def run_census(
     F: int = DEFAULT_F,
     P: int = DEFAULT_P,
     threshold: float = DEFAULT_THRESHOLD,
-    eps: float = DEFAULT_EPS,
-    criterion: str = DEFAULT_CRITERION,
-    max_view_deg: float = DEFAULT_MAX_VIEW_DEG,
-    max_F: int = DEFAULT_MAX_F,
-    max_P: int = DEFAULT_MAX_P,
+    rule: OrderRule | None = None,
     candidates: tuple[str, ...] = CANDIDATES,
     folds: int = DEFAULT_FOLDS,
     seed: int = 0,
@@ -535,8 +527,9 @@ def run_census(
         Orders of the accuracy table: 1 − ε(F, p) for p = 0…P (RH02 Fig. 8: 30, 5).
     threshold
         Accuracy mark in (0, 1) (RH02 Fig. 8: 0.9).
-    eps, criterion, max_view_deg, max_F, max_P
-        The order rule of the orders needed (``choose_orders``).
+    rule
+        The order rule of the orders needed (:class:`~shrmkit.analysis.order_rule.OrderRule`,
+        ``choose_orders``; default ``OrderRule()``).
     candidates, folds, seed, max_theta_deg
         The representation choice of scattered data (``choose_representation``).
     load
@@ -562,7 +555,7 @@ def run_census(
     Raises
     ------
     BadInputError
-        Bad settings (orders, threshold, tolerance, criterion, view limit, candidates, folds,
+        Bad settings (orders, threshold, a ``rule`` that is not an ``OrderRule``, candidates, folds,
         workers): checked before any row. A source that cannot be read or analysed is a failed row.
     """
     t0 = time.perf_counter()
@@ -572,13 +565,7 @@ def run_census(
         raise BadInputError(None, f"P must be an integer in 0..{DEFAULT_MAX_P}, got {P!r}")
     if not (isinstance(threshold, float | int) and 0.0 < threshold < 1.0):
         raise BadInputError(None, f"threshold must be a number in (0, 1), got {threshold!r}")
-    if not (isinstance(max_F, int | np.integer) and 1 <= max_F <= MAX_F_LIMIT):
-        raise BadInputError(None, f"max_F must be an integer in [1, {MAX_F_LIMIT}], got {max_F!r}")
-    if not (isinstance(max_P, int | np.integer) and 0 <= max_P <= MAX_P_LIMIT):
-        raise BadInputError(None, f"max_P must be an integer in [0, {MAX_P_LIMIT}], got {max_P!r}")
-    eps = check_eps(eps)
-    criterion = check_criterion(criterion)
-    max_view_deg = check_max_view(max_view_deg)
+    rule = resolve_rule(rule)
     unknown = [c for c in candidates if c not in CANDIDATES]
     if unknown or not candidates:
         raise BadInputError(None, f"unknown representation(s) {unknown}; choose from {', '.join(CANDIDATES)}")
@@ -591,8 +578,7 @@ def run_census(
     if not (isinstance(workers, int | np.integer) and 1 <= workers <= MAX_WORKERS):
         raise BadInputError(None, f"workers must be an integer in [1, {MAX_WORKERS}], got {workers!r}")
     settings: dict[str, Any] = {
-        "F": int(F), "P": int(P), "threshold": float(threshold), "eps": eps, "criterion": criterion,
-        "max_view_deg": max_view_deg, "max_F": int(max_F), "max_P": int(max_P), "fit": fit, "represent": represent}
+        "F": int(F), "P": int(P), "threshold": float(threshold), "rule": rule, "fit": fit, "represent": represent}
     names = [str(source) for source in sources]
     if workers > 1 and len(names) > 1:
         try:
@@ -608,8 +594,7 @@ def run_census(
                 rows.append(_census_row(source, load=load, **settings))
                 if progress is not None:
                     progress(i + 1, len(names), rows[-1])
-    return Census(rows=tuple(rows), F=int(F), P=int(P), threshold=float(threshold), eps=eps, criterion=criterion,
-                  max_view_deg=max_view_deg, max_F=int(max_F), max_P=int(max_P), fit=fit,
+    return Census(rows=tuple(rows), F=int(F), P=int(P), threshold=float(threshold), rule=rule, fit=fit,
                   seconds=time.perf_counter() - t0)
 
 

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from .pairs import sample_pairs_focused
+from .records import PrefilterInfo, ViewBand
 
 __all__ = [
     "ERROR_CAP",
@@ -76,15 +77,27 @@ class BandSignal:
         return 0.5 * (self.edges_deg[:-1] + self.edges_deg[1:])
 
 
-def _bands(shrm: Any) -> list[dict[str, Any]]:
-    bands = shrm.meta.get("view_bands") if isinstance(getattr(shrm, "meta", None), dict) else None
+def _bands(shrm: Any) -> tuple[ViewBand, ...]:
+    info = getattr(shrm, "info", None)
+    bands = info.view_bands if isinstance(info, PrefilterInfo) else ()
     if not bands:
         raise ValueError("this SHRM states no per-band errors (meta['view_bands']): prefilter it with shrmkit")
     return bands
 
 
-def _edges(bands: list[dict[str, Any]]) -> np.ndarray:
-    return np.array([b["theta_v_deg"][0] for b in bands] + [bands[-1]["theta_v_deg"][1]], dtype=np.float64)
+def _edges(bands: tuple[ViewBand, ...]) -> np.ndarray:
+    edges = [band.theta_v_deg or (np.nan, np.nan) for band in bands]
+    return np.array([lo for lo, _ in edges] + [edges[-1][1]], dtype=np.float64)
+
+
+def _statement(band: ViewBand, kind: str, residual: bool) -> float | None:
+    """A band's ``predicted``/``bound`` relative RMS: of the residual beside the lights when
+    ``residual`` and the band states one, else the whole."""
+    whole = band.predicted_rel_rms if kind == "predicted" else band.bound_rel_rms
+    if not residual:
+        return whole
+    part = band.predicted_rel_rms_residual if kind == "predicted" else band.bound_rel_rms_residual
+    return whole if part is None else part
 
 
 def channel_norm(rgb: np.ndarray) -> np.ndarray:
@@ -165,9 +178,8 @@ def band_errors(
         raise ValueError(f"signal has {signal.rms.size} bands, the SHRM states {len(bands)}")
     kind = "bound" if bound else "predicted"
     has_lights = bool(getattr(shrm, "has_lights", False))
-    key = f"{kind}_rel_rms_residual" if has_lights else f"{kind}_rel_rms"
-    rel = np.array([b.get(key, b.get(f"{kind}_rel_rms")) for b in bands], dtype=np.float64)
-    light = np.array([b.get("lights_rel_rms_residual", 0.0) if has_lights else 0.0 for b in bands], dtype=np.float64)
+    rel = np.array([_statement(b, kind, has_lights) for b in bands], dtype=np.float64)
+    light = np.array([(b.lights_rel_rms_residual or 0.0) if has_lights else 0.0 for b in bands], dtype=np.float64)
     rel = np.where(np.isfinite(rel), rel + 1.5 * light if bound else np.hypot(rel, light), np.inf)  # merged lights
     e = rel * signal.rms
     if bound:

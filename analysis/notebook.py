@@ -13,6 +13,7 @@ Public objects: :func:`order_choice_html`, :func:`shrm_html`, :func:`shrm_png`, 
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -20,6 +21,7 @@ import numpy as np
 from ..brdf_io.display import encode_png, middle_grey_exposure, to_8bit
 from ..brdf_io.latlong import row_solid_angles
 from ..brdf_io.notebook import THUMBNAIL_ROWS, card, html_table, number, png_img
+from .records import PrefilterInfo, ViewBand
 from .sh import real_sph_harm
 
 __all__ = ["order_choice_html", "shrm_html", "shrm_png", "stated_band", "THUMBNAIL_VIEW"]
@@ -28,8 +30,9 @@ __all__ = ["order_choice_html", "shrm_html", "shrm_png", "stated_band", "THUMBNA
 THUMBNAIL_VIEW = (0.0, 0.0, 1.0)
 
 
-def _band_name(band: dict[str, Any]) -> str:
-    lo, hi = band["theta_v_deg"]
+def _band_name(band: Mapping[str, Any] | ViewBand) -> str:
+    edges = band.theta_v_deg if isinstance(band, ViewBand) else band["theta_v_deg"]
+    lo, hi = edges if edges is not None else (float("nan"), float("nan"))
     return f"{lo:g}–{hi:g}°"
 
 
@@ -60,11 +63,18 @@ def order_choice_html(choice: Any) -> str:
     return card("OrderChoice", rows, extra=table)
 
 
-def stated_band(meta: dict[str, Any]) -> dict[str, Any] | None:
+def stated_band(meta: Mapping[str, Any]) -> dict[str, Any] | None:
     """The view band inside the limit with the largest predicted relative RMS among an SHRM's
-    ``meta["view_bands"]`` (the error the SHRM states for itself), or None when it states none."""
-    inside = [b for b in meta.get("view_bands") or [] if b.get("inside")]
-    return max(inside, key=lambda b: b["predicted_rel_rms"]) if inside else None
+    ``meta["view_bands"]`` (the error the SHRM states for itself), as JSON, or None when it states
+    none: :meth:`PrefilterInfo.stated_band <shrmkit.analysis.records.PrefilterInfo.stated_band>` of
+    ``meta`` (``SHRM.info.stated_band()`` gives the typed band)."""
+    band = PrefilterInfo.from_meta(meta).stated_band()
+    return None if band is None else band.to_json()
+
+
+def _or_dash(value: Any) -> Any:
+    """A card's value, or "—" for a key the SHRM's meta lacks (a file written before it)."""
+    return "—" if value is None else value
 
 
 def _view_map_thumbnail(shrm: Any, rows: int = THUMBNAIL_ROWS) -> np.ndarray:
@@ -86,34 +96,34 @@ def shrm_png(shrm: Any) -> bytes:
 def shrm_html(shrm: Any) -> str:
     """The card of an :class:`~shrmkit.analysis.shrm.SHRM`: orders, map size, the stated error of the
     worst view band, lights, window, timings and the per-band table."""
-    meta = shrm.meta
-    worst = stated_band(meta)
+    info: PrefilterInfo = shrm.info
+    worst = info.stated_band()
+    limit = float("nan") if info.max_view_deg is None else info.max_view_deg
     stated = "none stated" if worst is None else (
-        f"relative RMS {worst['predicted_rel_rms']:.3g} (bound {worst['bound_rel_rms']:.3g}) in band "
-        f"{_band_name(worst)}, worst inside {meta.get('max_view_deg', float('nan')):g}°")
+        f"relative RMS {worst.predicted_rel_rms:.3g} (bound {worst.bound_rel_rms:.3g}) in band "
+        f"{_band_name(worst)}, worst inside {limit:g}°")
     cube = "" if shrm.cube is None else f"; cube {shrm.cube.shape[2]}² per face"
     rows: list[tuple[str, Any]] = [
-        ("BRDF", meta.get("brdf", "—")),
-        ("environment", meta.get("environment", "—")),
+        ("BRDF", _or_dash(info.brdf)),
+        ("environment", _or_dash(info.environment)),
         ("F, P", f"{shrm.F}, {shrm.P}  ({(shrm.P + 1) ** 2} coefficient maps)"),
         ("map size", f"{shrm.height} × {shrm.width}{cube}, {shrm.coeffs.nbytes / 2**20:.3g} MiB"),
         ("tolerance", shrm.tolerance),
         ("stated error", stated),
-        ("lights (shaded exactly)", len(meta.get("lights") or [])),
-        ("window", meta.get("window", "—")),
+        ("lights (shaded exactly)", len(info.lights)),
+        ("window", _or_dash(info.window.used)),
     ]
-    if meta.get("capped_by"):
-        rows.append(("capped by", "; ".join(str(c) for c in meta["capped_by"])))
-    timings = meta.get("timings") or {}
+    if info.capped_by:
+        rows.append(("capped by", "; ".join(str(c) for c in info.capped_by)))
+    timings = info.timings.to_json()
     if timings:
         rows.append(("seconds", ", ".join(f"{k} {v:.3g}" for k, v in timings.items())))
-    bands = meta.get("view_bands") or []
     table = html_table(
         ["θ_v", "predicted rel. RMS", "bound", "inside the limit"],
-        [[_band_name(b), b["predicted_rel_rms"], b["bound_rel_rms"], b["inside"]] for b in bands],
+        [[_band_name(b), b.predicted_rel_rms, b.bound_rel_rms, b.inside] for b in info.view_bands],
         caption="stated error by view band (relative RMS of the reflected radiance)",
-    ) if bands else ""
+    ) if info.view_bands else ""
     image = png_img(shrm_png(shrm), "distant-viewer map, viewer at the zenith", width=4 * THUMBNAIL_ROWS)
     note = ("<div style='font-size:80%'>picture: the SHRM part for a viewer at the zenith, over the "
-            f"reflection direction (lat-long); {number(len(meta.get('lights') or []))} light(s) not drawn</div>")
+            f"reflection direction (lat-long); {number(len(info.lights))} light(s) not drawn</div>")
     return card("SHRM", rows, image=image, extra=note + table)

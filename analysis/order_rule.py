@@ -9,7 +9,8 @@ from them. ``data_specs/view_bands.md`` (the rule as one value) documents :meth:
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields, replace
+from collections.abc import Mapping
+from dataclasses import MISSING, dataclass, fields, replace
 from typing import Any
 
 from ..brdf_io.errors import BadInputError
@@ -19,7 +20,7 @@ from .defaults import DEFAULT_CRITERION, DEFAULT_MAX_F, DEFAULT_MAX_P, DEFAULT_M
 from .tolerance import DEFAULT_EPS, check_eps
 from .view_bands import check_criterion, check_max_view
 
-__all__ = ["OrderRule", "resolve_rule", "RULE_FIELDS"]
+__all__ = ["OrderRule", "resolve_rule", "init_options", "RuleView", "RuleFields", "RULE_FIELDS"]
 
 
 @dataclass(frozen=True)
@@ -83,6 +84,69 @@ class OrderRule:
 
 #: The fields of :class:`OrderRule`, in order: also the loose keywords the library still accepts.
 RULE_FIELDS = ("criterion", "max_view_deg", "eps", "max_F", "max_P")
+
+
+class RuleView:
+    """``criterion`` and ``max_view_deg`` read back from the ``rule`` (an :class:`OrderRule`) of a
+    class that holds one (a base of options and result dataclasses; no fields of its own)."""
+
+    rule: OrderRule
+
+    @property
+    def criterion(self) -> str:
+        """``rule.criterion``: ``"bands"`` or ``"rh02"``."""
+        return self.rule.criterion
+
+    @property
+    def max_view_deg(self) -> float:
+        """``rule.max_view_deg``: the rule's view limit, degrees of θ_v."""
+        return self.rule.max_view_deg
+
+
+class RuleFields(RuleView):
+    """Every field of the ``rule`` read back: :class:`RuleView`'s and ``eps``, ``max_F``, ``max_P``."""
+
+    @property
+    def eps(self) -> float:
+        """``rule.eps``: the tolerance ε."""
+        return self.rule.eps
+
+    @property
+    def max_F(self) -> int:
+        """``rule.max_F``: the cap on F."""
+        return self.rule.max_F
+
+    @property
+    def max_P(self) -> int:
+        """``rule.max_P``: the cap on P."""
+        return self.rule.max_P
+
+
+def init_options(obj: Any, options: dict[str, Any], loose: Mapping[str, str]) -> None:
+    """Set the fields of a frozen options dataclass written ``init=False`` that holds one ``rule``
+    (:class:`OrderRule`) from its constructor's keyword ``options``.
+
+    The keywords named in ``loose`` (keyword → rule field) set those fields of the rule, over a
+    ``rule=`` given too; the other keywords set the dataclass' fields (defaults for those not given).
+    ``dataclasses.replace`` then works both ways: it passes every field (``rule`` among them) and the
+    changed keywords, so a new ``rule=`` or a changed loose keyword each win.
+
+    Raises
+    ------
+    TypeError
+        A keyword that is neither a field nor in ``loose``.
+    BadInputError
+        A rule field out of range, or ``rule`` not an :class:`OrderRule` (:func:`resolve_rule`).
+    """
+    given = {field_: options.pop(key) for key, field_ in loose.items() if key in options}
+    options["rule"] = resolve_rule(options.get("rule"), override=True, **given)
+    known = fields(obj)
+    unknown = sorted(set(options) - {f.name for f in known})
+    if unknown:
+        raise TypeError(f"{type(obj).__name__}() got unexpected keyword argument(s) {', '.join(unknown)}")
+    for f in known:
+        default = f.default_factory() if f.default is MISSING and f.default_factory is not MISSING else f.default
+        object.__setattr__(obj, f.name, options.get(f.name, default))
 
 
 def _cap(name: str, value: Any, lo: int, hi: int) -> int:

@@ -17,7 +17,9 @@ line, and :func:`region_bounds` reads the per-band statement over a region of re
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -25,6 +27,7 @@ from ..brdf_io.exr import luminance_weights
 from ..brdf_io.latlong import pixel_directions, row_solid_angles
 from .brdf_coeffs import BRDFCoefficients
 from .lighting import LightingCoefficients
+from .records import PrefilterInfo
 from .synthesis import local_view_field, windowed
 
 __all__ = [
@@ -270,10 +273,12 @@ def pixel_statement(
                       capped=False, samples=int(errors.size), evaluations=fields.count)
 
 
-def pixel_line(meta: dict) -> str:
-    """One line for a terminal from an SHRM's ``meta`` (``pixel_errors``, ``pixel_rule``): the
-    per-direction statement and what the pixel rule did."""
-    stated = meta.get("pixel_errors") or {}
+def pixel_line(info: PrefilterInfo | Mapping[str, Any]) -> str:
+    """One line for a terminal from an SHRM's ``info`` (or its ``meta``; ``pixel_errors``,
+    ``pixel_rule``): the per-direction statement and what the pixel rule did."""
+    if not isinstance(info, PrefilterInfo):
+        info = PrefilterInfo.from_meta(info)
+    stated = info.pixel_errors or {}
     if stated.get("p90") is None:
         text = "per pixel: not measured (no higher order than F to measure against)"
     else:
@@ -282,7 +287,7 @@ def pixel_line(meta: dict) -> str:
         text = (f"per pixel: relative error median {stated['median']:.3g}, 90th percentile {stated['p90']:.3g} "
                 f"(sqrt(eps) {stated['tolerance']:.3g}; estimated on {stated['samples']} sampled directions x views "
                 f"against F {stated['F_reference']})")
-    rule = meta.get("pixel_rule")
+    rule = info.pixel_rule
     if rule and rule["F"] > rule["F_from"]:
         text += f"; the pixel rule raised F_B {rule['F_from']} -> {rule['F']}"
     elif rule:

@@ -278,3 +278,10 @@ class PrefilterInfo:
     def bands_inside(self) -> tuple[ViewBand, ...]:
         """The bands inside the rule's view limit (a band without ``inside`` counts as inside)."""
         return tuple(band for band in self.view_bands if band.inside is not False)
+
+    def stated_band(self) -> ViewBand | None:
+        """The error the SHRM states for itself: among the bands marked ``inside`` the rule's view
+        limit, the one with the largest ``predicted_rel_rms`` (the first of equals); None when no
+        band is marked inside (a file without the per-band statement)."""
+        inside = [band for band in self.view_bands if band.inside]
+        return max(inside, key=lambda band: band.predicted_rel_rms or 0.0) if inside else None

@@ -44,12 +44,14 @@ from ..analysis.census import (
     census_sources,
     run_census,
 )
+from ..analysis.order_rule import OrderRule
 from ..brdf_io.atomic import atomic_paths, check_writable
 from ..brdf_io.brdf import BRDF
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.jsonutil import to_jsonable
 from ..brdf_io.specs import BRDF_FILE_TYPES, load_brdf
 from .common import (
+    order_rule,
     print_json,
     print_table,
     progress_shown,
@@ -103,8 +105,8 @@ def run(args: argparse.Namespace) -> int:
                              markup=False, highlight=False, soft_wrap=True)
 
         census = run_census(
-            sources, F=args.F, P=args.P, threshold=args.threshold, eps=args.eps, criterion=args.criterion,
-            max_view_deg=args.max_view_deg, max_F=args.max_F, max_P=args.max_P, candidates=args.candidates,
+            sources, F=args.F, P=args.P, threshold=args.threshold, candidates=args.candidates,
+            rule=OrderRule(eps=args.eps, max_F=args.max_F, max_P=args.max_P, **order_rule(args)),
             folds=args.folds, seed=args.seed, max_theta_deg=args.max_theta,
             load=functools.partial(load_census_brdf, rgl_incident=args.rgl_incident), progress=progress,
             workers=args.workers,

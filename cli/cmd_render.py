@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from ..analysis.notebook import stated_band
+from ..analysis.order_rule import OrderRule
 from ..analysis.tolerance import check_eps
 from ..brdf_io.atomic import atomic_paths, check_writable
 from ..brdf_io.errors import BadInputError
@@ -108,7 +109,7 @@ def _validate(args: argparse.Namespace, sequence: bool = False) -> tuple[list[Ca
     # RenderOptions checks --lobes/--elevations (its ranges, one home) before anything is loaded
     options = RenderOptions(lobes=args.lobes, elevations=args.elevations, self_shadow=args.self_shadow,
                             window=args.window, lights=args.lights, pixel_rule=args.pixel_rule == "on",
-                            env_rotation=rotation, **order_rule(args))
+                            env_rotation=rotation, rule=OrderRule(eps=args.eps, **order_rule(args)))
     return cameras, options
 
 

@@ -20,6 +20,7 @@ from pathlib import Path
 
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
+from ..analysis.order_rule import resolve_rule
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.specs import brdf_sources
 from ..render.mesh import load_mesh
@@ -38,18 +39,21 @@ from .report.options import load_report_env, profile
 def options_from_args(args: argparse.Namespace):
     """ReportOptions from the parsed arguments (the quick profile when ``--quick``)."""
 
-    changes = {"eps": args.eps, "lobes": args.lobes, "preview": args.preview, "seed": args.seed, "mesh": args.mesh,
+    changes = {"lobes": args.lobes, "preview": args.preview, "seed": args.seed, "mesh": args.mesh,
                "env_up": args.env_up, "env_flip": args.env_flip, "env_azimuth": args.env_azimuth,
                "env_layer": args.env_layer, "env_part": args.env_part,
-               "window": args.window, "lights": args.lights, "criterion": args.criterion,
-               "max_view_deg": args.max_view_deg, "plots": not args.no_plots}
+               "window": args.window, "lights": args.lights, "plots": not args.no_plots}
     for key, value in (("tolerances", args.tolerances), ("envs", tuple(args.env) if args.env else None),
                        ("env_height", args.env_height), ("models", args.models), ("n_pairs", args.pairs),
-                       ("max_F", args.max_F), ("fit_samples", args.fit_samples),
-                       ("explorer_plots", args.explorer_plots)):
+                       ("fit_samples", args.fit_samples), ("explorer_plots", args.explorer_plots)):
         if value is not None:
             changes[key] = value
-    return profile("quick" if args.quick else "full", **changes)
+    options = profile("quick" if args.quick else "full", **changes)
+    # one order rule: the profile's (quick caps F at 96) with the rule options given; set through the
+    # rule's keywords, which ReportOptions.with_changes applies over its rule (a rule= would not win)
+    rule = resolve_rule(options.rule, override=True, eps=args.eps, max_F=args.max_F, criterion=args.criterion,
+                        max_view_deg=args.max_view_deg)
+    return options.with_changes(**rule.to_json())
 
 
 def run_with_progress(sources: list[str], out: str, options, *, workers: int = 1, scheduler: str | None = None,

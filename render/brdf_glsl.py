@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from ..analysis.defaults import DEFAULT_MAX_VIEW_DEG
 from ..analysis.lights import LightSet, light_radiance
 from ..analysis.pairs import sample_pairs_focused
 from ..analysis.reference import local_frames
@@ -577,7 +578,8 @@ def light_shading(shrm: Any, *, table_shape: tuple[int, int, int] | None = None,
     uniforms = light_uniforms(lights)
     error = None
     if shader is TABLE_SHADER:
-        max_view = float(shrm.meta.get("max_view_deg", 80.0))
+        stated = shrm.info.max_view_deg
+        max_view = DEFAULT_MAX_VIEW_DEG if stated is None else float(stated)
         if table is None:
             table, error = choose_table(brdf, lights, max_view_deg=max_view, shape=table_shape)
         elif measure:

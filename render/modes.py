@@ -44,11 +44,10 @@ from ..analysis.baselines.methods import (
 from ..analysis.baselines.rsibr import RSIBRMaps
 from ..analysis.baselines.selfshadow import vertex_visibility_sh
 from ..analysis.lights import DEFAULT_LIGHTS, check_lights
-from ..analysis.order_rule import OrderRule
+from ..analysis.order_rule import OrderRule, RuleView, init_options
 from ..analysis.orders import OrderChoice
 from ..analysis.pixels import pixel_line
 from ..analysis.shrm import DEFAULT_WINDOW, SHRM, check_window
-from ..analysis.view_bands import DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG
 from ..brdf_io.brdf import BRDF
 from ..brdf_io.env_rotation import check_env_rotation
 from ..brdf_io.envmap import EnvironmentMap
@@ -83,9 +82,9 @@ LOBES_RANGE = (GAUSSIAN_LOBES.lo, GAUSSIAN_LOBES.hi)
 ELEVATIONS_RANGE = (GAUSSIAN_ELEVATIONS.lo, GAUSSIAN_ELEVATIONS.hi)
 
 
-@dataclass(frozen=True)
-class RenderOptions:
-    """Options of the model builders; a mode uses those it needs.
+@dataclass(frozen=True, init=False)
+class RenderOptions(RuleView):
+    """Options of the model builders, keyword-only; a mode uses those it needs.
 
     Attributes
     ----------
@@ -100,10 +99,15 @@ class RenderOptions:
     window
         The SHRM modes' window against Gibbs ringing, one of ``analysis.shrm.WINDOWS``
         (``prefilter(window=)``; default ``"auto"``).
+    rule
+        The SHRM modes' order rule (:class:`~shrmkit.analysis.order_rule.OrderRule`: criterion, view
+        limit, caps; :mod:`shrmkit.analysis.view_bands`; default ``OrderRule()``). Its tolerance is
+        replaced by the render's ``eps`` argument: :meth:`rule_at` is the rule the SHRMs are made
+        under.
     criterion, max_view_deg
-        The SHRM modes' order rule and its view limit (validated as an
-        :class:`~shrmkit.analysis.order_rule.OrderRule`'s; :mod:`shrmkit.analysis.view_bands`). The
-        tolerance is the render's ``eps`` argument: :meth:`rule_at` is the whole rule at it.
+        ``rule.criterion`` and ``rule.max_view_deg``, read back from :attr:`rule`; as keywords they
+        set those fields of ``rule`` (over a ``rule=`` given too; ``dataclasses.replace`` works with
+        either). An unknown keyword raises ``TypeError``.
     lights
         The SHRM modes' explicit lights (``prefilter(lights=)``: ``"auto"``, ``"none"`` or at most
         N lights; validated by :func:`~shrmkit.analysis.lights.check_lights`): the compact bright
@@ -131,12 +135,15 @@ class RenderOptions:
     elevations: int = GAUSSIAN_ELEVATIONS.default
     self_shadow: bool = False
     window: str = DEFAULT_WINDOW
-    criterion: str = DEFAULT_CRITERION
-    max_view_deg: float = DEFAULT_MAX_VIEW_DEG
     lights: str | int = DEFAULT_LIGHTS
     pixel_rule: bool = True
     env_rotation: Any = None
     orders: OrderChoice | None = field(default=None, compare=False, repr=False)
+    rule: OrderRule = OrderRule()
+
+    def __init__(self, **options: Any) -> None:
+        init_options(self, options, {"criterion": "criterion", "max_view_deg": "max_view_deg"})
+        self.__post_init__()
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "env_rotation", _rotation_tuples(self.env_rotation))
@@ -147,21 +154,19 @@ class RenderOptions:
         if not isinstance(self.pixel_rule, bool):
             raise BadInputError(None, f"pixel_rule must be True or False, got {self.pixel_rule!r}")
         object.__setattr__(self, "lights", check_lights(self.lights))
-        object.__setattr__(self, "max_view_deg", self.rule_at(None).max_view_deg)  # the rule's checks
         for setting in (GAUSSIAN_LOBES, GAUSSIAN_ELEVATIONS):
             setting.check(getattr(self, setting.name))
 
     def rule_at(self, eps: float | None) -> OrderRule:
-        """The SHRM modes' :class:`~shrmkit.analysis.order_rule.OrderRule` at tolerance ``eps`` (None:
-        the default ε), with this criterion and view limit and the default caps.
+        """The SHRM modes' :class:`~shrmkit.analysis.order_rule.OrderRule` at tolerance ``eps``:
+        :attr:`rule` with ``eps`` (None: :attr:`rule` as it is).
 
         Raises
         ------
         BadInputError
-            ``eps``, ``criterion`` or ``max_view_deg`` out of range.
+            ``eps`` out of range.
         """
-        rule = OrderRule(criterion=self.criterion, max_view_deg=self.max_view_deg)
-        return rule if eps is None else rule.replace(eps=eps)
+        return self.rule if eps is None else self.rule.replace(eps=eps)
 
     def rotations(self) -> np.ndarray | list[np.ndarray] | None:
         """``env_rotation`` as ``render_frames`` takes it: None, one (3, 3) matrix, or a list of them."""
@@ -289,9 +294,8 @@ def lights_info(shrm: SHRM, *, per_pixel: bool = True) -> tuple[dict[str, Any], 
 
 def _shrm_settings(eps: float, options: RenderOptions) -> dict[str, Any]:
     """The SHRM's settings of the table's builders (``analysis.baselines.methods.shrm_model``)."""
-    return {"eps": eps, "window": options.window, "criterion": options.criterion,
-            "max_view_deg": options.max_view_deg, "lights": options.lights, "pixel_rule": options.pixel_rule,
-            "orders": options.orders}
+    return {"rule": options.rule_at(eps), "window": options.window, "lights": options.lights,
+            "pixel_rule": options.pixel_rule, "orders": options.orders}
 
 
 def _prefiltered(
@@ -306,14 +310,15 @@ def _prefiltered(
     stated, window = shrm.info, shrm.info.window
     info = {"F": shrm.F, "P": shrm.P, "height": shrm.height, "width": shrm.width, "eps": eps,
             "achieved_eps": dict(shrm.eps), "azimuth_free": azimuth_free, "prefilter_seconds": seconds,
-            "criterion": stated.criterion, "max_view_deg": stated.max_view_deg, "view_bands": shrm.meta["view_bands"],
+            "criterion": stated.criterion, "max_view_deg": stated.max_view_deg,
+            "view_bands": [band.to_json() for band in stated.view_bands],
             "window": window.used, "window_requested": window.requested, "window_strength": window.strength,
             "window_reason": window.reason, "negative_before": window.negative_before,
             "negative_after": window.negative_after,
             "negative_fraction_after": window.negative_fraction_after,
             "pixel_errors": stated.pixel_errors, "pixel_rule": stated.pixel_rule, "lights": light_info}
     lines = (f"SHRM F={shrm.F} P={shrm.P} on {shrm.height}x{shrm.width} ({stated_line(shrm, eps)})",
-             f"window: {window.describe()} ({window.reason})", pixel_line(shrm.meta),
+             f"window: {window.describe()} ({window.reason})", pixel_line(stated),
              light_line, f"prefilter: {seconds:.3f} s")
     return BuiltModel(shrm, info, lines)
 

@@ -47,10 +47,9 @@ from ..defaults import (  # (default, lo, hi)
     RSIBR_REFERENCE_HEIGHT_LIMITS,
 )
 from ..lights import DEFAULT_LIGHTS
+from ..order_rule import OrderRule, resolve_rule
 from ..orders import OrderChoice
 from ..shrm import DEFAULT_WINDOW, SHRM, prefilter
-from ..tolerance import DEFAULT_EPS
-from ..view_bands import DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG
 from .gaussian_lobes import GaussianLobeModel, TransferSamples, fit_gaussian_lobes, sg_mip_stack, transfer_samples
 from .rsibr import RSIBRMaps, rsibr_from_shrm, rsibr_reference
 
@@ -117,8 +116,9 @@ class Method:
         What the model is, one line.
     settings
         The method's own fit settings with their limits. Every method built from an SHRM
-        (``uses_shrm``) also takes the SHRM's settings: ``eps``, ``window``, ``criterion``,
-        ``max_view_deg``, ``lights``, ``pixel_rule``, ``orders`` (:func:`shrm_model`).
+        (``uses_shrm``) also takes the SHRM's settings: ``rule`` (or its loose ``eps``,
+        ``criterion``, ``max_view_deg``), ``window``, ``lights``, ``pixel_rule``, ``orders``
+        (:func:`shrm_model`).
     build
         ``build(env, brdf, **settings) -> model``: the plain model (``model_type``).
     model_type
@@ -160,22 +160,27 @@ def shrm_model(
     env: Any,
     brdf: Any,
     *,
-    eps: float = DEFAULT_EPS,
+    rule: OrderRule | None = None,
+    eps: float | None = None,
     window: str = DEFAULT_WINDOW,
-    criterion: str = DEFAULT_CRITERION,
-    max_view_deg: float = DEFAULT_MAX_VIEW_DEG,
+    criterion: str | None = None,
+    max_view_deg: float | None = None,
     lights: str | int = DEFAULT_LIGHTS,
     pixel_rule: bool = True,
     orders: OrderChoice | None = None,
 ) -> SHRM:
-    """[RH02] The global SHRM of ``env`` and ``brdf`` at tolerance ``eps``: :func:`~..shrm.prefilter`
-    with the orders of its rule (``criterion`` up to ``max_view_deg``), the window, the explicit
-    lights and the pixel rule. ``orders``: the BRDF's order choice made beforehand (same ε, rule).
+    """[RH02] The global SHRM of ``env`` and ``brdf`` under the order ``rule``
+    (:class:`~shrmkit.analysis.order_rule.OrderRule`, default ``OrderRule()``: tolerance ε, criterion,
+    view limit, caps): :func:`~..shrm.prefilter` with the orders of that rule, the window, the
+    explicit lights and the pixel rule. ``eps``, ``criterion``, ``max_view_deg``: the rule's fields as
+    loose keywords (None: not given; with ``rule`` they must agree with it, as in ``prefilter``).
+    ``orders``: the BRDF's order choice made beforehand (same rule).
 
-    Raises :class:`BadInputError` as ``prefilter`` does (ε outside (0, 1), unknown window …).
+    Raises :class:`BadInputError` as ``prefilter`` does (ε outside (0, 1), unknown window, a loose
+    keyword that disagrees with ``rule`` …).
     """
-    return prefilter(env, brdf, eps=eps, window=window, criterion=criterion, max_view_deg=max_view_deg,
-                     lights=lights, pixel_rule=pixel_rule, orders=orders)
+    rule = resolve_rule(rule, eps=eps, criterion=criterion, max_view_deg=max_view_deg)
+    return prefilter(env, brdf, rule=rule, window=window, lights=lights, pixel_rule=pixel_rule, orders=orders)
 
 
 def kautz_mccool_model(
@@ -183,26 +188,28 @@ def kautz_mccool_model(
     brdf: Any,
     *,
     shrm: SHRM | None = None,
-    eps: float = DEFAULT_EPS,
+    rule: OrderRule | None = None,
+    eps: float | None = None,
     window: str = DEFAULT_WINDOW,
-    criterion: str = DEFAULT_CRITERION,
-    max_view_deg: float = DEFAULT_MAX_VIEW_DEG,
+    criterion: str | None = None,
+    max_view_deg: float | None = None,
     lights: str | int = DEFAULT_LIGHTS,
     pixel_rule: bool = True,
     orders: OrderChoice | None = None,
 ) -> SHRM:
     """[KM00] The azimuth-free SHRM: only the q = 0 terms, B(α, β, θ_o) = Σ_p B_p0(α, β) Y_p0(ω_o')
-    (RH02 Fig. 9), on the SHRM's own grid: the (F, P) and map rows of ``shrm``, the SHRM at ``eps``
-    (made with :func:`shrm_model` and the other settings when None), so that it differs from the SHRM
-    by the azimuthal truncation alone. Its window is decided for the q = 0 field.
+    (RH02 Fig. 9), on the SHRM's own grid: the (F, P) and map rows of ``shrm``, the SHRM under
+    ``rule`` (made with :func:`shrm_model` and the other settings when None), so that it differs
+    from the SHRM by the azimuthal truncation alone. Its window is decided for the q = 0 field.
+    ``rule`` and the loose keywords ``eps``, ``criterion``, ``max_view_deg``: as in :func:`shrm_model`.
 
     Raises :class:`BadInputError` as :func:`shrm_model` does.
     """
+    rule = resolve_rule(rule, eps=eps, criterion=criterion, max_view_deg=max_view_deg)
     if shrm is None:
-        shrm = shrm_model(env, brdf, eps=eps, window=window, criterion=criterion, max_view_deg=max_view_deg,
-                          lights=lights, pixel_rule=pixel_rule, orders=orders)
-    return prefilter(env, brdf, eps=eps, F=shrm.F, P=shrm.P, size=shrm.height, azimuth_free=True, window=window,
-                     criterion=criterion, max_view_deg=max_view_deg, lights=lights)
+        shrm = shrm_model(env, brdf, rule=rule, window=window, lights=lights, pixel_rule=pixel_rule, orders=orders)
+    return prefilter(env, brdf, rule=rule, F=shrm.F, P=shrm.P, size=shrm.height, azimuth_free=True, window=window,
+                     lights=lights)
 
 
 #: Rows of the reference maps of ``rsibr_model(source="reference")`` (the original method's cost).

@@ -386,13 +386,13 @@ def pixels_statement(shrm, values: np.ndarray, theta_v_deg: np.ndarray, *, signa
     absolute = {kind: band_errors(shrm, bound=kind == "bound", level=1.0, signal=signal)
                 for kind in ("predicted", "bound")}
     out = []
-    for k, band in enumerate(shrm.meta["view_bands"]):
-        lo, hi = band["theta_v_deg"]
+    for k, band in enumerate(shrm.info.view_bands):
+        lo, hi = band.theta_v_deg
         sel = (theta >= lo) & (theta < hi)
         rms_pix = float(np.sqrt(np.mean(channel_norm(values[sel]) ** 2))) if sel.any() else 0.0
         record: dict[str, Any] = {"theta_v_deg": [float(lo), float(hi)], "pixels": int(sel.sum())}
         for kind in ("predicted", "bound"):
-            r = float(band[f"{kind}_rel_rms"])
+            r = float(band.predicted_rel_rms if kind == "predicted" else band.bound_rel_rms)
             spread = float(absolute[kind][k]) / rms_pix if rms_pix > 0.0 else float("inf")
             record[f"{kind}_rel_rms"] = max(r, spread) if sel.any() else r
             record[f"stated_{kind}_rel_rms"] = r

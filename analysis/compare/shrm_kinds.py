@@ -22,11 +22,11 @@ __all__ = ["build_shrm", "build_shrm_low_p", "build_kautz_mccool"]
 
 
 def _params(shrm: SHRM, **extra: Any) -> dict[str, Any]:
-    meta = shrm.meta
-    return {"F": shrm.F, "P": shrm.P, "map": f"{shrm.height}x{shrm.width}", "window": meta["window"],
-            "window_strength": meta["window_strength"], "eps_B": shrm.eps["reflected"],
-            "negative_before": meta["negative_before"], "negative_after": meta["negative_after"],
-            "view_bands": meta["view_bands"], "lights": len(meta.get("lights", [])), **extra}
+    info = shrm.info
+    return {"F": shrm.F, "P": shrm.P, "map": f"{shrm.height}x{shrm.width}", "window": info.window.used,
+            "window_strength": info.window.strength, "eps_B": shrm.eps["reflected"],
+            "negative_before": info.window.negative_before, "negative_after": info.window.negative_after,
+            "view_bands": [band.to_json() for band in info.view_bands], "lights": len(info.lights), **extra}
 
 
 def build_shrm(ctx: BuildContext) -> list[BuiltRepresentation]:

@@ -283,7 +283,7 @@ def _environments(brdf: BRDF, options: ReportOptions, choices: dict[float, Order
             prefilter_cpu = time.process_time() - c0
             err = relative_rms(shrm.radiance(R, V), reference)  # clamped at 0, as rendered
             bands = beside_measured(band_error(shrm.radiance(sample.R, sample.V), reference_b, sample),
-                                    shrm.meta["view_bands"])
+                                    [band.to_json() for band in shrm.info.view_bands])
             row = _speed_row(env.name, tol, shrm, bands, err, ref_seconds / options.n_pairs)
             row.update(prefilter_cpu_seconds=prefilter_cpu,
                        reference_map_cpu_seconds=ref_cpu_per_pair * (shrm.height * shrm.width))

@@ -117,10 +117,11 @@ def run_demo(out_dir: str | Path = "shrm-demo", *, progress: Callable[[str], Non
     env = load_env(DEMO_ENV, height=128)
     shrm = prefilter(env, brdf, eps=DEMO_EPS)
     shrm_path = shrm.save(out / "shrm" / f"{plastic.stem}.shrm.npz")
+    seconds = shrm.info.timings.total or 0.0  # prefilter always times its total
     steps.append(DemoStep("prefilter", (shrm_path,), f"SHRM F={shrm.F}, P={shrm.P}, {shrm.height}x{shrm.width}, "
-                          f"{shrm.meta['timings']['total'] * 1e3:.0f} ms", time.perf_counter() - t,
+                          f"{seconds * 1e3:.0f} ms", time.perf_counter() - t,
                           {"F": shrm.F, "P": shrm.P, "height": shrm.height, "width": shrm.width,
-                           "prefilter_seconds": shrm.meta["timings"]["total"]}))
+                           "prefilter_seconds": seconds}))
 
     t = begin("render")
     png = out / "render" / f"{plastic.stem}.png"

@@ -95,3 +95,59 @@ def test_options_hold_one_rule() -> None:
     assert (quick["eps"], quick["max_F"], quick["max_P"], quick["criterion"], quick["max_view_deg"]) == (
         0.03, 96, 20, "bands", 80.0)
     assert "rule" not in quick
+
+
+def test_render_options_hold_one_rule() -> None:
+    """RenderOptions (issue 27: the rule passed instead of criterion/max_view_deg) keeps its documented
+    keywords, which set and read the rule's fields; the render's ε replaces the rule's in ``rule_at``."""
+    from shrmkit.render.modes import RenderOptions
+
+    rule = OrderRule(criterion="rh02", max_view_deg=60.0, max_F=64)
+    options = RenderOptions(rule=rule)
+    assert (options.criterion, options.max_view_deg) == ("rh02", 60.0)
+    assert options.rule_at(0.01) == rule.replace(eps=0.01) and options.rule_at(None) is rule
+    assert RenderOptions(criterion="rh02", max_view_deg=60).rule == OrderRule(criterion="rh02", max_view_deg=60.0)
+    assert RenderOptions(rule=rule, max_view_deg=70).rule == rule.replace(max_view_deg=70.0)  # keyword over rule=
+    assert dataclasses.replace(options, window="none").rule is rule
+    assert dataclasses.replace(options, rule=OrderRule()).rule == OrderRule()  # a new rule wins, as a keyword does
+    assert dataclasses.replace(options, criterion="bands").rule == rule.replace(criterion="bands")
+    with pytest.raises(TypeError, match="max_view"):
+        RenderOptions(max_view=60)
+    assert RenderOptions().rule == OrderRule()
+    with pytest.raises(BadInputError, match="max view angle"):
+        RenderOptions(max_view_deg=100)
+
+
+def test_builders_and_census_take_one_rule() -> None:
+    """shrm_model / kautz_mccool_model / run_census take ``rule=``; a loose keyword that disagrees with
+    it, or a rule that is not an OrderRule, is refused before any work (no prefilter, no row)."""
+    from shrmkit.analysis.baselines import kautz_mccool_model, shrm_model
+    from shrmkit.analysis.census import run_census
+
+    rule = OrderRule(eps=0.05, criterion="rh02", max_view_deg=70.0, max_F=96)
+    for build in (shrm_model, kautz_mccool_model):
+        with pytest.raises(BadInputError, match="disagrees"):
+            build("builtin:constant,height=4", SPEC, rule=rule, eps=0.01)
+    census = run_census([], rule=rule)
+    assert census.rule is rule and (census.eps, census.criterion, census.max_view_deg, census.max_F, census.max_P) == (
+        0.05, "rh02", 70.0, 96, 20)
+    assert {k: census.as_dict()[k] for k in rule.to_json()} == rule.to_json()
+    assert run_census([]).rule == OrderRule()
+    with pytest.raises(BadInputError, match="OrderRule"):
+        run_census([], rule={"eps": 0.05})  # type: ignore[arg-type]
+
+
+def test_report_cli_rule_over_the_profile() -> None:
+    """``shrm report``'s options: the profile's rule (quick: max_F 96) with the rule options given."""
+    import argparse
+
+    from shrmkit.cli.cmd_report import options_from_args
+    from shrmkit.cli.options_report import add_arguments
+
+    parser = argparse.ArgumentParser()
+    add_arguments(parser)
+    quick = options_from_args(parser.parse_args(["phong:s=8", "--quick", "--criterion", "rh02", "--eps", "0.05"]))
+    assert quick.rule == OrderRule(criterion="rh02", eps=0.05, max_F=96) and quick.profile == "quick"
+    raised = options_from_args(parser.parse_args(["phong:s=8", "--quick", "--max-F", "200", "--max-view-angle", "60"]))
+    assert raised.rule == OrderRule(max_F=200, max_view_deg=60.0)
+    assert options_from_args(parser.parse_args(["phong:s=8"])).rule == OrderRule()

@@ -107,3 +107,18 @@ def test_view_band_keeps_unknown_keys_and_order() -> None:
     assert record.theta_v_deg == (0.0, 15.0) and record.extra == {"future_key": [1]}
     assert _same(record.to_json(), band)
     assert Timings(orders=1.0, map_size=2.0).to_json() == {"orders": 1.0, "map size": 2.0}
+
+
+def test_stated_band_is_the_worst_band_marked_inside() -> None:
+    """PrefilterInfo.stated_band: the largest predicted relative RMS among bands with inside True (a
+    band outside, or without ``inside``, never counts); the reference is the hand-made list itself."""
+    bands = [{"theta_v_deg": [0, 10], "predicted_rel_rms": 0.02, "bound_rel_rms": 0.03, "inside": True},
+             {"theta_v_deg": [10, 20], "predicted_rel_rms": 0.05, "bound_rel_rms": 0.06, "inside": True},
+             {"theta_v_deg": [20, 30], "predicted_rel_rms": 0.04, "bound_rel_rms": 0.09, "inside": True},
+             {"theta_v_deg": [80, 90], "predicted_rel_rms": 0.50, "bound_rel_rms": 0.70, "inside": False},
+             {"theta_v_deg": [70, 80], "predicted_rel_rms": 0.90, "bound_rel_rms": 0.95}]
+    worst = PrefilterInfo.from_meta({"view_bands": bands}).stated_band()
+    assert worst is not None
+    assert (worst.theta_v_deg, worst.predicted_rel_rms, worst.bound_rel_rms) == ((10, 20), 0.05, 0.06)
+    assert PrefilterInfo.from_meta({"view_bands": bands[3:]}).stated_band() is None
+    assert PrefilterInfo.from_meta({}).stated_band() is None
