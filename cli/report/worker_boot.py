@@ -2,12 +2,12 @@
 to its driver *before* the heavy imports.
 
 A worker process is started with the ``spawn`` method; its target's module is imported when the
-process object is unpickled. With :func:`~shrmkit.cli.report.batch._worker_main` as the target,
+process object is unpickled. With :func:`~shrmkit.cli.report._pool._worker_main` as the target,
 that meant importing the report modules (numpy, scipy, matplotlib: 1.5 s of CPU, about 3 s on a
 loaded machine) before the parent-death signal was set, so a driver killed in those seconds left
 its workers running until their imports ended (issue 30). This module imports only the standard
 library: :func:`boot` sets ``PR_SET_PDEATHSIG`` (Linux, ``prctl(2)``) and checks that the driver is
-still there, then imports its target by name (the batch module's worker loop) and runs it.
+still there, then imports its target by name (the process engine's worker loop) and runs it.
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ def boot(target: str, parent_pid: int, *args: Any) -> None:
     death; exit at once if it is already gone), then ``target`` (``"module:function"``, imported only
     now: the heavy imports run under the parent-death signal) called with ``args``.
 
-    ``shrm report --workers N`` starts ``boot("shrmkit.cli.report.batch:_worker_main", pid, conn,
+    ``shrm report --workers N`` starts ``boot("shrmkit.cli.report._pool:_worker_main", pid, conn,
     threads, preview_mode, pid)``; that loop also starts the watch thread of systems without
     ``prctl``."""
     if sys.platform.startswith("linux"):

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import csv
 import fcntl
+import importlib
 import json
 import os
 import re
@@ -25,7 +26,7 @@ from pathlib import Path
 
 import pytest
 
-from shrmkit.cli.report import batch
+from shrmkit.cli.report import _dask_engine, _pool, batch
 from shrmkit.cli.report.batch import run_batch
 from shrmkit.cli.report.options import profile
 
@@ -99,7 +100,7 @@ def _sigint_held_off(pid: int) -> bool:
 def _watching(pid: int) -> bool:
     """Whether worker ``pid`` started its driver watch (past its start-up imports, in its own code)."""
     try:
-        return any((task / "comm").read_text().strip() == batch.WATCH_THREAD_NAME
+        return any((task / "comm").read_text().strip() == _pool.WATCH_THREAD_NAME
                    for task in Path(f"/proc/{pid}/task").iterdir())
     except OSError:
         return False
@@ -368,7 +369,7 @@ def test_dask_worker_death_costs_one_retry_and_the_rest_of_the_batch_goes_on(tmp
     retried: list[str] = []
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
                                   silence_logs=50) as cluster:
-        outcomes = list(batch._dask(tasks, cluster.scheduler_address,
+        outcomes = list(_dask_engine._dask(tasks, cluster.scheduler_address,
                                     lambda *e: events.append(e), retried, task_function))
     assert sorted(o.name for o in outcomes) == ["plain", "victim"] and all(o.ok for o in outcomes)
     victim = next(o for o in outcomes if o.name == "victim")
@@ -421,7 +422,7 @@ def _stub_dask(monkeypatch, plan):
             return self.futures[-1]
 
         def get_events(self, topic):
-            return self.start_events if topic == batch.DASK_START_TOPIC else self.all_events
+            return self.start_events if topic == _dask_engine.DASK_START_TOPIC else self.all_events
 
         def close(self, timeout=None):
             pass
@@ -435,7 +436,7 @@ def _stub_dask(monkeypatch, plan):
 
     monkeypatch.setattr(distributed, "Client", make)
     monkeypatch.setattr(distributed, "as_completed", lambda futures, loop=None: Completed(client))
-    monkeypatch.setattr(batch, "DASK_POLL_SECONDS", 0.0)
+    monkeypatch.setattr(_dask_engine, "DASK_POLL_SECONDS", 0.0)
 
 
 def test_dask_task_whose_worker_dies_twice_is_one_failed_report(monkeypatch):
@@ -464,7 +465,7 @@ def test_dask_task_whose_worker_dies_twice_is_one_failed_report(monkeypatch):
     options = profile("quick", preview="none", plots=False)
     tasks = [batch.ReportTask("phong:s=8", n, options, "none") for n in ("doomed", "queued", "fine")]
     events, retried = [], []
-    outcomes = list(batch._dask(tasks, "tcp://stub:1", lambda *e: events.append(e), retried))
+    outcomes = list(_dask_engine._dask(tasks, "tcp://stub:1", lambda *e: events.append(e), retried))
     by_name = {o.name: o for o in outcomes}
     assert sorted(by_name) == ["doomed", "fine", "queued"]
     assert by_name["fine"].ok and by_name["queued"].ok and not by_name["doomed"].ok
@@ -523,8 +524,15 @@ def test_worker_target_module_sets_the_parent_death_signal_before_heavy_imports(
     """A spawned worker imports its target's module first: worker_boot.py must load no numpy, scipy or
     matplotlib, so that PR_SET_PDEATHSIG is set before the report modules' seconds of imports (a driver
     killed then left its workers running 3-14 s: benchmarks in the closing note)."""
-    heavy = "('numpy', 'scipy', 'matplotlib', 'shrmkit.cli.report.batch')"
+    heavy = "('numpy', 'scipy', 'matplotlib', 'shrmkit.cli.report.batch', 'shrmkit.cli.report._pool')"
     code = f"import sys, shrmkit.cli.report.worker_boot; print(sorted(m for m in {heavy} if m in sys.modules))"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert out.returncode == 0 and out.stdout.strip() == "[]", out.stderr[-2000:]
-    assert batch._Pool.start_worker.__code__.co_names.count("worker_boot") >= 1  # the target the driver starts
+    assert _pool._Pool.start_worker.__code__.co_names.count("worker_boot") >= 1  # the target the driver starts
+
+
+def test_worker_target_names_the_process_engines_worker_loop():
+    """The worker loop is started by name (``worker_boot.boot`` imports it): the name must stay that
+    of the process engine's loop wherever it lives (a moved module left the name behind)."""
+    module, _, name = _pool.WORKER_TARGET.partition(":")
+    assert getattr(importlib.import_module(module), name) is _pool._worker_main
