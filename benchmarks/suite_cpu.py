@@ -6,6 +6,11 @@ Usage::
     python benchmarks/suite_cpu.py [--top 30] [--json out.json] -- [pytest args]
     python benchmarks/suite_cpu.py --top 20 -- -p no:xdist -q tests/analysis/test_view_bands.py
     python benchmarks/suite_cpu.py --compare old.json new.json --top 30
+    python benchmarks/suite_cpu.py --durations-out tests/resources/test_durations.json -- -n 2 -q
+
+``--durations-out``: the tests' wall seconds (setup + call + teardown) of at least ``--min-seconds``
+(default 1.0), ``{node id: seconds}`` sorted longest first, the file from which tests/conftest.py
+hands the tests out to the xdist workers longest first (from a whole run on the project machine).
 
 Runs pytest in this process with a small plugin: for each test, setup + call + teardown, the
 process CPU time (``os.times``: user + sys, all threads) plus the CPU time of children reaped
@@ -68,6 +73,13 @@ def table(rows: dict[str, list[float]], top: int) -> str:
     return "\n".join(lines)
 
 
+def durations_json(rows: dict[str, list[float]], min_seconds: float = 1.0) -> str:
+    """``{node id: wall seconds}`` of the tests of at least ``min_seconds``, longest first, one a
+    line (the expected durations tests/conftest.py orders the work by)."""
+    long = sorted(((n, round(v[1], 1)) for n, v in rows.items() if v[1] >= min_seconds), key=lambda kv: -kv[1])
+    return "{\n" + ",\n".join(f"{json.dumps(n)}: {s}" for n, s in long) + "\n}\n"
+
+
 def compare(old: dict[str, list[float]], new: dict[str, list[float]], top: int) -> str:
     names = sorted(set(old) | set(new), key=lambda n: -max(old.get(n, [0])[0], new.get(n, [0])[0]))
     lines = [f"{'old cpu':>8} {'new cpu':>8}  test"]
@@ -89,6 +101,8 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--top", type=int, default=30)
     parser.add_argument("--json", help="write {nodeid: [cpu s, wall s]} here")
+    parser.add_argument("--durations-out", help="write {nodeid: wall s} of the tests of at least --min-seconds here")
+    parser.add_argument("--min-seconds", type=float, default=1.0)
     parser.add_argument("--compare", nargs=2, metavar=("OLD", "NEW"), help="compare two --json files")
     args = parser.parse_args(own)
     if args.compare:
@@ -120,6 +134,8 @@ def main(argv: list[str] | None = None) -> int:
                   f"process CPU {cpu:.1f} s (collection included)")
     if args.json:
         Path(args.json).write_text(json.dumps(rows, indent=0))
+    if args.durations_out:
+        Path(args.durations_out).write_text(durations_json(rows, args.min_seconds))
     return int(code)
 
 

@@ -50,6 +50,23 @@ BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
 #: import graph of tests/test_layers.py (1.6 s CPU to parse, once instead of once per worker)
 ONE_UNIT_MODULES = frozenset({"tests/test_layers.py"})
 
+#: expected seconds (setup + call) of the tests that take about 2 s or more on the 2-core project
+#: machine, ``{node id: seconds}``; written by ``benchmarks/suite_cpu.py --durations-out`` from a
+#: whole run. A test that is not listed counts 0 s (3 s if marked ``slow``): a stale entry only
+#: changes the order in which the tests are handed out, never what runs.
+DURATIONS = Path(__file__).resolve().parent / "resources" / "test_durations.json"
+SLOW_UNLISTED_SECONDS = 3.0
+
+
+def work_unit(nodeid: str) -> str:
+    """The unit of work under xdist a test belongs to: ``path::Class`` for the tests of a class,
+    the module for those of ``ONE_UNIT_MODULES``, the node id itself for any other test."""
+    path, _, rest = nodeid.partition("::")
+    if path in ONE_UNIT_MODULES:
+        return path
+    names = rest.split("[", 1)[0].split("::")
+    return f"{path}::{names[0]}" if len(names) > 1 else nodeid
+
 
 @pytest.hookimpl(optionalhook=True)
 def pytest_xdist_make_scheduler(config, log):
@@ -58,17 +75,15 @@ def pytest_xdist_make_scheduler(config, log):
         return None
     from xdist.scheduler import LoadScopeScheduling
 
+    # the units go out in collection order, which pytest_collection_modifyitems made longest first
+    # (``loadscope``'s own reorder would put the units with the most tests first instead)
+    config.option.loadscopereorder = False
+
     class ClassScheduling(LoadScopeScheduling):
-        """Units: ``path::Class`` for the tests of a class, the node id itself for any other
-        test. Larger units are handed out first (xdist's ``loadscope`` order), then single
-        tests in collection order."""
+        """Units: :func:`work_unit`, handed out in collection order (longest expected first)."""
 
         def _split_scope(self, nodeid: str) -> str:
-            path, _, rest = nodeid.partition("::")
-            if path in ONE_UNIT_MODULES:
-                return path
-            names = rest.split("[", 1)[0].split("::")
-            return f"{path}::{names[0]}" if len(names) > 1 else nodeid
+            return work_unit(nodeid)
 
     return ClassScheduling(config, log)
 
@@ -89,11 +104,21 @@ def pytest_collection(session):
 
 
 def pytest_collection_modifyitems(config, items):
-    """Tests marked ``slow`` first (a stable sort: otherwise collection order), but the tests that
-    read the shared demo run after the first of them last. Under xdist the single tests are handed
-    out in this order after the classes, so the long ones start early and the run does not end with
-    one worker busy on a 25 s test while the other is idle."""
-    items.sort(key=lambda item: item.get_closest_marker("slow") is None)
+    """Units of work (:func:`work_unit`) longest expected first (``DURATIONS``: the sum over a
+    unit's tests; a stable sort, so otherwise collection order), but the tests that read the shared
+    demo run after the first of them last. Under xdist the units are handed out in this order, so the
+    long ones start early and the run ends on short tests on both workers (longest processing time
+    first) instead of with one worker busy on a 25 s test while the other is idle."""
+    expected = json.loads(DURATIONS.read_text()) if DURATIONS.is_file() else {}
+    unit_seconds: dict[str, float] = {}
+    for item in items:
+        unlisted = SLOW_UNLISTED_SECONDS if item.get_closest_marker("slow") is not None else 0.0
+        unit = work_unit(item.nodeid)
+        unit_seconds[unit] = unit_seconds.get(unit, 0.0) + expected.get(item.nodeid, unlisted)
+    first = {}
+    for index, item in enumerate(items):
+        first.setdefault(work_unit(item.nodeid), index)
+    items.sort(key=lambda item: (-unit_seconds[work_unit(item.nodeid)], first[work_unit(item.nodeid)]))
     # The session-wide demo run (demo_run below) is made by the first worker to ask while the other
     # waits on its lock: its users after the first go last, so that no worker sits ~11 s idle on it.
     demo_users = [item for item in items if "demo_run" in getattr(item, "fixturenames", ())]
