@@ -19,7 +19,7 @@ Reference: [RH02] §3.1, §5.1 and Appendices B–C (``data_specs/bibliography.m
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, lru_cache
 
 import ducc0
 import numpy as np
@@ -28,6 +28,14 @@ from ..brdf_io.brdf import BRDF
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.quadrature import gauss_legendre
 from ..brdf_io.reparam import ReparamGrid, sample_rho_hat_half
+from ._band_eps import (
+    CHANNEL_FLOOR,
+    bands_inside,
+    eps_from_band_residual,
+    live_channels,
+    mult_q,
+)
+from ._view_fit import FIT_PASSES, OUTSIDE_WEIGHT, band_eps_column, fit_view_coefficients, profile_shaped
 from .brdf_coeffs import BRDFCoefficients, weighted_legendre
 from .defaults import CRITERIA, DEFAULT_CRITERION, DEFAULT_MAX_VIEW_DEG  # numpy-free home, for the CLI's parsers
 from .sh import Lambda, legendre_f
@@ -36,7 +44,7 @@ __all__ = [
     "DEFAULT_BAND_EDGES_DEG", "DEFAULT_MAX_VIEW_DEG", "CRITERIA", "DEFAULT_CRITERION", "ViewProfile",
     "view_profile", "fit_view_coefficients", "band_eps_table", "brdf_view_bands", "scene_error_curve",
     "shrm_view_bands", "check_max_view", "check_criterion", "bands_inside", "worst_inside", "BandStatement",
-    "window_matrix", "band_eps_column", "resolution_tail",
+    "window_matrix", "band_eps_column", "resolution_tail", "CHANNEL_FLOOR", "OUTSIDE_WEIGHT", "FIT_PASSES",
 ]
 
 #: Band edges of θ_v in degrees: 15° wide up to 60°, then 10° and 5° toward grazing.
@@ -47,9 +55,6 @@ _FLOAT32_REL = 2.0**-24
 #: quadrature of each band (doubling the nodes changes the per-band errors by < 0.6 %,
 #: Cook–Torrance, microfacet σ = 0.05 and 0.3) and the rounding of a float64 reference.
 BOUND_MARGIN = 1.05
-#: In the point-light tables a channel counts in a band when its energy there is at least this
-#: fraction of the band's strongest channel (1 % in amplitude).
-CHANNEL_FLOOR = 1e-4
 
 
 def check_max_view(value: float) -> float:
@@ -83,10 +88,6 @@ def _band_nodes(edges_deg: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarr
     return np.concatenate(theta), np.concatenate(weight), np.concatenate(band)
 
 
-def _mult(n: int) -> np.ndarray:
-    return np.where(np.arange(n) == 0, 1.0, 2.0)
-
-
 @dataclass(frozen=True, eq=False)
 class ViewProfile:
     """ρ̂ resolved by view elevation: T_lq(θ_o') at Gauss–Legendre nodes of each θ_v band.
@@ -115,7 +116,8 @@ class ViewProfile:
     theta_v, weight, band
         Nodes θ_v (radians), their dθ_v quadrature weights and band index, each (K,).
     T
-        float64 (F0+1, K, P0+1, 3): T_lq at each node (above), q <= P0.
+        float64 (F0+1, K, P0+1, 3): T_lq at each node (above), q <= P0 (:func:`view_profile`
+        makes it a view of :attr:`Tq`, the layout the sums over q and l read fastest).
     beyond
         (K, 3): the energy density 𝓔(θ_o') − Σ_{l<=F0, q<=P0} mult T²/(2π) the table does
         not resolve (l > F0 or q > P0), >= 0.
@@ -151,8 +153,16 @@ class ViewProfile:
         return self.T.shape[2] - 1
 
     @cached_property
+    def Tq(self) -> np.ndarray:
+        """T_lq as (P0+1, K, 3, F0+1) [q, node, channel, l], C-contiguous (read-only; no copy when
+        :attr:`T` is a view of it, as :func:`view_profile` makes it)."""
+        out = np.ascontiguousarray(self.T.transpose(2, 1, 3, 0))
+        out.setflags(write=False)
+        return out
+
+    @cached_property
     def _full(self) -> np.ndarray:
-        out = np.tensordot(self.T**2, _mult(self.P0 + 1), axes=(2, 0)) / (2.0 * np.pi)
+        out = _q_sum_of_squares(self.Tq).transpose(2, 0, 1).copy()
         out.setflags(write=False)
         return out
 
@@ -161,23 +171,15 @@ class ViewProfile:
         return self._full
 
     @cached_property
-    def _band_matrix(self) -> np.ndarray:
+    def band_matrix(self) -> np.ndarray:
+        """(n_bands, K): each node's dθ_v weight in its band's row, 0 elsewhere (:meth:`band_sum`)."""
         m = np.zeros((self.n_bands, self.theta_v.size))
         m[self.band, np.arange(self.theta_v.size)] = self.weight
         return m
 
     def band_sum(self, per_node: np.ndarray) -> np.ndarray:
         """Σ over each band's nodes of weight × value; ``per_node`` has the nodes on axis 0."""
-        return np.tensordot(self._band_matrix, per_node, axes=(1, 0))
-
-    @cached_property
-    def T_stack(self) -> np.ndarray:
-        """T_lq as (P0+1, K, (F0+1)·3): for each q one (K, l·channel) matrix, the right-hand sides
-        of the view fit (read-only, computed once)."""
-        K = self.theta_v.size
-        out = np.ascontiguousarray(self.T.transpose(2, 1, 0, 3)).reshape(self.P0 + 1, K, -1)
-        out.setflags(write=False)
-        return out
+        return np.tensordot(self.band_matrix, per_node, axes=(1, 0))
 
     def view_legendre(self, P: int) -> np.ndarray:
         """f_pq(cos 2θ_v) at the nodes for p, q <= P: (P+1, P+1, K) (computed once at P0)."""
@@ -186,6 +188,12 @@ class ViewProfile:
     @cached_property
     def _view_legendre(self) -> np.ndarray:
         return legendre_f(self.P0, self.P0, np.cos(2.0 * self.theta_v))
+
+    @cached_property
+    def fit_cache(self) -> dict:
+        """Working data of the view fits of this profile, by the F0 they keep
+        (:mod:`shrmkit.analysis._view_fit`: what every view order P shares; filled on first use)."""
+        return {}
 
     @cached_property
     def band_full(self) -> np.ndarray:
@@ -205,15 +213,22 @@ class ViewProfile:
         return (self.weight * 2.0 * np.sin(2.0 * self.theta_v)) @ density
 
 
+def _q_sum_of_squares(Tq: np.ndarray) -> np.ndarray:
+    """Σ_q mult_q T_lq²/(2π) per (node, channel, l), (K, 3, F0+1), from T_lq as [q, node, channel, l]."""
+    squares = Tq * Tq
+    return np.tensordot(mult_q(Tq.shape[0]) / (2.0 * np.pi), squares, axes=(0, 0))
+
+
 def _cosine_transform(half: np.ndarray, n_phi: int) -> np.ndarray:
     """Σ_j x_j cos(2π q j / n_phi) over the whole period for q = 0 .. n_phi // 2, from the half
-    period x_0 .. x_{n_phi // 2} of an even sequence on axis 2: the real part of its rfft. For
-    even n_phi a DCT-I of the half (half the points), for odd n_phi the rfft of the mirrored whole."""
-    if n_phi % 2 == 0 and half.shape[2] > 1:
-        return ducc0.fft.dct(half, type=1, axes=(2,))
+    period x_0 .. x_{n_phi // 2} of an even sequence on axis 0: the real part of its rfft, q on
+    axis 0 of a C-contiguous result (``half`` may be any strided view). For even n_phi a DCT-I of
+    the half (half the points), for odd n_phi the rfft of the mirrored whole."""
+    if n_phi % 2 == 0 and half.shape[0] > 1:
+        return ducc0.fft.dct(half, type=1, axes=(0,), out=np.empty(half.shape))
     inner = np.arange(1, (n_phi + 1) // 2)
-    whole = np.concatenate([half, half[:, :, inner[::-1]]], axis=2)
-    return np.fft.rfft(whole, axis=2).real
+    whole = np.concatenate([half, half[inner[::-1]]], axis=0)
+    return np.ascontiguousarray(np.fft.rfft(whole, axis=0).real)
 
 
 def view_profile(
@@ -236,10 +251,9 @@ def view_profile(
         raise ValueError(f"grid {grid} too coarse for orders F0={F0}, P0={P0}")
     theta_v, weight, band = _band_nodes(edges)
     xi, wi = grid.theta_i()
-    fi = weighted_legendre(F0, P0, grid.n_theta_i)  # (F0+1, P0+1, n_i)
     K = theta_v.size
     n_q = grid.n_phi // 2 + 1
-    T = np.empty((F0 + 1, K, P0 + 1, 3))
+    folded = np.empty((2, P0 + 1, (grid.n_theta_i + 1) // 2, K, 3))  # [parity in cos θ_i', q, i, node, c]
     energy = np.empty((K, 3))
     q_energy = np.empty((K, n_q, 3))
     # the half period φ' ∈ [0, π] stands for the whole (ρ̂ is even in φ'): every node but 0 (and π)
@@ -249,24 +263,66 @@ def view_profile(
     dphi = 2.0 * np.pi / grid.n_phi
     for b in range(len(edges) - 1):
         idx = np.nonzero(band == b)[0]
+        nodes = slice(idx[0], idx[-1] + 1)  # a band's nodes are consecutive
         # (n_i, k, n_phi // 2 + 1, 3): φ' ∈ [0, π] (ρ̂ is even in φ')
-        values, n_missing = sample_rho_hat_half(brdf, xi, np.cos(2.0 * theta_v[idx]), grid.n_phi)
-        missing[b] = n_missing
-        g = _cosine_transform(values, grid.n_phi) * dphi  # (n_i, k, n_q, 3)
-        n_i, k = g.shape[:2]
-        # Σ_i fi[l, q, i] g[i, k, q, c]: one matrix product per q (BLAS), batched over q
-        rhs = np.ascontiguousarray(g[:, :, : P0 + 1, :].transpose(2, 0, 1, 3)).reshape(P0 + 1, n_i, k * 3)
-        per_q = np.matmul(fi.transpose(1, 0, 2), rhs).reshape(P0 + 1, F0 + 1, k, 3)  # [q, l, node, c]
-        T[:, idx] = 2.0 * np.pi * per_q.transpose(1, 2, 0, 3)
+        values, missing[b] = sample_rho_hat_half(brdf, xi, np.cos(2.0 * theta_v[idx]), grid.n_phi)
+        g = _cosine_transform(values.transpose(2, 0, 1, 3), grid.n_phi)  # [q, i, node, c]
+        g *= dphi
+        _fold_theta_i(g[: P0 + 1], folded[:, :, :, nodes])
         # 𝓔(θ_o') = 2π ∫ dω_i ρ̂²: the density whose sin θ_o' dθ_o' integral is ∫∫ ρ̂² (ReparamBRDF.energy)
-        energy[idx] = 2.0 * np.pi * dphi * np.tensordot(wi, np.einsum("ikjc,j->ikc", values**2, q_mult), axes=(0, 0))
+        energy[nodes] = 2.0 * np.pi * dphi * np.einsum("kjc,j->kc", np.tensordot(wi, np.square(values, out=values),
+                                                                                axes=(0, 0)), q_mult)
         # per q, all l (Bessel's equality in θ_i'): mult_q ∫ g_q² d cos θ_i'; Σ_q of it is 𝓔 (Parseval)
-        q_energy[idx] = np.tensordot(wi, g * g, axes=(0, 0)) * q_mult[None, :, None]
-    resolved = np.tensordot(T**2, _mult(P0 + 1), axes=(2, 0)).sum(axis=0) / (2.0 * np.pi)
+        per_q = np.matmul(wi, np.square(g, out=g).reshape(n_q, grid.n_theta_i, -1))  # (n_q, k·3)
+        q_energy[nodes] = per_q.reshape(n_q, -1, 3).transpose(1, 0, 2) * q_mult[None, :, None]
+    Tq = _theta_i_transform(folded, F0, grid.n_theta_i)  # [q, node, c, l]
+    resolved = _q_sum_of_squares(Tq).sum(axis=2)  # (K, 3)
     return ViewProfile(
-        edges_deg=edges, theta_v=theta_v, weight=weight, band=band, T=T,
+        edges_deg=edges, theta_v=theta_v, weight=weight, band=band, T=Tq.transpose(3, 1, 0, 2),
         beyond=np.clip(energy - resolved, 0.0, None), missing=missing, name=brdf.name, q_energy=q_energy,
     )
+
+
+def _fold_theta_i(g: np.ndarray, out: np.ndarray) -> None:
+    """The even and odd parts in cos θ_i' of ``g`` [q, i, node, c] on the symmetric Gauss–Legendre
+    nodes (node i and n_i − 1 − i mirror each other): g_i ± g_mirror for i < n_i/2, and the middle
+    node of an odd n_i once in the even part, into ``out`` [parity, q, i, node, c] (i < ⌈n_i/2⌉)."""
+    n_i = g.shape[1]
+    h = n_i // 2
+    top, bottom = g[:, :h], g[:, ::-1][:, :h]
+    np.add(top, bottom, out=out[0, :, :h])
+    np.subtract(top, bottom, out=out[1, :, :h])
+    if n_i % 2:
+        out[0, :, h] = g[:, h]
+        out[1, :, h] = 0.0
+
+
+@lru_cache(maxsize=8)
+def _parity_legendre(F0: int, P0: int, n_nodes: int) -> tuple[np.ndarray, np.ndarray]:
+    """The weighted f_lq(θ_i') w_i of :func:`weighted_legendre` on the first ⌈n/2⌉ nodes, for even
+    and for odd l: ((P0+1, ⌈n/2⌉, ⌈(F0+1)/2⌉), (P0+1, ⌈n/2⌉, ⌊(F0+1)/2⌋)) [q, i, l], read-only
+    (computed once per size, as ``weighted_legendre``)."""
+    fi = weighted_legendre(F0, P0, n_nodes)[:, :, : (n_nodes + 1) // 2]
+    out = tuple(np.ascontiguousarray(fi[parity::2].transpose(1, 2, 0)) for parity in (0, 1))
+    for a in out:
+        a.setflags(write=False)
+    return out[0], out[1]
+
+
+def _theta_i_transform(folded: np.ndarray, F0: int, n_nodes: int) -> np.ndarray:
+    """T_lq = 2π Σ_i f_lq(θ_i') w_i g_q(θ_i') for l <= F0, q <= P0, as (P0+1, K, 3, F0+1) [q, node,
+    c, l], from the folded g (:func:`_fold_theta_i`): f_lq(−x) = (−1)^{l+q} f_lq(x), so the sum over
+    the nodes is one over half of them, of the even part of g where l + q is even and of the odd
+    part where it is odd — one matrix product per (q, parity of l), batched over q (half the work of
+    the whole sum)."""
+    _, Q, h, K, _ = folded.shape
+    q = np.arange(Q)
+    Tq = np.empty((Q, K, 3, F0 + 1))
+    for parity, f in enumerate(_parity_legendre(F0, Q - 1, n_nodes)):
+        rhs = folded[(q + parity) % 2, q].reshape(Q, h, K * 3)  # the part of g whose parity is that of l + q
+        Tq[..., parity::2] = (rhs.transpose(0, 2, 1) @ f).reshape(Q, K, 3, -1)
+    Tq *= 2.0 * np.pi
+    return Tq
 
 
 def window_matrix(window: np.ndarray, F: int, P: int) -> np.ndarray:
@@ -308,163 +364,7 @@ def _residual(profile: ViewProfile, approx: np.ndarray) -> np.ndarray:
     F1, _, Q1, _ = approx.shape
     diff = profile.T[:F1].copy()
     diff[:, :, :Q1, :] -= approx
-    return np.tensordot(diff**2, _mult(profile.P0 + 1), axes=(2, 0)) / (2.0 * np.pi)
-
-
-def _live(total: np.ndarray) -> np.ndarray:
-    return total > 1e-12 * max(float(total.max(initial=0.0)), 1e-300)
-
-
-def bands_inside(profile: ViewProfile, max_view_deg: float) -> np.ndarray:
-    """Indices of the bands that start below ``max_view_deg`` (those a rule must meet)."""
-    return np.nonzero(profile.edges_deg[:-1] < max_view_deg)[0]
-
-
-#: Weight of the bands beyond the view limit in the view fit (relative to those inside):
-#: small, so that the grazing singularity of physically based lobes (ρ̂ ∝ 1/cos θ_v) does not
-#: spoil the views inside, but not zero, so that the fit stays tame beyond the limit.
-OUTSIDE_WEIGHT = 0.02
-#: Reweighting passes of the view fit toward the worst band inside the limit (Lawson-style,
-#: square-root damped), stopped early when a pass gains < 0.5 %: the least-squares fit alone
-#: leaves the band next to the limit worst (Cook–Torrance α = 0.1, f0 = 0.04: ε 0.031 after
-#: 4 passes, 0.030 after 8).
-FIT_PASSES = 8
-
-
-def fit_view_coefficients(
-    profile: ViewProfile, coefficients: BRDFCoefficients | None, P: int, max_view_deg: float,
-    F0: int | None = None,
-) -> BRDFCoefficients:
-    """ρ̂_lpq (p <= P) fitted to T_lq over the views that matter, instead of projected.
-
-    RH02's coefficients are the orthogonal projection over *all* views θ_o' ∈ [0, π]; for a
-    physically based lobe ρ̂ grows like 1/cos θ_v toward grazing (Smith G and Fresnel keep
-    it large), so the projection spends its P orders on the last few degrees and converges
-    slowly everywhere (measured, Cook–Torrance α = 0.092: ε_b 0.03–0.09 in *every* band at
-    P = 16). Here, for each (l, q), the coefficients minimize Σ_k W_k (T_lq(θ_k) − T̂_lq(θ_k))²
-    over the profile's nodes, with W_k = dθ_v weight / the band's signal (each band's relative
-    error counts alike), bands beyond ``max_view_deg`` down-weighted by
-    :data:`OUTSIDE_WEIGHT`, then :data:`FIT_PASSES` passes that raise the weight of the bands
-    inside with the largest error. The l-expansion is still the projection (exact in l).
-    Same shape as ``coefficients`` (entries p > P zero); the energy is the BRDF's. With
-    ``coefficients`` None (the fit needs only the profile), the shape is (F0+1, P0+1, P0+1, 3)
-    of the profile (``F0``: at most that order, default the profile's: the fit of
-    :func:`band_eps_column` with that F0) and the energy its :meth:`ViewProfile.energy`.
-    """
-    if coefficients is None:
-        coefficients = _profile_shaped(profile, F0)
-    F0 = min(profile.F0, coefficients.F0)
-    fit, _ = _view_fit(profile, P, max_view_deg, F0)
-    out = np.zeros_like(coefficients.coeffs)
-    out[: F0 + 1, : P + 1, : P + 1] = fit
-    return BRDFCoefficients(coeffs=out, energy=coefficients.energy, name=coefficients.name)
-
-
-def _view_fit(profile: ViewProfile, P: int, max_view_deg: float, F0: int) -> tuple[np.ndarray, np.ndarray]:
-    """The fit of :func:`fit_view_coefficients` for l <= F0: ρ̂_lpq as (F0+1, P+1, P+1, 3) [l, p, q, c],
-    and the residual of its last pass Σ_{q<=P} mult (T_lq − T̂_lq)²/(2π) per (node, l, channel),
-    (K, F0+1, 3).
-
-    Every q is solved at once: the basis columns 2π f_pq(cos 2θ_v) (p = q..P) of each q, padded
-    with zero columns to P+1, are stacked, and one stacked QR solve serves all (l, channel)
-    right-hand sides of all q (each padding column gets one extra unit row, so the system has full
-    rank and its solution there is zero: the padding changes nothing)."""
-    inside = np.zeros(profile.n_bands, dtype=bool)
-    inside[bands_inside(profile, max_view_deg)] = True
-    signal = (profile.band_full.sum(axis=1) + profile.band_beyond).sum(axis=1)
-    band_w = np.where(inside, 1.0, OUTSIDE_WEIGHT) / np.where(signal > 0, signal, 1.0)
-    fo = profile.view_legendre(P)  # (P+1, P+1, K)
-    K = profile.theta_v.size
-    basis = np.zeros((P + 1, K, P + 1))  # [q, node, p − q]
-    for q in range(P + 1):
-        basis[q, :, : P + 1 - q] = 2.0 * np.pi * fo[q : P + 1, q, :].T
-    padding = np.zeros((P + 1, P + 1, P + 1))
-    for q in range(1, P + 1):
-        padding[q, np.arange(P + 1 - q, P + 1), np.arange(P + 1 - q, P + 1)] = 1.0
-    n_cols = (F0 + 1) * 3
-    rhs = profile.T_stack[: P + 1, :, :n_cols]  # (P+1, K, n_cols)
-    mult = _mult(P + 1) / (2.0 * np.pi)
-    at_F0 = _EpsAtF0(profile, F0, P)
-    # the reweighting passes need the residual summed over l only: Σ_l (R rhs)²[k] = (R G R^T)[k, k]
-    # with R = I − basis·M the fit's residual operator and G = Σ_l rhs rhs^T per (q, channel), so a
-    # pass costs O(K²) per (q, channel) instead of a pass over every (l, channel) column
-    by_channel = rhs.reshape(P + 1, K, F0 + 1, 3).transpose(0, 3, 1, 2)  # (P+1, 3, K, F0+1)
-    gram = by_channel @ by_channel.transpose(0, 1, 3, 2)  # (P+1, 3, K, K)
-    eye = np.eye(K)
-    prev_worst = np.inf
-    for npass in range(FIT_PASSES + 1):
-        sw = np.sqrt(profile.weight * band_w[profile.band])
-        # weighted least squares by QR of the small matrices, each q's zero padding columns held at
-        # zero by one extra unit row apiece (full rank; the solution there is 0, elsewhere unchanged)
-        Q, Rq = np.linalg.qr(np.concatenate([basis * sw[None, :, None], padding], axis=1))
-        M = np.linalg.solve(Rq, Q.transpose(0, 2, 1))[:, :, :K] * sw[None, None, :]  # (P+1, P+1, K)
-        if npass == FIT_PASSES or not inside.any():
-            break
-        R = eye - basis @ M  # (P+1, K, K)
-        per_node = np.einsum("q,qckj,qkj->kc", mult, R[:, None] @ gram, R)  # (K, 3), Σ over l
-        eps = at_F0.eps(at_F0.fixed + per_node)  # = _band_eps_all(profile, fitted, [P])[:, F0, 0]
-        worst = eps[inside].max()
-        if worst <= 0.0 or worst > 0.995 * prev_worst:  # nothing to gain (a view-independent lobe)
-            break
-        prev_worst = worst
-        band_w = band_w * np.where(inside, np.sqrt(np.clip(eps / worst, 1e-3, 1.0)), 1.0)
-    sol = M @ rhs  # (P+1, P+1, n_cols)
-    diff = rhs - basis @ sol
-    residual = np.einsum("q,qkn->kn", mult, diff * diff).reshape(K, F0 + 1, 3)
-    fit = np.zeros((F0 + 1, P + 1, P + 1, 3))
-    by_l = sol.reshape(P + 1, P + 1, F0 + 1, 3)  # [q, p − q, l, c]
-    for q in range(P + 1):
-        fit[:, q:, q, :] = by_l[q, : P + 1 - q].transpose(1, 0, 2)
-    return fit, residual
-
-
-class _EpsAtF0:
-    """ε_b(F0, P) of :func:`_band_eps_all` from a per-node residual, for the reweighting passes
-    of :func:`fit_view_coefficients`: the parts that do not depend on the fit are computed once.
-
-    ``fixed`` (K, 3): Σ_{l<=F0, P<q<=P0} mult T²/(2π), the view orders the fit leaves out."""
-
-    def __init__(self, profile: ViewProfile, F0: int, P: int) -> None:
-        self.profile = profile
-        full = profile.band_full  # (nb, F0p+1, 3)
-        beyond = profile.band_beyond + full[:, F0 + 1 :].sum(axis=1)
-        full = full[:, : F0 + 1]
-        self.total = full.sum(axis=1) + beyond  # (nb, 3)
-        live = _live(self.total.sum(axis=0))[None, :] & (
-            self.total >= CHANNEL_FLOOR * self.total.max(axis=1, keepdims=True))
-        self.live = live & (self.total > 0)
-        self.after = beyond  # energy at l > F0
-        T = profile.T[: F0 + 1, :, P + 1 :, :]
-        self.fixed = np.tensordot(T**2, _mult(profile.P0 + 1)[P + 1 :], axes=(2, 0)).sum(axis=0) / (2.0 * np.pi)
-
-    def eps(self, residual: np.ndarray) -> np.ndarray:
-        """(n_bands,): worst live channel of (band sum of ``residual`` + energy beyond F0) / total."""
-        err = self.profile.band_sum(residual) + self.after
-        eps = np.where(self.live, err / np.where(self.total > 0, self.total, 1.0), 0.0)
-        return np.clip(eps, 0.0, None).max(axis=-1)
-
-
-def _profile_shaped(profile: ViewProfile, F0: int | None = None) -> BRDFCoefficients:
-    """Zero ρ̂_lpq of the profile's orders (F0+1, P0+1, P0+1, 3) (``F0`` default the profile's)
-    carrying its energy: the shape a view fit fills when no projected coefficients are at hand."""
-    F0 = profile.F0 if F0 is None else min(int(F0), profile.F0)
-    shape = (F0 + 1, profile.P0 + 1, profile.P0 + 1, 3)
-    return BRDFCoefficients(coeffs=np.zeros(shape), energy=profile.energy(), name=profile.name)
-
-
-def band_eps_column(profile: ViewProfile, P: int, max_view_deg: float, F0: int | None = None) -> np.ndarray:
-    """One column of :func:`band_eps_table` from the profile alone: ε(F, P) for F = 0..F0 of the
-    worst band inside ``max_view_deg`` (worst channel), with the view fit at order ``P``
-    (equal to ``_band_eps_all`` of :func:`fit_view_coefficients`; the fit's own residual is used).
-    ``F0`` (default the profile's): the highest order kept; the profile's orders above it count as
-    error, and the view fit is made for l <= F0 (the column of a profile cut at F0)."""
-    F0 = profile.F0 if F0 is None else min(int(F0), profile.F0)
-    _, low = _view_fit(profile, P, max_view_deg, F0)
-    T = profile.T[: F0 + 1, :, : P + 1, :]
-    fitted_orders = np.tensordot(T * T, _mult(P + 1), axes=(2, 0)) / (2.0 * np.pi)  # (F0+1, K, 3), q <= P
-    residual = low + np.moveaxis(profile.full()[: F0 + 1] - fitted_orders, 1, 0)  # q > P: all of it is error
-    inside = bands_inside(profile, max_view_deg)
-    return _eps_from_residual(profile, F0, residual)[inside].max(axis=0)
+    return np.tensordot(diff**2, mult_q(profile.P0 + 1), axes=(2, 0)) / (2.0 * np.pi)
 
 
 def resolution_tail(profile: ViewProfile, F: int, P: int, max_view_deg: float, n_phi: int) -> float:
@@ -492,7 +392,7 @@ def resolution_tail(profile: ViewProfile, F: int, P: int, max_view_deg: float, n
     else:
         tail = tail + profile.band_beyond
     inside = bands_inside(profile, max_view_deg)
-    live = _live(total.sum(axis=0))[None, :] & (total >= CHANNEL_FLOOR * total.max(axis=1, keepdims=True))
+    live = live_channels(total.sum(axis=0))[None, :] & (total >= CHANNEL_FLOOR * total.max(axis=1, keepdims=True))
     share = np.where(live & (total > 0), tail / np.where(total > 0, total, 1.0), 0.0)
     return float(share[inside].max(initial=0.0))
 
@@ -538,7 +438,7 @@ def view_order_floor(profile: ViewProfile, tolerance: float, max_view_deg: float
         return 0
     full = profile.band_full
     total = full.sum(axis=1) + profile.band_beyond  # (nb, 3)
-    live = _live(total.sum(axis=0))[None, :] & (total >= CHANNEL_FLOOR * total.max(axis=1, keepdims=True))
+    live = live_channels(total.sum(axis=0))[None, :] & (total >= CHANNEL_FLOOR * total.max(axis=1, keepdims=True))
     per_q = profile.band_sum(profile.q_energy)  # (nb, n_q, 3)
     above = per_q[:, ::-1].cumsum(axis=1)[:, ::-1]  # [:, q] = energy at q' >= q
     above = np.concatenate([above[:, 1:], np.zeros_like(above[:, :1])], axis=1)  # [:, P] = energy at q > P
@@ -564,7 +464,7 @@ def band_eps_table(
     """
     inside = bands_inside(profile, max_view_deg)
     if coefficients is None:
-        coefficients = _profile_shaped(profile)
+        coefficients = profile_shaped(profile)
     if not fit:
         return _band_eps_all(profile, coefficients)[inside].max(axis=0)
     P0 = min(profile.P0, coefficients.P0)
@@ -587,26 +487,8 @@ def _band_eps_all(
     out = np.empty((profile.n_bands, F0 + 1, len(p_list)))
     for j, p in enumerate(p_list):
         residual = np.moveaxis(_residual(profile, _approximation(profile, coefficients, F0, p)), 1, 0)
-        out[:, :, j] = _eps_from_residual(profile, F0, residual)
+        out[:, :, j] = eps_from_band_residual(profile, F0, profile.band_sum(residual))
     return out
-
-
-def _eps_from_residual(profile: ViewProfile, F0: int, residual: np.ndarray) -> np.ndarray:
-    """ε_b(F) for F = 0..F0 of every band, worst live channel, (n_bands, F0+1), from the error
-    density per (node, l, channel) (K, F0+1, 3) of the kept orders l <= F0."""
-    full = profile.band_full  # (nb, F0p+1, 3)
-    beyond = profile.band_beyond + full[:, F0 + 1 :].sum(axis=1)  # unresolved by the table
-    full = full[:, : F0 + 1]
-    total = full.sum(axis=1) + beyond  # (nb, 3)
-    # a channel counts in a band where it carries at least CHANNEL_FLOOR of the band's strongest
-    # channel's energy (a specular-only red channel with f0 = 0 is ~0 at normal views: its
-    # relative error there is invisible, and would otherwise decide the orders)
-    live = _live(total.sum(axis=0))[None, :] & (total >= CHANNEL_FLOOR * total.max(axis=1, keepdims=True))
-    after = total[:, None, :] - np.cumsum(full, axis=1)  # energy at l > f, (nb, F0+1, 3)
-    safe = np.where(total > 0, total, 1.0)[:, None, :]
-    err = np.cumsum(profile.band_sum(residual), axis=1) + after  # (nb, F0+1, 3)
-    eps = np.where(live[:, None, :] & (total[:, None, :] > 0), err / safe, 0.0)
-    return np.clip(eps, 0.0, None).max(axis=-1)
 
 
 def brdf_view_bands(
@@ -753,7 +635,7 @@ def shrm_view_bands(
     full = np.moveaxis(profile.full(), 1, 0)  # (K, F0+1, 3)
     approx = _approximation(profile, coefficients, F, P, sigma, q_max)
     res = np.moveaxis(_residual(profile, approx), 1, 0)  # (K, F+1, 3)
-    kept = np.moveaxis(np.tensordot(approx**2, _mult(P + 1), axes=(2, 0)), 1, 0) / (2.0 * np.pi)
+    kept = np.moveaxis(np.tensordot(approx**2, mult_q(P + 1), axes=(2, 0)), 1, 0) / (2.0 * np.pi)
     above = full[:, F + 1 :]
 
     def trunc(w: np.ndarray, w_beyond: np.ndarray) -> np.ndarray:
@@ -770,7 +652,7 @@ def shrm_view_bands(
         c = coefficients.coeffs[: F + 1, : P + 1, : P + 1, :]
         if sigma is not None:
             c = c * window_matrix(sigma, F, P)[:, :, None, None]
-        e_lp = np.tensordot(c**2, _mult(P + 1), axes=(2, 0)).sum(axis=-1)  # (F+1, P+1)
+        e_lp = np.tensordot(c**2, mult_q(P + 1), axes=(2, 0)).sum(axis=-1)  # (F+1, P+1)
         total = e_lp.sum(axis=1, keepdims=True)
         share = np.where(total > 0, e_lp / np.where(total > 0, total, 1.0), 0.0)
         share[total[:, 0] <= 0, P] = 1.0  # nothing known: the largest degree
