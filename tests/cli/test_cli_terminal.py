@@ -5,6 +5,7 @@ number whole — no cell squeezed to "…" — whether stdout is a pipe (logs, `
 from __future__ import annotations
 
 import io
+import json
 import subprocess
 import sys
 
@@ -13,20 +14,35 @@ from rich.table import Table
 
 from shrmkit.cli import common
 
+#: `shrm ARGV` for each ARGV of the JSON list argv[1], one after the other in one fresh interpreter
+#: whose stdout is a pipe; after each, a line "\0EXIT <code>" (one interpreter start instead of two)
+RUN_VERBS = (
+    "import json, sys\n"
+    "from shrmkit.cli.main import main\n"
+    "for argv in json.loads(sys.argv[1]):\n"
+    "    code = main(argv)\n"
+    "    sys.stdout.flush()\n"
+    "    print(f'\\0EXIT {code}', flush=True)\n"
+)
 
-def run_cli(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "shrmkit.cli.main", *args], capture_output=True, text=True)
+
+def run_verbs(*argvs: list[str]) -> list[str]:
+    """The stdout of each `shrm ARGV` (in order) run with stdout a pipe; each must exit 0."""
+    proc = subprocess.run([sys.executable, "-c", RUN_VERBS, json.dumps(argvs)], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    *outs, last = proc.stdout.split("\0EXIT ")  # out 1, "code 1\nout 2", …, "code n\n"
+    codes = [int(part.partition("\n")[0]) for part in [*outs[1:], last]]
+    assert codes == [0] * len(argvs), proc.stderr
+    return [outs[0], *(part.partition("\n")[2] for part in outs[1:])]
 
 
 def test_orders_and_prefilter_through_a_pipe_have_no_cut_cells(tmp_path):
-    proc = run_cli("orders", "cook-torrance:alpha=0.3,dist=ggx", "--env", "builtin:sky,height=16")
-    assert proc.returncode == 0, proc.stderr
-    assert "…" not in proc.stdout and "eps(F, P)" in proc.stdout and "view band" in proc.stdout
-    assert max(len(line) for line in proc.stdout.splitlines()) <= common.PIPE_WIDTH
-    proc = run_cli("prefilter", "--env", "builtin:sky,height=16", "--brdf", "phong:s=16", "-o",
-                   str(tmp_path / "a.shrm.npz"))
-    assert proc.returncode == 0, proc.stderr
-    assert "…" not in proc.stdout and "eps reflected" in proc.stdout
+    orders, prefilter = run_verbs(
+        ["orders", "cook-torrance:alpha=0.3,dist=ggx", "--env", "builtin:sky,height=16"],
+        ["prefilter", "--env", "builtin:sky,height=16", "--brdf", "phong:s=16", "-o", str(tmp_path / "a.shrm.npz")])
+    assert "…" not in orders and "eps(F, P)" in orders and "view band" in orders
+    assert max(len(line) for line in orders.splitlines()) <= common.PIPE_WIDTH
+    assert "…" not in prefilter and "eps reflected" in prefilter
 
 
 def test_a_wide_table_on_an_80_column_console_is_printed_whole(monkeypatch):
