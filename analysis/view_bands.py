@@ -221,14 +221,13 @@ def _q_sum_of_squares(Tq: np.ndarray) -> np.ndarray:
 
 def _cosine_transform(half: np.ndarray, n_phi: int) -> np.ndarray:
     """Σ_j x_j cos(2π q j / n_phi) over the whole period for q = 0 .. n_phi // 2, from the half
-    period x_0 .. x_{n_phi // 2} of an even sequence on axis 0: the real part of its rfft, q on
-    axis 0 of a C-contiguous result (``half`` may be any strided view). For even n_phi a DCT-I of
-    the half (half the points), for odd n_phi the rfft of the mirrored whole."""
-    if n_phi % 2 == 0 and half.shape[0] > 1:
-        return ducc0.fft.dct(half, type=1, axes=(0,), out=np.empty(half.shape))
+    period x_0 .. x_{n_phi // 2} of an even sequence on axis 3: the real part of its rfft. For
+    even n_phi a DCT-I of the half (half the points), for odd n_phi the rfft of the mirrored whole."""
+    if n_phi % 2 == 0 and half.shape[3] > 1:
+        return ducc0.fft.dct(half, type=1, axes=(3,))
     inner = np.arange(1, (n_phi + 1) // 2)
-    whole = np.concatenate([half, half[inner[::-1]]], axis=0)
-    return np.ascontiguousarray(np.fft.rfft(whole, axis=0).real)
+    whole = np.concatenate([half, half[:, :, :, inner[::-1]]], axis=3)
+    return np.fft.rfft(whole, axis=3).real
 
 
 def view_profile(
@@ -251,14 +250,20 @@ def view_profile(
         raise ValueError(f"grid {grid} too coarse for orders F0={F0}, P0={P0}")
     theta_v, weight, band = _band_nodes(edges)
     xi, wi = grid.theta_i()
-    K = theta_v.size
+    K, n_i = theta_v.size, grid.n_theta_i
     n_q = grid.n_phi // 2 + 1
-    folded = np.empty((2, P0 + 1, (grid.n_theta_i + 1) // 2, K, 3))  # [parity in cos θ_i', q, i, node, c]
+    h = (n_i + 1) // 2
+    folded = np.empty((2, P0 + 1, K, 3, h))  # Σ_j ρ̂ cos qφ'_j folded by parity in cos θ_i': [parity, q, node, c, i]
     energy = np.empty((K, 3))
     q_energy = np.empty((K, n_q, 3))
     # the half period φ' ∈ [0, π] stands for the whole (ρ̂ is even in φ'): every node but 0 (and π)
     # counts twice, as every cosine order q but 0 (and n_phi/2) does in Parseval's sum
     q_mult = np.where((np.arange(n_q) == 0) | (2 * np.arange(n_q) == grid.n_phi), 1.0, 2.0)
+    # Σ_i w_i g_i² = Σ_{i < n_i/2} w_i (e_i² + o_i²)/2 for (e_i, o_i) = g_i ± g_mirror (symmetric
+    # weights; the middle node of an odd n_i is e alone, at its own weight)
+    w_folded = wi[:h] / 2.0
+    if n_i % 2:
+        w_folded[-1] = wi[h - 1]
     missing = np.zeros(len(edges) - 1, dtype=np.int64)
     dphi = 2.0 * np.pi / grid.n_phi
     for b in range(len(edges) - 1):
@@ -266,16 +271,15 @@ def view_profile(
         nodes = slice(idx[0], idx[-1] + 1)  # a band's nodes are consecutive
         # (n_i, k, n_phi // 2 + 1, 3): φ' ∈ [0, π] (ρ̂ is even in φ')
         values, missing[b] = sample_rho_hat_half(brdf, xi, np.cos(2.0 * theta_v[idx]), grid.n_phi)
-        g = _cosine_transform(values.transpose(2, 0, 1, 3), grid.n_phi)  # [q, i, node, c]
-        g *= dphi
-        _fold_theta_i(g[: P0 + 1], folded[:, :, :, nodes])
+        g = _cosine_transform(_fold_theta_i(values), grid.n_phi)  # [parity, i, node, q, c] (fold and DCT: linear)
+        np.copyto(folded[:, :, nodes], g[:, :, :, : P0 + 1].transpose(0, 3, 2, 4, 1))
+        # per q, all l (Bessel's equality in θ_i'): mult_q ∫ g_q² d cos θ_i'; Σ_q of it is 𝓔 (Parseval)
+        per_q = np.matmul(w_folded, np.square(g, out=g).reshape(2, h, -1)).sum(axis=0)
+        q_energy[nodes] = per_q.reshape(-1, n_q, 3) * (q_mult * dphi**2)[None, :, None]
         # 𝓔(θ_o') = 2π ∫ dω_i ρ̂²: the density whose sin θ_o' dθ_o' integral is ∫∫ ρ̂² (ReparamBRDF.energy)
         energy[nodes] = 2.0 * np.pi * dphi * np.einsum("kjc,j->kc", np.tensordot(wi, np.square(values, out=values),
                                                                                 axes=(0, 0)), q_mult)
-        # per q, all l (Bessel's equality in θ_i'): mult_q ∫ g_q² d cos θ_i'; Σ_q of it is 𝓔 (Parseval)
-        per_q = np.matmul(wi, np.square(g, out=g).reshape(n_q, grid.n_theta_i, -1))  # (n_q, k·3)
-        q_energy[nodes] = per_q.reshape(n_q, -1, 3).transpose(1, 0, 2) * q_mult[None, :, None]
-    Tq = _theta_i_transform(folded, F0, grid.n_theta_i)  # [q, node, c, l]
+    Tq = _theta_i_transform(folded, F0, n_i, 2.0 * np.pi * dphi)  # [q, node, c, l]
     resolved = _q_sum_of_squares(Tq).sum(axis=2)  # (K, 3)
     return ViewProfile(
         edges_deg=edges, theta_v=theta_v, weight=weight, band=band, T=Tq.transpose(3, 1, 0, 2),
@@ -283,18 +287,20 @@ def view_profile(
     )
 
 
-def _fold_theta_i(g: np.ndarray, out: np.ndarray) -> None:
-    """The even and odd parts in cos θ_i' of ``g`` [q, i, node, c] on the symmetric Gauss–Legendre
-    nodes (node i and n_i − 1 − i mirror each other): g_i ± g_mirror for i < n_i/2, and the middle
-    node of an odd n_i once in the even part, into ``out`` [parity, q, i, node, c] (i < ⌈n_i/2⌉)."""
-    n_i = g.shape[1]
+def _fold_theta_i(values: np.ndarray) -> np.ndarray:
+    """The even and odd parts in cos θ_i' of ``values`` (n_i, ...) on the symmetric Gauss–Legendre
+    nodes (node i and n_i − 1 − i mirror each other): v_i ± v_mirror for i < n_i/2, and the middle
+    node of an odd n_i once in the even part: (2, ⌈n_i/2⌉, ...) [parity, i, ...]."""
+    n_i = values.shape[0]
     h = n_i // 2
-    top, bottom = g[:, :h], g[:, ::-1][:, :h]
-    np.add(top, bottom, out=out[0, :, :h])
-    np.subtract(top, bottom, out=out[1, :, :h])
+    out = np.empty((2, (n_i + 1) // 2) + values.shape[1:])
+    top, bottom = values[:h], values[::-1][:h]
+    np.add(top, bottom, out=out[0, :h])
+    np.subtract(top, bottom, out=out[1, :h])
     if n_i % 2:
-        out[0, :, h] = g[:, h]
-        out[1, :, h] = 0.0
+        out[0, h] = values[h]
+        out[1, h] = 0.0
+    return out
 
 
 @lru_cache(maxsize=8)
@@ -309,19 +315,19 @@ def _parity_legendre(F0: int, P0: int, n_nodes: int) -> tuple[np.ndarray, np.nda
     return out[0], out[1]
 
 
-def _theta_i_transform(folded: np.ndarray, F0: int, n_nodes: int) -> np.ndarray:
-    """T_lq = 2π Σ_i f_lq(θ_i') w_i g_q(θ_i') for l <= F0, q <= P0, as (P0+1, K, 3, F0+1) [q, node,
-    c, l], from the folded g (:func:`_fold_theta_i`): f_lq(−x) = (−1)^{l+q} f_lq(x), so the sum over
-    the nodes is one over half of them, of the even part of g where l + q is even and of the odd
-    part where it is odd — one matrix product per (q, parity of l), batched over q (half the work of
-    the whole sum)."""
-    _, Q, h, K, _ = folded.shape
-    q = np.arange(Q)
+def _theta_i_transform(folded: np.ndarray, F0: int, n_nodes: int, scale: float) -> np.ndarray:
+    """T_lq = ``scale`` Σ_i f_lq(θ_i') w_i g_q(θ_i') for l <= F0, q <= P0, as (P0+1, K, 3, F0+1)
+    [q, node, c, l], from the folded g [parity, q, node, c, i] (:func:`_fold_theta_i`):
+    f_lq(−x) = (−1)^{l+q} f_lq(x), so the sum over the nodes is one over half of them, of the even
+    part of g where l + q is even and of the odd part where it is odd — one matrix product per
+    (q, parity of l), batched over the q of each parity (half the work of the whole sum)."""
+    _, Q, K, _, h = folded.shape
     Tq = np.empty((Q, K, 3, F0 + 1))
-    for parity, f in enumerate(_parity_legendre(F0, Q - 1, n_nodes)):
-        rhs = folded[(q + parity) % 2, q].reshape(Q, h, K * 3)  # the part of g whose parity is that of l + q
-        Tq[..., parity::2] = (rhs.transpose(0, 2, 1) @ f).reshape(Q, K, 3, -1)
-    Tq *= 2.0 * np.pi
+    for parity_l, f in enumerate(_parity_legendre(F0, Q - 1, n_nodes)):  # f: [q, i, l of that parity]
+        for parity_q in (0, 1):
+            rhs = folded[(parity_q + parity_l) % 2, parity_q::2].reshape(-1, K * 3, h)
+            Tq[parity_q::2, ..., parity_l::2] = (rhs @ f[parity_q::2]).reshape(-1, K, 3, f.shape[2])
+    Tq *= scale
     return Tq
 
 
