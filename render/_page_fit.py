@@ -100,7 +100,9 @@ class _Banded:
     ``index`` (rows, band) int, ``weight`` (rows, band); ``dtype``: the products' type."""
 
     def __init__(self, index: np.ndarray, weight: np.ndarray, dtype: type = np.float64) -> None:
-        self.index, self.weight, self.dtype = index, weight.astype(dtype), dtype
+        self.index: np.ndarray = index
+        self.weight: np.ndarray = weight.astype(dtype)
+        self.dtype = dtype
 
     def __matmul__(self, x: np.ndarray) -> np.ndarray:
         """(rows, ...) product with ``x`` (n, ...), in ``dtype`` (only the rows read are converted)."""

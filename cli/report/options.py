@@ -8,12 +8,12 @@ from __future__ import annotations
 
 import copy
 import math
-from dataclasses import InitVar, dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 from ...analysis.fit.models_param import MODELS
 from ...analysis.lights import DEFAULT_LIGHTS, check_lights
-from ...analysis.order_rule import RULE_FIELDS, OrderRule, resolve_rule
+from ...analysis.order_rule import RULE_FIELDS, OrderRule, RuleFields, init_options
 from ...analysis.shrm import DEFAULT_WINDOW, check_window
 from ...analysis.tolerance import check_eps
 from ...brdf_io.errors import BadInputError
@@ -28,14 +28,15 @@ DEFAULT_MODELS = ("lafortune", "cook-torrance")
 PREVIEW_MODES = ("auto", "gl", "cpu", "none")
 
 
-@dataclass(frozen=True)
-class ReportOptions:
+@dataclass(frozen=True, init=False)
+class ReportOptions(RuleFields):
     """What a report computes and at which cost.
 
     The order rule is one value, :attr:`rule` (:class:`~shrmkit.analysis.order_rule.OrderRule`);
     the keywords ``eps``, ``max_F``, ``max_P``, ``criterion`` and ``max_view_deg`` set its fields
-    (over a ``rule=`` given too, so that :meth:`with_changes` and ``dataclasses.replace`` work) and
-    read them back. :meth:`as_dict` writes them under their own names, as before the rule.
+    (over a ``rule=`` given too: :meth:`with_changes` and ``dataclasses.replace`` take either, a new
+    ``rule=`` or a changed keyword) and read them back; an unknown keyword raises ``TypeError``.
+    :meth:`as_dict` writes them under their own names, as before the rule.
 
     Attributes
     ----------
@@ -95,7 +96,6 @@ class ReportOptions:
         error) and the fits' band errors are drawn whenever ``plots`` is.
     """
 
-    eps: InitVar[float | None] = None
     tolerances: tuple[float, ...] = DEFAULT_TOLERANCES
     envs: tuple[str, ...] = ("builtin:sky",)
     env_height: int = 64
@@ -113,25 +113,22 @@ class ReportOptions:
     # the caps of `shrm orders` (analysis.orders), so that both choose the same (F, P): the search
     # starts from ε(min(F0, max_F), p), so a lower cap moves P, and F with it, even when F stays
     # below it (microfacet σ = 0.03 at ε = 0.01: (241, 18) under 256, (274, 17) under 512; issue 29)
-    max_F: InitVar[int | None] = None
-    max_P: InitVar[int | None] = None
     preview: str = "auto"
     preview_size: int = 192
     mesh: str | None = None
     albedo_nodes: int = 64
     window: str = DEFAULT_WINDOW
-    criterion: InitVar[str | None] = None
-    max_view_deg: InitVar[float | None] = None
     lights: str | int = DEFAULT_LIGHTS
     plots: bool = True
     explorer_plots: bool = True
     profile: str = field(default="full")
     rule: OrderRule = OrderRule()
 
-    def __post_init__(self, eps: float | None, max_F: int | None, max_P: int | None, criterion: str | None,
-                      max_view_deg: float | None) -> None:
-        object.__setattr__(self, "rule", resolve_rule(self.rule, override=True, eps=eps, max_F=max_F, max_P=max_P,
-                                                      criterion=criterion, max_view_deg=max_view_deg))
+    def __init__(self, **options: Any) -> None:
+        init_options(self, options, {name: name for name in RULE_FIELDS})
+        self.__post_init__()
+
+    def __post_init__(self) -> None:
         check_window(self.window)
         object.__setattr__(self, "lights", check_lights(self.lights))
         for tol in self.tolerances:
@@ -169,20 +166,20 @@ class ReportOptions:
     def as_dict(self) -> dict[str, Any]:
         """JSON-able record of the options (``report.json`` ``options``): every constructor keyword
         in declaration order, the rule's fields under their own names (no ``rule`` key)."""
-        d = {name: copy.deepcopy(getattr(self, name)) for name in self.__dataclass_fields__ if name != "rule"}
+        d = {name: copy.deepcopy(getattr(self, name)) for name in _KEYWORDS}
         d["tolerances"] = list(self.all_tolerances)
         d["envs"] = list(self.envs)
         d["models"] = list(self.models)
         return d
 
 
-def _rule_field(name: str) -> property:
-    return property(lambda self: getattr(self.rule, name), doc=f"``rule.{name}`` (:class:`ReportOptions`).")
-
-
-for _name in RULE_FIELDS:  # the keywords read back from the rule (the InitVars' class defaults replaced)
-    setattr(ReportOptions, _name, _rule_field(_name))
-del _name
+#: the constructor's keywords in the order of ``report.json``'s ``options`` (the rule's fields where
+#: they stood when they were keywords of their own)
+_KEYWORDS = ("eps", "tolerances", "envs", "env_height", "env_up", "env_flip", "env_azimuth", "env_layer", "env_part",
+             "models", "lobes", "fit_samples", "fit_starts", "n_pairs", "seed", "max_F", "max_P", "preview",
+             "preview_size", "mesh", "albedo_nodes", "window", "criterion", "max_view_deg", "lights", "plots",
+             "explorer_plots", "profile")
+assert set(_KEYWORDS) == {f.name for f in fields(ReportOptions) if f.name != "rule"} | set(RULE_FIELDS)
 
 
 def profile(name: str = "full", **changes: Any) -> ReportOptions:

@@ -13,7 +13,7 @@ import pytest
 
 from shrmkit.analysis import OrderRule
 from shrmkit.analysis.compare import CompareOptions
-from shrmkit.analysis.order_rule import resolve_rule
+from shrmkit.analysis.order_rule import RULE_FIELDS, resolve_rule
 from shrmkit.analysis.orders import choose_orders, choose_orders_many, orders_on_grid_for
 from shrmkit.brdf_io.errors import BadInputError
 from shrmkit.brdf_io.specs import load_brdf
@@ -95,6 +95,12 @@ def test_options_hold_one_rule() -> None:
     assert (quick["eps"], quick["max_F"], quick["max_P"], quick["criterion"], quick["max_view_deg"]) == (
         0.03, 96, 20, "bands", 80.0)
     assert "rule" not in quick
+    assert list(quick)[:2] == ["eps", "tolerances"] and set(RULE_FIELDS) <= set(quick)
+    # a new rule given whole is taken (the keywords read back from the old rule used to win over it)
+    other = OrderRule(eps=0.01, criterion="rh02", max_F=64)
+    assert report.with_changes(rule=other).rule == other == dataclasses.replace(report, rule=other).rule
+    with pytest.raises(TypeError):
+        ReportOptions(tolerance=0.1)
 
 
 def test_render_options_hold_one_rule() -> None:
