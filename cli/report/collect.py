@@ -422,6 +422,32 @@ def _analysis_brdf(brdf: BRDF, fit_entries: list[dict[str, Any]],
     return choice.brdf, f"fit:{choice.model}", note, record
 
 
+def _preview(main: tuple[Any, Any], options: ReportOptions,
+             preview_mode: str | None) -> tuple[list[PreviewImage], dict[str, Any]]:
+    """The previews of the main tolerance's first SHRM and the report's ``preview`` block; a failed
+    preview is noted there (the report is kept)."""
+    mode, mode_note = (preview_mode, "") if preview_mode else resolve_preview_mode(options.preview)
+    env0, shrm0 = main
+    t0 = time.perf_counter()
+    try:
+        with OPENGL_LOCK:  # one offscreen context at a time per process (shared_state module)
+            previews, notes = render_previews(shrm0, env0, mode=mode, size=options.preview_size, mesh=options.mesh)
+        preview_error = None
+    except Exception as err:  # a failed preview must not lose the report
+        previews, notes, preview_error = [], [f"preview failed: {err}"], str(err)
+    return previews, {
+        "mode": mode,
+        "env": env0.name,
+        "tolerance": options.rule.eps,
+        "F": shrm0.F,
+        "P": shrm0.P,
+        "images": [{"key": p.key, "file": f"preview_{p.key}.png", "renderer": p.renderer} for p in previews],
+        "notes": ([mode_note] if mode_note else []) + notes,
+        "error": preview_error,
+        "preview_seconds": time.perf_counter() - t0,
+    }
+
+
 def collect_report(
     source: str | Path,
     options: ReportOptions,
@@ -481,27 +507,9 @@ def collect_report(
     _stage(progress, "checks")
     checks = data_checks(brdf, analysed, seed=options.seed, albedo_nodes=options.albedo_nodes)
     _stage(progress, "preview")
-    mode, mode_note = (preview_mode, "") if preview_mode else resolve_preview_mode(options.preview)
-    env0, shrm0 = main_shrms[0]
-    t0 = time.perf_counter()
-    try:
-        with OPENGL_LOCK:  # one offscreen context at a time per process (shared_state module)
-            previews, notes = render_previews(shrm0, env0, mode=mode, size=options.preview_size, mesh=options.mesh)
-        preview_error = None
-    except Exception as err:  # a failed preview must not lose the report
-        previews, notes, preview_error = [], [f"preview failed: {err}"], str(err)
-    preview_block = {
-        "mode": mode,
-        "env": env0.name,
-        "tolerance": options.rule.eps,
-        "F": shrm0.F,
-        "P": shrm0.P,
-        "images": [{"key": p.key, "file": f"preview_{p.key}.png", "renderer": p.renderer} for p in previews],
-        "notes": ([mode_note] if mode_note else []) + notes,
-        "error": preview_error,
-        "preview_seconds": time.perf_counter() - t0,
-    }
-    live, views = live_views(main_shrms, previews, preview_mode=mode, preview_size=options.preview_size)
+    previews, preview_block = _preview(main_shrms[0], options, preview_mode)
+    live, views = live_views(main_shrms, previews, preview_mode=preview_block["mode"],
+                             preview_size=options.preview_size)
     doc = {
         "format": REPORT_FORMAT,
         "format_version": REPORT_FORMAT_VERSION,
