@@ -21,11 +21,21 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..analysis.components import connected_labels
 from ..brdf_io.env_rotation import check_env_rotation, to_map_frame
+from ._closed_mesh import closed_outward
+from ._vtk_deferred import (
+    MAX_DEFERRED_OBJECTS,
+    _Deferred,
+    _deferred_actors,
+    _gbuffer_texture,
+    _quad_corners,
+    _restore_depth,
+    _screen_pass_depth,
+)
+from ._vtk_upload import _attribute_array, _float_texture, _new_actor, _polydata, _set_view_uniforms, _shader
 from .camera import Camera, orbit_camera
-from .glsl import TO_MAP_UNIFORM, Shading, gbuffer_fragment_replacements, vertex_replacements
-from .mesh import Mesh, make_mesh
+from .glsl import Shading, gbuffer_fragment_replacements, vertex_replacements
+from .mesh import Mesh
 from .modes import DEFAULT_MODE, RenderMode, get_mode
 from .offscreen import is_software_rasterizer, make_render_window, read_rgba_float
 
@@ -51,132 +61,6 @@ class RenderResult:
     seconds: float
 
 
-def _float_texture(image: np.ndarray):  # -> (vtkTexture, vtkImageData, numpy buffer)
-    """A float texture of the (h, w, 3) or (h, w, 4) image: GL_RGB32F or GL_RGBA32F, texels exact."""
-    from vtkmodules.util.numpy_support import numpy_to_vtk  # lazy: VTK is loaded only when rendering
-    from vtkmodules.vtkCommonDataModel import vtkImageData  # lazy: VTK
-    from vtkmodules.vtkRenderingCore import vtkTexture  # lazy: VTK
-
-    h, w, channels = image.shape
-    buf = np.ascontiguousarray(image, dtype=np.float32).reshape(h * w, channels)
-    data = vtkImageData()
-    data.SetDimensions(w, h, 1)  # x (columns) fastest, then rows: texel (x, y) = image[y, x]
-    arr = numpy_to_vtk(buf, deep=0)
-    arr.SetName("shrm")
-    data.GetPointData().SetScalars(arr)
-    tex = vtkTexture()
-    tex.SetInputData(data)
-    tex.SetColorModeToDirectScalars()  # float32 texels as they are (GL_RGB32F), no colour mapping
-    tex.InterpolateOff()
-    tex.MipmapOff()
-    tex.SetUseSRGBColorSpace(False)
-    return tex, data, buf
-
-
-def _set_uniforms(actor, uniforms: dict[str, tuple[str, list[float]]]) -> None:
-    """Set constant uniforms (``Shading.uniforms``: float, int, vec3, vec3[]) on the mapper's shader
-    program each time it is bound (its UpdateShaderEvent). The GLSL declares them (the shared
-    ``render/webgl`` files), so they are not VTK custom uniforms (VTK would declare those again),
-    and vtkUniforms cannot hold a vec3 array from Python."""
-    if not uniforms:
-        return
-    from vtkmodules.util.misc import calldata_type  # lazy: VTK
-    from vtkmodules.util.vtkConstants import VTK_OBJECT  # lazy: VTK
-    from vtkmodules.vtkCommonCore import vtkCommand  # lazy: VTK
-
-    calls: list[tuple[str, tuple[Any, ...]]] = []
-    for name, (kind, values) in uniforms.items():
-        values = [float(v) for v in values]
-        if kind == "float":
-            calls.append(("SetUniformf", (name, values[0])))
-        elif kind == "int":
-            calls.append(("SetUniformi", (name, int(values[0]))))
-        elif kind == "vec3":
-            calls.append(("SetUniform3f", (name, values)))
-        elif kind == "vec3[]":
-            calls.append(("SetUniform3fv", (name, len(values) // 3, values)))
-        else:
-            raise ValueError(f"uniform {name}: unknown type {kind!r}")
-
-    @calldata_type(VTK_OBJECT)
-    def upload(_caller, _event, program) -> None:  # the vtkShaderProgram the mapper has bound
-        for method, args in calls:
-            getattr(program, method)(*args)
-
-    actor.GetMapper().AddObserver(vtkCommand.UpdateShaderEvent, upload)
-
-
-def _attribute_array(name: str) -> str:
-    """Name of the point-data array that feeds the vertex attribute ``name``."""
-    return f"{name}_data"
-
-
-def _polydata(mesh: Mesh, attributes: dict[str, np.ndarray]):
-    from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray  # lazy: VTK
-    from vtkmodules.vtkCommonCore import vtkPoints  # lazy: VTK
-    from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData  # lazy: VTK
-
-    pts = vtkPoints()
-    pts.SetData(numpy_to_vtk(np.ascontiguousarray(mesh.vertices, dtype=np.float32), deep=1))
-    cells = vtkCellArray()
-    offsets = np.arange(0, 3 * mesh.n_triangles + 1, 3, dtype=np.int64)
-    cells.SetData(
-        numpy_to_vtkIdTypeArray(offsets, deep=1),
-        numpy_to_vtkIdTypeArray(np.ascontiguousarray(mesh.faces.reshape(-1), dtype=np.int64), deep=1),
-    )
-    poly = vtkPolyData()
-    poly.SetPoints(pts)
-    poly.SetPolys(cells)
-    normals = numpy_to_vtk(np.ascontiguousarray(mesh.normals, dtype=np.float32), deep=1)
-    normals.SetName("Normals")
-    poly.GetPointData().SetNormals(normals)
-    for name, values in attributes.items():  # per-vertex vec4 attributes of the mode
-        arr = numpy_to_vtk(np.ascontiguousarray(values, dtype=np.float32), deep=1)
-        arr.SetName(_attribute_array(name))
-        poly.GetPointData().AddArray(arr)
-    return poly
-
-
-def closed_outward(mesh: Mesh) -> bool:
-    """Whether ``mesh`` is a closed surface whose faces all wind counter-clockwise seen from outside.
-
-    True when every directed edge (a → b) of the faces occurs exactly once and its reverse
-    (b → a) exactly once (closed and consistently oriented: each edge is shared by two faces
-    that traverse it in opposite directions), and every connected piece encloses a positive
-    signed volume Σ a·(b × c)/6 (outward orientation). For such a mesh, seen from outside its
-    bounding sphere, every back face lies behind a front face of the same piece, so culling
-    back faces changes no pixel. Meshes with open borders, non-manifold or inconsistently
-    wound edges, split seam vertices, or a cavity (a piece with inward orientation) give False.
-    """
-    faces = np.asarray(mesh.faces, dtype=np.int64)
-    n = len(mesh.vertices)
-    a = faces.reshape(-1)
-    b = faces[:, [1, 2, 0]].reshape(-1)
-    directed = np.sort(a * n + b)
-    if np.any(directed[1:] == directed[:-1]) or not np.array_equal(directed, np.sort(b * n + a)):
-        return False
-    label = connected_labels(a, b, n)
-    v = mesh.vertices
-    volume6 = np.einsum("ij,ij->i", v[faces[:, 0]], np.cross(v[faces[:, 1]], v[faces[:, 2]]))
-    return bool(np.all(np.bincount(label[faces[:, 0]], weights=volume6) > 0.0))
-
-
-#: GL_LEQUAL (VTK's depth function), GL_GREATER (the deferred screen pass's)
-GL_LEQUAL, GL_GREATER = 0x0203, 0x0204
-#: Most objects tagged in one deferred frame: tags 2^1 … 2^64 times a unit R stay finite in
-#: float32, and the screen pass divides by the tag before it measures |R|
-MAX_DEFERRED_OBJECTS = 64
-
-
-@dataclass(eq=False)
-class _Deferred:
-    """The two extra actors of a deferred object and the quad's vertex buffer."""
-
-    gbuffer: Any  # vtkActor: the mesh writing R · 2^(k+1)
-    screen: Any  # vtkActor: the quad filling the view, shading each covered pixel once
-    quad_points: np.ndarray  # float32 (4, 3), shared with the quad's vtkPoints
-
-
 @dataclass(eq=False)
 class _Object:
     mesh: Mesh
@@ -192,14 +76,6 @@ class _Object:
     closed: bool  # closed, consistently and outward oriented: back faces never visible from outside
     deferred: _Deferred | None = None  # the deferred passes' actors, when the mode has them
     geometry: Any = None  # vtkActor writing R (the geometry pass's shader, tag 1), made by reflection_directions
-
-
-def _to_map_values(env_rotation: np.ndarray | None) -> list[float]:
-    """The 9 floats of the uniform :data:`~shrmkit.render.glsl.TO_MAP_UNIFORM` (the GLSL matrix Qᵀ):
-    OpenGL reads them column by column (glUniformMatrix3fv, no transpose), and the columns of Qᵀ
-    are the rows of Q."""
-    q = np.eye(3) if env_rotation is None else np.asarray(env_rotation, dtype=np.float64)
-    return [float(x) for x in q.reshape(-1)]
 
 
 class SHRMRenderer:
@@ -269,34 +145,18 @@ class SHRMRenderer:
         self._textures: dict[int, tuple[Shading, dict[str, Any]]] = {}  # Shading.textures, kept alive
         if deferred is None:
             deferred = is_software_rasterizer(self._window)
-        self._gbuffer = self._gbuffer_texture() if deferred else None
+        self._gbuffer = _gbuffer_texture(self._window, self.width, self.height) if deferred else None
         self._deferred_frame = False
         if self._gbuffer is not None:
             # VTK resets the depth function only when it clears; the screen pass sets GL_GREATER
             self._renderer.AddObserver("EndEvent", self._restore_depth_state)
 
-    def _gbuffer_texture(self):  # -> vtkOpenGLTexture or None
-        """The display framebuffer's colour texture (what pass 1 leaves), wrapped for a sampler."""
-        from vtkmodules.vtkRenderingOpenGL2 import vtkOpenGLTexture  # lazy: VTK
-
-        fbo = self._window.GetDisplayFramebuffer()
-        colour = None if fbo is None else fbo.GetColorAttachmentAsTextureObject(0)
-        if colour is None or (colour.GetWidth(), colour.GetHeight()) != (self.width, self.height):
-            return None
-        tex = vtkOpenGLTexture()
-        tex.SetTextureObject(colour)
-        return tex
-
     def _restore_depth_state(self, *_: object) -> None:
-        state = self._window.GetState()
-        state.vtkglDepthFunc(GL_LEQUAL)
-        state.vtkglDepthMask(True)
+        _restore_depth(self._window)
 
     def _screen_pass_state(self, *_: object) -> None:
         # the quad mapper's StartEvent, before it draws: pass only where pass 1 left a surface
-        state = self._window.GetState()
-        state.vtkglDepthFunc(GL_GREATER)
-        state.vtkglDepthMask(False)
+        _screen_pass_depth(self._window)
 
     @property
     def deferred(self) -> bool:
@@ -342,81 +202,10 @@ class SHRMRenderer:
         radius = float(np.max(np.linalg.norm(mesh.vertices - center, axis=1)))
         obj = _Object(mesh, model, record, actor, tex, data, buf, shading.state, center, radius, closed_outward(mesh))
         if self._gbuffer is not None and shading.deferred is not None:
-            obj.deferred = self._deferred_actors(actor, tex, shading, len(self._objects))
+            obj.deferred = _deferred_actors(self._renderer, self._gbuffer, actor, tex, shading, len(self._objects),
+                                        self._extra_textures(shading), self._screen_pass_state)
         self._objects.append(obj)
         return len(self._objects) - 1
-
-    def _deferred_actors(self, actor, tex, shading: Shading, index: int) -> _Deferred:
-        """The geometry-pass actor (same polydata as ``actor``) and the screen quad of object ``index``."""
-        from vtkmodules.util.numpy_support import numpy_to_vtk  # lazy: VTK
-
-        scale = float(2.0 ** (index + 1))
-        # its own mapper (its own shader program) on the same polydata
-        gbuffer = self._new_actor(actor.GetMapper().GetInput())
-        self._shader(gbuffer, vertex_replacements(), gbuffer_fragment_replacements(), scale)
-        self._renderer.AddActor(gbuffer)
-
-        # a unit square for the mesh checks; its corners are rewritten every frame (_quad_corners)
-        square = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]])
-        quad = make_mesh(square, np.array([[0, 1, 2], [0, 2, 3]]), np.tile([0.0, 0.0, 1.0], (4, 1)),
-                         normalize=False)
-        poly = _polydata(quad, {})
-        points = np.zeros((4, 3), dtype=np.float32)
-        poly.GetPoints().SetData(numpy_to_vtk(points, deep=0))  # shares ``points``
-        screen = self._new_actor(poly)
-        screen.GetMapper().AddObserver("StartEvent", self._screen_pass_state)
-        screen.GetProperty().SetTexture("shrmTex", tex)
-        screen.GetProperty().SetTexture("shrmGbuf", self._gbuffer)
-        for name, extra in self._extra_textures(shading).items():
-            screen.GetProperty().SetTexture(name, extra)
-        assert shading.deferred is not None  # add_object calls this for modes with a deferred pass only
-        self._shader(screen, shading.vertex, shading.deferred, scale, shading.uniforms)
-        self._renderer.AddActor(screen)
-        gbuffer.SetVisibility(False)
-        screen.SetVisibility(False)
-        return _Deferred(gbuffer, screen, points)
-
-    @staticmethod
-    def _new_actor(polydata):  # -> vtkActor
-        """An actor drawing ``polydata`` through its own mapper, world coordinates as given."""
-        from vtkmodules.vtkRenderingCore import vtkActor  # lazy: VTK
-        from vtkmodules.vtkRenderingOpenGL2 import vtkOpenGLPolyDataMapper  # lazy: VTK
-
-        mapper = vtkOpenGLPolyDataMapper()
-        mapper.SetInputData(polydata)
-        mapper.SetVBOShiftScaleMethod(0)  # DISABLE_SHIFT_SCALE: vertexMC must be world coordinates
-        mapper.ScalarVisibilityOff()
-        actor = vtkActor()
-        actor.SetMapper(mapper)
-        return actor
-
-    @staticmethod
-    def _shader(actor, vertex: list[tuple[str, str]], fragment: list[tuple[str, str]],
-                scale: float | None = None, uniforms: dict[str, tuple[str, list[float]]] | None = None) -> None:
-        """Shader replacements, the uniforms every frame sets (``shrmGScale``: a deferred pass's tag)
-        and the shading's constant ``uniforms`` (``Shading.uniforms``: the lights and the BRDF)."""
-        sp = actor.GetShaderProperty()
-        for tag, text in vertex:
-            sp.AddVertexShaderReplacement(tag, True, text, False)
-        for tag, text in fragment:
-            sp.AddFragmentShaderReplacement(tag, True, text, False)
-        uni = sp.GetFragmentCustomUniforms()
-        uni.SetUniform3f("shrmEye", [0.0, 0.0, 0.0])
-        uni.SetUniform3f("shrmViewDir", [1.0, 0.0, 0.0])
-        uni.SetUniformi("shrmOrtho", 0)
-        uni.SetUniformMatrix3x3(TO_MAP_UNIFORM, _to_map_values(None))
-        if scale is not None:
-            uni.SetUniformf("shrmGScale", scale)
-        _set_uniforms(actor, uniforms or {})
-
-    def _quad_corners(self, camera: Camera, far: float) -> np.ndarray:
-        """(4, 3) world corners of a quad filling the view (with a margin) at depth far / 1.004."""
-        d = far / 1.004  # beyond every surface (all within far / 1.01), inside the far plane
-        half_h = camera.parallel_scale if camera.projection == "ortho" else d * np.tan(0.5 * camera.fov_y)
-        half_w = half_h * self.width / self.height
-        c = camera.eye + d * camera.forward
-        x, y = 1.25 * half_w * camera.right, 1.25 * half_h * camera.up
-        return np.array([c - x - y, c + x - y, c + x + y, c - x + y])
 
     def _extra_textures(self, shading: Shading) -> dict[str, Any]:
         """The shading's further textures (``Shading.textures``), made once per Shading and kept
@@ -432,7 +221,7 @@ class SHRMRenderer:
         from vtkmodules.vtkCommonDataModel import vtkDataObject  # lazy: VTK is loaded only when rendering
 
         tex, data, buf = _float_texture(shading.texture)
-        actor = SHRMRenderer._new_actor(_polydata(mesh, shading.attributes))
+        actor = _new_actor(_polydata(mesh, shading.attributes))
         for name in shading.attributes:
             actor.GetMapper().MapDataArrayToVertexAttribute(
                 name, _attribute_array(name), vtkDataObject.FIELD_ASSOCIATION_POINTS, -1
@@ -440,7 +229,7 @@ class SHRMRenderer:
         actor.GetProperty().SetTexture("shrmTex", tex)
         for name, extra in self._extra_textures(shading).items():
             actor.GetProperty().SetTexture(name, extra)
-        SHRMRenderer._shader(actor, shading.vertex, shading.fragment, uniforms=shading.uniforms)
+        _shader(actor, shading.vertex, shading.fragment, uniforms=shading.uniforms)
         return actor, tex, data, buf
 
     def update_view_maps(self, camera: Camera, env_rotation: np.ndarray | None = None) -> None:
@@ -480,19 +269,11 @@ class SHRMRenderer:
         depth = float(np.dot(obj.center - camera.eye, camera.forward))
         return bool(obj.closed and depth - obj.radius >= near)
 
-    @staticmethod
-    def _set_view_uniforms(actor, camera: Camera, env_rotation: np.ndarray | None = None) -> None:
-        uni = actor.GetShaderProperty().GetFragmentCustomUniforms()
-        uni.SetUniform3f("shrmEye", camera.eye.tolist())
-        uni.SetUniform3f("shrmViewDir", (-camera.forward).tolist())
-        uni.SetUniformi("shrmOrtho", 1 if camera.projection == "ortho" else 0)
-        uni.SetUniformMatrix3x3(TO_MAP_UNIFORM, _to_map_values(env_rotation))
-
     def _setup(self, camera: Camera, update_maps: bool = True, env_rotation: np.ndarray | None = None) -> None:
         near, far = self._clipping(camera)
         camera.apply_to(self._renderer.GetActiveCamera(), (near, far))
         self._deferred_frame = self.deferred
-        corners = self._quad_corners(camera, far) if self._deferred_frame else None
+        corners = _quad_corners(camera, far, self.width, self.height) if self._deferred_frame else None
         for obj in self._objects:
             cull = self._cull(obj, camera, near)
             actors: tuple[Any, ...]
@@ -507,7 +288,7 @@ class SHRMRenderer:
                 obj.actor.GetProperty().SetBackfaceCulling(cull)
                 actors = (obj.actor,)
             for actor in actors:
-                self._set_view_uniforms(actor, camera, env_rotation)
+                _set_view_uniforms(actor, camera, env_rotation)
         if update_maps:
             self.update_view_maps(camera, env_rotation)
 
@@ -591,11 +372,11 @@ class SHRMRenderer:
         camera.apply_to(self._renderer.GetActiveCamera(), (near, far))
         for obj in self._objects:
             if obj.geometry is None:
-                obj.geometry = self._new_actor(obj.actor.GetMapper().GetInput())
-                self._shader(obj.geometry, vertex_replacements(), gbuffer_fragment_replacements(), 1.0)
+                obj.geometry = _new_actor(obj.actor.GetMapper().GetInput())
+                _shader(obj.geometry, vertex_replacements(), gbuffer_fragment_replacements(), 1.0)
                 self._renderer.AddActor(obj.geometry)
             obj.geometry.GetProperty().SetBackfaceCulling(self._cull(obj, camera, near))
-            self._set_view_uniforms(obj.geometry, camera)
+            _set_view_uniforms(obj.geometry, camera)
         self._show(forward=False, gbuffer=False, screen=False)
         try:
             for obj in self._objects:
