@@ -8,13 +8,13 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from typing import Any
 
 from ...brdf_io.errors import BadInputError
 from ..baselines.methods import GAUSSIAN_ELEVATIONS, GAUSSIAN_LOBES, RSIBR_REFERENCE_HEIGHT
 from ..lights import DEFAULT_LIGHTS, check_lights
-from ..order_rule import OrderRule, resolve_rule
+from ..order_rule import OrderRule, init_options
 from ..shrm import DEFAULT_WINDOW, check_window
 
 __all__ = ["CompareOptions", "DEFAULT_ENV_HEIGHT"]
@@ -102,14 +102,7 @@ class CompareOptions:
                 if new in options:
                     raise TypeError(f"CompareOptions: give {new}= or {old}=, not both")
                 options[new] = options.pop(old)
-        loose = {field_: options.pop(key) for key, field_ in _RULE_KEYWORDS.items() if key in options}
-        options["rule"] = resolve_rule(options.get("rule"), override=True, **loose)
-        known = fields(self)
-        unknown = sorted(set(options) - {f.name for f in known})
-        if unknown:
-            raise TypeError(f"CompareOptions() got unexpected keyword argument(s) {', '.join(unknown)}")
-        for f in known:
-            object.__setattr__(self, f.name, options.get(f.name, f.default))
+        init_options(self, options, _RULE_KEYWORDS)
         self.__post_init__()
 
     @property
