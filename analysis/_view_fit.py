@@ -141,6 +141,7 @@ class _FitParts:
         totals = profile_totals(profile, F0)
         self.total, self.after = totals.total, totals.beyond  # (nb, 3): all energy, energy at l > F0
         self.live = totals.live & (self.total > 0)
+        self.safe_total = np.where(self.total > 0, self.total, 1.0)
 
     @staticmethod
     def of(profile: ViewProfile, F0: int) -> _FitParts:
@@ -183,10 +184,15 @@ class _FitParts:
     @cached_property
     def band_normals(self) -> np.ndarray:
         """Σ_{k in b} dθ_v weight_k B_k^T B_k per (q, band) of the basis at the profile's P0,
-        (P0+1, n_bands, P0+1, P0+1) [q, band, p − q, p' − q] (zero where p or p' > P0)."""
-        basis = _basis(self.profile, self.profile.P0)
-        outer = basis[:, :, :, None] * basis[:, :, None, :]
-        return self.profile.band_sum(outer.transpose(1, 0, 2, 3)).transpose(1, 0, 2, 3)  # Σ weight × value
+        (P0+1, P0+1, P0+1, n_bands) [q, p − q, p' − q, band] (zero where p or p' > P0)."""
+        profile = self.profile
+        basis = _basis(profile, profile.P0)  # [q, node, p − q]
+        weighted = basis * profile.weight[None, :, None]
+        out = np.empty(basis.shape[:1] + basis.shape[2:] * 2 + (profile.n_bands,))
+        for b in range(profile.n_bands):
+            nodes = profile.band == b
+            out[..., b] = weighted[:, nodes].transpose(0, 2, 1) @ basis[:, nodes]
+        return out
 
     def node_tail(self, P: int) -> np.ndarray:
         """Σ_{l<=F0, P<q<=P0} mult T²/(2π) per (node, channel), (K, 3): what no fit at order P holds."""
@@ -199,9 +205,9 @@ class _FitParts:
     def band_eps_at_F0(self, residual: np.ndarray) -> np.ndarray:
         """ε_b(F0) per band (n_bands,), worst live channel, from a per-node error density (K, 3)
         summed over l <= F0 (the energy at l > F0 added): the reweighting passes' measure."""
-        err = self.profile.band_sum(residual) + self.after
-        eps = np.where(self.live, err / np.where(self.total > 0, self.total, 1.0), 0.0)
-        return np.clip(eps, 0.0, None).max(axis=-1)
+        err = self.profile.band_matrix @ residual + self.after
+        eps = np.where(self.live, err / self.safe_total, 0.0)
+        return np.maximum(eps, 0.0).max(axis=-1)
 
     def solve(self, P: int, max_view_deg: float) -> _Fit:
         """The reweighted fit at view order ``P`` (:func:`fit_view_coefficients`)."""
@@ -223,21 +229,22 @@ class _Fit:
         # 1 on the padding columns of each q: p − q > P − q
         self.pad = (np.arange(P + 1)[None, :] > P - np.arange(P + 1)[:, None]).astype(np.float64)
         self.mult = mult_q(P + 1) / (2.0 * np.pi)
+        self.pad_eye = self.pad[:, :, None] * np.eye(P + 1)  # a unit diagonal entry per padding column
         self.M = self._reweighted(max_view_deg)
 
     def _band_normals(self) -> np.ndarray:
-        """Σ_{k in b} dθ_v weight_k B_k^T B_k per (q, band) at this P: (P+1, P+1, P+1, n_bands)
-        [q, p − q, p' − q, band] (the profile's at P0, the columns above P zeroed)."""
+        """Σ_{k in b} dθ_v weight_k B_k^T B_k per (q, band) at this P: ((P+1)³, n_bands)
+        [(q, p − q, p' − q), band] (the profile's at P0, the columns above P zeroed)."""
         keep = 1.0 - self.pad
-        normals = self.parts.band_normals[: self.P + 1, :, : self.P + 1, : self.P + 1].transpose(0, 2, 3, 1)
-        return normals * (keep[:, :, None, None] * keep[:, None, :, None])
+        normals = self.parts.band_normals[: self.P + 1, : self.P + 1, : self.P + 1] * (
+            keep[:, :, None, None] * keep[:, None, :, None])
+        return normals.reshape(-1, normals.shape[-1])  # [(q, p − q, p' − q), band]: one product per pass
 
     def _operator(self, node_w: np.ndarray, band_w: np.ndarray, normals: np.ndarray) -> np.ndarray:
         """M = (B^T W B)^{-1} B^T W per q, (P+1, P+1, K), W = diag(``node_w``) = the node weights ×
         ``band_w`` of each node's band: the normal equations (``normals``: :meth:`_band_normals`)
         when well conditioned (:data:`NORMAL_EQUATIONS_COND`), else QR."""
-        eye = self.pad[:, :, None] * np.eye(self.P + 1)  # a unit diagonal entry per padding column
-        A = normals @ band_w + eye
+        A = (normals @ band_w).reshape(self.pad_eye.shape) + self.pad_eye
         try:
             inverse = np.linalg.inv(A)
             # max_q ‖A‖₁ × max_q ‖A⁻¹‖₁ >= the largest condition number κ₁ of the q
@@ -246,7 +253,7 @@ class _Fit:
         except np.linalg.LinAlgError:
             pass
         sw = np.sqrt(node_w)
-        Q, Rq = np.linalg.qr(np.concatenate([self.basis * sw[None, :, None], eye], axis=1))
+        Q, Rq = np.linalg.qr(np.concatenate([self.basis * sw[None, :, None], self.pad_eye], axis=1))
         return np.linalg.solve(Rq, Q.transpose(0, 2, 1))[:, :, : self.parts.K] * sw[None, None, :]
 
     def _pass_residual(self, M: np.ndarray, gram: np.ndarray) -> np.ndarray:
@@ -286,7 +293,7 @@ class _Fit:
             if worst <= 0.0 or worst > 0.995 * prev_worst:  # nothing to gain (a view-independent lobe)
                 return M
             prev_worst = worst
-            band_w = band_w * np.where(inside, np.sqrt(np.clip(eps / worst, 1e-3, 1.0)), 1.0)
+            band_w = band_w * np.where(inside, np.sqrt(np.minimum(np.maximum(eps / worst, 1e-3), 1.0)), 1.0)
         return M
 
     def coefficients(self) -> np.ndarray:
@@ -309,7 +316,7 @@ class _Fit:
             diff = rhs[q] - self.basis[q, :, :n] @ (self.M[q, :n] @ rhs[q])
             diff *= diff
             acc += mult[q] * diff
-        return parts.profile.band_sum(acc).reshape(-1, 3, parts.F0 + 1).transpose(0, 2, 1)
+        return (parts.profile.band_matrix @ acc).reshape(-1, 3, parts.F0 + 1).transpose(0, 2, 1)
 
 
 def _basis(profile: ViewProfile, P: int) -> np.ndarray:
