@@ -232,11 +232,11 @@ def sample_rho_hat_half(
     phi = 2.0 * np.pi * np.arange(n_phi // 2 + 1) / max(n_phi, 1)
     # the nodes that are their own mirror image (0, and π for even n_phi) count once, the others twice
     ends = [0, n_phi // 2] if n_phi % 2 == 0 and n_phi > 0 else [0]
-    inner = np.arange(1, (n_phi + 1) // 2)
+    inner = slice(1, (n_phi + 1) // 2)  # a slice, not an index array: a plain copy into ``values``
     values = np.empty((ci.size, co.size, phi.size, 3))
     values[:, :, ends], end_missing = sample_rho_hat(brdf, ci, co, phi[ends])
     missing = end_missing
-    if inner.size:
+    if phi[inner].size:
         values[:, :, inner], inner_missing = sample_rho_hat(brdf, ci, co, phi[inner])
         missing += 2 * inner_missing
     return values, missing
