@@ -638,17 +638,46 @@ def shrm_view_bands(
     if F > min(F0, coefficients.F0) or P > min(profile.P0, coefficients.P0):
         raise ValueError(f"orders (F={F}, P={P}) beyond the profile (F0={F0}, P0={profile.P0})")
     w_pred, w_bound, ceiling = _lighting_weights(band_energy, F0)
-    full = np.moveaxis(profile.full(), 1, 0)  # (K, F0+1, 3)
     approx = _approximation(profile, coefficients, F, P, sigma, q_max)
-    res = np.moveaxis(_residual(profile, approx), 1, 0)  # (K, F+1, 3)
+    trunc_pred, trunc_bound = _truncation_error(profile, approx, w_pred, w_bound, ceiling)
+    # the map's lookup and storage error of the field kept, (K, 3) each
     kept = np.moveaxis(np.tensordot(approx**2, mult_q(P + 1), axes=(2, 0)), 1, 0) / (2.0 * np.pi)
-    above = full[:, F + 1 :]
+    kept_w = kept * w_pred[None, : F + 1]
+    map_pred, map_bound = _map_error_factors(coefficients, F, P, sigma, map_rows, lighting_rows)
+    map_p = (kept_w * map_pred[None, :, None]).sum(axis=1)
+    map_b = (kept_w * map_bound[None, :, None]).sum(axis=1)
+    if signal_band_energy is None:
+        signal_pred, signal_low = _signal(profile, band_energy, w_pred, w_bound)
+    else:
+        s_pred, s_bound, _ = _lighting_weights(signal_band_energy, F0)
+        signal_pred, signal_low = _signal(profile, signal_band_energy, s_pred, s_bound)
+    per_node = (trunc_pred, trunc_bound, map_p, map_b, signal_pred, signal_low)
+    bands = _band_statements(profile, [profile.band_sum(x) for x in per_node], max_view_deg)
+    # all views with RH02's measure (sin θ_o' dθ_o' = 2 sin 2θ_v dθ_v): the energy fractions ε_B
+    solid = 2.0 * np.sin(2.0 * profile.theta_v)[:, None]
+    pred, _, _, bound = _ratios(*[(x * solid).T @ profile.weight for x in per_node])
+    return BandStatement(bands=bands, eps_predicted=pred**2, eps_bound=min(1.0, bound**2))
+
+
+def _truncation_error(profile: ViewProfile, approx: np.ndarray, w_pred: np.ndarray, w_bound: np.ndarray,
+                      ceiling: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The truncation error density per (node, channel), (K, 3) each, predicted and bounded, of the
+    field T̂ = ``approx`` (F+1, K, P+1, 3) under the lighting weights of :func:`_lighting_weights`:
+    the residual at l <= F, everything at F < l <= F0 and the energy the profile does not resolve."""
+    F = approx.shape[0] - 1
+    res = np.moveaxis(_residual(profile, approx), 1, 0)  # (K, F+1, 3)
+    above = np.moveaxis(profile.full(), 1, 0)[:, F + 1 :]
 
     def trunc(w: np.ndarray, w_beyond: np.ndarray) -> np.ndarray:
         return (res * w[None, : F + 1]).sum(axis=1) + (above * w[None, F + 1 :]).sum(axis=1) + w_beyond * profile.beyond
 
-    trunc_pred = trunc(w_pred, w_pred[-1])
-    trunc_bound = trunc(w_bound, ceiling)
+    return trunc(w_pred, w_pred[-1]), trunc(w_bound, ceiling)
+
+
+def _map_error_factors(coefficients: BRDFCoefficients, F: int, P: int, sigma: np.ndarray | None,
+                       map_rows: int | None, lighting_rows: tuple[int, int] | None) -> tuple[np.ndarray, np.ndarray]:
+    """Mean square relative error per l of the kept field's storage, map lookup and lighting
+    averaging (:func:`shrm_view_bands`): (predicted, bound), (F+1,) each."""
     l = np.arange(F + 1, dtype=np.float64)
     map_pred = np.full(F + 1, _FLOAT32_REL**2 * (P + 1) ** 2)
     map_bound = 4.0 * map_pred
@@ -669,23 +698,27 @@ def shrm_view_bands(
         delta = l * (l + 1.0) * (np.pi / lighting_rows[0]) ** 2 / 24.0
         map_pred += np.minimum(delta, 1.0) ** 2
         map_bound += np.minimum(2.0 * delta, 1.0) ** 2
-    kept_w = kept * w_pred[None, : F + 1]
-    map_p = (kept_w * map_pred[None, :, None]).sum(axis=1)
-    map_b = (kept_w * map_bound[None, :, None]).sum(axis=1)
-    # the resolved signal at the l the lighting holds: a lower bound on the band's signal
-    signal_energy = band_energy if signal_band_energy is None else signal_band_energy
-    s_pred, s_bound, _ = (w_pred, w_bound, None) if signal_band_energy is None else _lighting_weights(
-        signal_energy, F0)
-    known = min(signal_energy.shape[0], F0 + 1)
+    return map_pred, map_bound
+
+
+def _signal(profile: ViewProfile, signal_energy: np.ndarray, s_pred: np.ndarray,
+            s_bound: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The signal density per (node, channel), (K, 3) each: predicted (all l, the tail included)
+    and low (the resolved signal at the l the lighting holds: a lower bound on the band's signal)."""
+    full = np.moveaxis(profile.full(), 1, 0)  # (K, F0+1, 3)
+    known = min(signal_energy.shape[0], profile.F0 + 1)
     signal_low = (full[:, :known] * s_bound[None, :known]).sum(axis=1)
     signal_pred = (full * s_pred[None]).sum(axis=1) + s_pred[-1] * profile.beyond
-    b_tp, b_tb = profile.band_sum(trunc_pred), profile.band_sum(trunc_bound)
-    b_mp, b_mb = profile.band_sum(map_p), profile.band_sum(map_b)
-    b_sp, b_sl = profile.band_sum(signal_pred), profile.band_sum(signal_low)
+    return signal_pred, signal_low
+
+
+def _band_statements(profile: ViewProfile, band_parts: list[np.ndarray], max_view_deg: float) -> list[dict]:
+    """One dict per band (:func:`shrm_view_bands`) from the band sums (nb, 3) of the truncation
+    (predicted, bound), map (predicted, bound) and signal (predicted, low) densities."""
     inside = set(bands_inside(profile, max_view_deg).tolist())
     bands = []
     for b in range(profile.n_bands):
-        pred, tp, mp, bound = _ratios(b_tp[b], b_tb[b], b_mp[b], b_mb[b], b_sp[b], b_sl[b])
+        pred, tp, mp, bound = _ratios(*[x[b] for x in band_parts])
         bands.append({
             "theta_v_deg": [float(profile.edges_deg[b]), float(profile.edges_deg[b + 1])],
             "predicted_rel_rms": pred,
@@ -696,11 +729,7 @@ def shrm_view_bands(
             "extrapolated_samples": int(profile.missing[b]),
             "bound_holds": bool(profile.missing[b] == 0),
         })
-    # all views with RH02's measure (sin θ_o' dθ_o' = 2 sin 2θ_v dθ_v): the energy fractions ε_B
-    solid = 2.0 * np.sin(2.0 * profile.theta_v)[:, None]
-    parts = [(x * solid).T @ profile.weight for x in (trunc_pred, trunc_bound, map_p, map_b, signal_pred, signal_low)]
-    pred, _, _, bound = _ratios(*parts)
-    return BandStatement(bands=bands, eps_predicted=pred**2, eps_bound=min(1.0, bound**2))
+    return bands
 
 
 @dataclass(frozen=True)
