@@ -35,11 +35,13 @@ OUTSIDE_WEIGHT = 0.02
 #: leaves the band next to the limit worst (Cook–Torrance α = 0.1, f0 = 0.04: ε 0.031 after
 #: 4 passes, 0.030 after 8).
 FIT_PASSES = 8
-#: The weighted least squares of a pass are solved by their normal equations (B^T W B) x = B^T W y
-#: when the estimate of their condition number (the squared ratio of the largest to the smallest
-#: Cholesky pivot) is below this (measured: <= 1.3·10³ for the model families and RGL tables at
-#: P <= 20 on the default bands' 44 nodes, so the solution carries <= ~10⁻¹³ relative rounding),
-#: else by QR of the weighted basis (P close to the node count).
+#: The weighted least squares of a pass are solved by their normal equations (B^T W B) x = B^T W y,
+#: and the pass's residual taken from the Gram matrices in O(P K²), when the bound on their
+#: condition number κ₁ is below this (measured: <= 1.3·10³ for the model families and RGL tables at
+#: P <= 20 on the default bands' 44 nodes, so both carry <= ~10⁻¹³ relative rounding); else by QR
+#: of the weighted basis and the residual operator in full (P close to the node count: the fit
+#: nearly interpolates the nodes, κ₁ 4·10⁸ at P = 38 of 44, and rounding relative to the signal
+#: would swamp the small residual).
 NORMAL_EQUATIONS_COND = 1e6
 
 
@@ -240,35 +242,41 @@ class _Fit:
             keep[:, :, None, None] * keep[:, None, :, None])
         return normals.reshape(-1, normals.shape[-1])  # [(q, p − q, p' − q), band]: one product per pass
 
-    def _operator(self, node_w: np.ndarray, band_w: np.ndarray, normals: np.ndarray) -> np.ndarray:
+    def _operator(self, node_w: np.ndarray, band_w: np.ndarray, normals: np.ndarray) -> tuple[np.ndarray, bool]:
         """M = (B^T W B)^{-1} B^T W per q, (P+1, P+1, K), W = diag(``node_w``) = the node weights ×
-        ``band_w`` of each node's band: the normal equations (``normals``: :meth:`_band_normals`)
-        when well conditioned (:data:`NORMAL_EQUATIONS_COND`), else QR."""
+        ``band_w`` of each node's band, and whether it came from the normal equations (``normals``:
+        :meth:`_band_normals`), used when well conditioned (:data:`NORMAL_EQUATIONS_COND`), or from
+        QR of the weighted basis."""
         A = (normals @ band_w).reshape(self.pad_eye.shape) + self.pad_eye
         try:
             inverse = np.linalg.inv(A)
             # max_q ‖A‖₁ × max_q ‖A⁻¹‖₁ >= the largest condition number κ₁ of the q
             if np.abs(A).sum(axis=1).max() * np.abs(inverse).sum(axis=1).max() < NORMAL_EQUATIONS_COND:
-                return inverse @ (self.basis.transpose(0, 2, 1) * node_w)
+                return inverse @ (self.basis.transpose(0, 2, 1) * node_w), True
         except np.linalg.LinAlgError:
             pass
         sw = np.sqrt(node_w)
         Q, Rq = np.linalg.qr(np.concatenate([self.basis * sw[None, :, None], self.pad_eye], axis=1))
-        return np.linalg.solve(Rq, Q.transpose(0, 2, 1))[:, :, : self.parts.K] * sw[None, None, :]
+        return np.linalg.solve(Rq, Q.transpose(0, 2, 1))[:, :, : self.parts.K] * sw[None, None, :], False
 
-    def _pass_residual(self, M: np.ndarray, gram: np.ndarray) -> np.ndarray:
-        """Σ_q mult Σ_l (R T)²/(2π) per (channel, node) without the Gram diagonals' part, (3, K),
-        R = I − B M the residual operator: of the diagonal of R G R^T = G − 2 B (M G) + B (M G M^T) B^T
-        per (q, channel), the last two terms, from the Gram matrices G (O(P K²) per (q, channel), never
-        a pass over every (l, channel) column; one matrix product per q serves the three channels,
-        ``gram``: :meth:`_FitParts.gram`)."""
+    def _pass_residual(self, M: np.ndarray, gram: np.ndarray, gram_diag: np.ndarray, low_rank: bool) -> np.ndarray:
+        """Σ_q mult Σ_l (R T)²/(2π) per (node, channel), (K, 3), R = I − B M the residual operator:
+        the diagonal of R G R^T per (q, channel) from the Gram matrices G (``gram``:
+        :meth:`_FitParts.gram`, one matrix product per q serves the three channels; never a pass
+        over every (l, channel) column). ``low_rank``: as G − 2 B (M G) + B (M G M^T) B^T, O(P K²)
+        per (q, channel); else as (R G) R^T, O(K³), whose rounding stays relative to R where the
+        fit nearly interpolates the nodes (P close to K, when the normal equations are not used)."""
         P1, K = self.P + 1, self.parts.K
-        Bt = self.basis.transpose(0, 2, 1)  # (P+1, P+1, K)
-        H = (M @ gram).reshape(P1, P1 * 3, K)  # M G: [q, (p, c), k]
-        Z = (H @ M.transpose(0, 2, 1)) @ Bt  # M G M^T B^T
-        Z -= 2.0 * H
-        per_q = np.einsum("qpk,qpck->qck", Bt, Z.reshape(P1, P1, 3, K))  # (P+1, 3, K)
-        return (self.mult @ per_q.reshape(P1, 3 * K)).reshape(3, K)
+        if low_rank:
+            Bt = self.basis.transpose(0, 2, 1)  # (P+1, P+1, K)
+            H = (M @ gram).reshape(P1, P1 * 3, K)  # M G: [q, (p, c), k]
+            Z = (H @ M.transpose(0, 2, 1)) @ Bt  # M G M^T B^T
+            Z -= 2.0 * H
+            per_q = gram_diag + np.einsum("qpk,qpck->qck", Bt, Z.reshape(P1, P1, 3, K))  # (P+1, 3, K)
+        else:
+            R = np.eye(K) - self.basis @ M  # (P+1, K, K)
+            per_q = np.einsum("qkcj,qkj->qck", (R @ gram).reshape(P1, K, 3, K), R)
+        return (self.mult @ per_q.reshape(P1, 3 * K)).reshape(3, K).T
 
     def _reweighted(self, max_view_deg: float) -> np.ndarray:
         """The operator M after the reweighting passes toward the worst band inside the limit."""
@@ -281,14 +289,12 @@ class _Fit:
         normals = self._band_normals()
         prev_worst = np.inf
         for npass in range(FIT_PASSES + 1):
-            M = self._operator(profile.weight * band_w[profile.band], band_w, normals)
+            M, low_rank = self._operator(profile.weight * band_w[profile.band], band_w, normals)
             if npass == FIT_PASSES or not inside.any():
                 return M
             if npass == 0:
-                gram = parts.gram(P)
-                # what does not change between passes: the Gram diagonals and the orders q > P
-                fixed = (self.mult @ parts.gram_diagonal(P).reshape(P + 1, -1)).reshape(3, -1).T + parts.node_tail(P)
-            eps = parts.band_eps_at_F0(fixed + self._pass_residual(M, gram).T)
+                gram, gram_diag, fixed = parts.gram(P), parts.gram_diagonal(P), parts.node_tail(P)
+            eps = parts.band_eps_at_F0(fixed + self._pass_residual(M, gram, gram_diag, low_rank))
             worst = eps[inside].max()
             if worst <= 0.0 or worst > 0.995 * prev_worst:  # nothing to gain (a view-independent lobe)
                 return M
