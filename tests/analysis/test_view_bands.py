@@ -251,65 +251,6 @@ def test_a_channel_without_energy_in_a_band_does_not_decide_the_orders():
     assert all(0.0 <= b["eps"] <= 1.0 for b in o.view_bands())
 
 
-def _fit_direct(profile, coefficients, P, max_view_deg):
-    """The view fit written out slowly: per (l, q, channel) weighted least squares by
-    ``numpy.linalg.lstsq`` on the nodes, and every reweighting pass's band errors from
-    ``_band_eps_all`` of the whole fitted set (what ``fit_view_coefficients`` computes
-    incrementally)."""
-    from shrmkit.analysis.brdf_coeffs import BRDFCoefficients
-    from shrmkit.analysis.sh import legendre_f
-    from shrmkit.analysis.view_bands import FIT_PASSES, OUTSIDE_WEIGHT, _band_eps_all, bands_inside
-
-    F0 = min(profile.F0, coefficients.F0)
-    inside = np.zeros(profile.n_bands, dtype=bool)
-    inside[bands_inside(profile, max_view_deg)] = True
-    signal = (profile.band_full.sum(axis=1) + profile.band_beyond).sum(axis=1)
-    band_w = np.where(inside, 1.0, OUTSIDE_WEIGHT) / np.where(signal > 0, signal, 1.0)
-    fo = legendre_f(P, P, np.cos(2.0 * profile.theta_v))
-    out = np.zeros_like(coefficients.coeffs)
-    fitted = BRDFCoefficients(coeffs=out, energy=coefficients.energy, name=coefficients.name)
-    prev = np.inf
-    for npass in range(FIT_PASSES + 1):
-        sw = np.sqrt(profile.weight * band_w[profile.band])
-        for q in range(P + 1):
-            A = 2.0 * np.pi * fo[q : P + 1, q, :].T * sw[:, None]
-            for l in range(F0 + 1):
-                for c in range(3):
-                    out[l, q : P + 1, q, c] = np.linalg.lstsq(A, sw * profile.T[l, :, q, c], rcond=None)[0]
-        if npass == FIT_PASSES:
-            break
-        eps = _band_eps_all(profile, fitted, p_list=[P])[:, F0, 0]
-        worst = eps[inside].max()
-        if worst <= 0.0 or worst > 0.995 * prev:
-            break
-        prev = worst
-        band_w = band_w * np.where(inside, np.sqrt(np.clip(eps / worst, 1e-3, 1.0)), 1.0)
-    return fitted
-
-
-@pytest.mark.parametrize("spec, P", [("cook-torrance:kd=0.2,alpha=0.1,f0=0.04", 3), ("microfacet:sigma=0.3", 2),
-                                     ("lambert:albedo=0.5", 4)])
-def test_view_fit_equals_the_direct_least_squares(spec, P):
-    """fit_view_coefficients (pseudo-inverse per q, band errors of each pass from the residual
-    of that pass only) equals per-coefficient lstsq with the band errors of the whole fitted set
-    recomputed every pass, to rounding; its band-error table column is the direct one's."""
-    from shrmkit.analysis.brdf_coeffs import rho_lpq
-    from shrmkit.analysis.view_bands import _band_eps_all, fit_view_coefficients
-
-    brdf = shrmkit.load_brdf(spec)
-    grid = ReparamGrid.for_orders(16, 6)
-    F0, P0 = 16, 6
-    coefficients = rho_lpq(reparameterize(brdf, grid), F0, P0)
-    profile = view_profile(brdf, grid, F0, P0)
-    fast = fit_view_coefficients(profile, coefficients, P, 80.0)
-    slow = _fit_direct(profile, coefficients, P, 80.0)
-    scale = np.abs(slow.coeffs).max()
-    np.testing.assert_allclose(fast.coeffs, slow.coeffs, rtol=0, atol=1e-9 * scale)
-    assert np.abs(fast.coeffs[:, P + 1 :]).max(initial=0.0) == 0.0
-    np.testing.assert_allclose(_band_eps_all(profile, fast, p_list=[P]), _band_eps_all(profile, slow, p_list=[P]),
-                               rtol=1e-8, atol=1e-14)
-
-
 @pytest.mark.parametrize("spec, F, P", [("microfacet:sigma=0.1", 72, 10), ("cook-torrance:alpha=0.1,dist=ggx", 60, 14),
                                         ("lambert:albedo=0.5", 4, 5)])
 def test_projected_eps_from_the_profile_matches_the_3d_quadrature(spec, F, P):
