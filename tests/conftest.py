@@ -50,7 +50,7 @@ BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
 #: import graph of tests/test_layers.py (1.6 s CPU to parse, once instead of once per worker)
 ONE_UNIT_MODULES = frozenset({"tests/test_layers.py"})
 
-#: expected seconds (setup + call) of the tests that take about 2 s or more on the 2-core project
+#: expected seconds (setup + call + teardown) of the tests that take 1 s or more on the 2-core project
 #: machine, ``{node id: seconds}``; written by ``benchmarks/suite_cpu.py --durations-out`` from a
 #: whole run. A test that is not listed counts 0 s (3 s if marked ``slow``): a stale entry only
 #: changes the order in which the tests are handed out, never what runs.
