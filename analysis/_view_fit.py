@@ -269,10 +269,15 @@ class _Fit:
         P1, K = self.P + 1, self.parts.K
         if low_rank:
             Bt = self.basis.transpose(0, 2, 1)  # (P+1, P+1, K)
-            H = (M @ gram).reshape(P1, P1 * 3, K)  # M G: [q, (p, c), k]
-            Z = (H @ M.transpose(0, 2, 1)) @ Bt  # M G M^T B^T
-            Z -= 2.0 * H
-            per_q = gram_diag + np.einsum("qpk,qpck->qck", Bt, Z.reshape(P1, P1, 3, K))  # (P+1, 3, K)
+            per_q = np.empty((P1, 3, K))
+            half = (P1 + 1) // 2
+            # the q >= P+1 − half have at most ``half`` basis columns: their products skip the padding
+            for qs, n in ((slice(0, P1 - half), P1), (slice(P1 - half, P1), half)):
+                Mq, Bq = M[qs, :n], Bt[qs, :n]
+                H = (Mq @ gram[qs]).reshape(-1, n * 3, K)  # M G: [q, (p, c), k]
+                Z = (H @ Mq.transpose(0, 2, 1)) @ Bq  # M G M^T B^T
+                Z -= 2.0 * H
+                per_q[qs] = gram_diag[qs] + np.einsum("qpk,qpck->qck", Bq, Z.reshape(-1, n, 3, K))
         else:
             R = np.eye(K) - self.basis @ M  # (P+1, K, K)
             per_q = np.einsum("qkcj,qkj->qck", (R @ gram).reshape(P1, K, 3, K), R)
