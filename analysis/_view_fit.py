@@ -159,13 +159,15 @@ class _FitParts:
 
     def gram(self, P: int) -> np.ndarray:
         """G_qc = Σ_l T_lq T_lq^T over the nodes for q <= P, the channels side by side:
-        (P+1, K, 3·K) [q, node, channel·node] (computed once per q)."""
-        done = self._gram.shape[0]
+        (P+1, K, 3·K) [q, node, channel·node] (computed once per q; every array kept is a whole
+        prefix in q, so callers in other threads read a correct one whichever they find)."""
+        gram = self._gram
+        done = gram.shape[0]
         if P + 1 > done:
             by_channel = self.rhs(P)[done:].reshape(P + 1 - done, self.K, 3, self.F0 + 1).transpose(0, 2, 1, 3)
-            gram = (by_channel @ by_channel.transpose(0, 1, 3, 2)).transpose(0, 2, 1, 3)  # [q, k, c, j]
-            self._gram = np.concatenate([self._gram, gram.reshape(P + 1 - done, self.K, 3 * self.K)])
-        return self._gram[: P + 1]
+            more = (by_channel @ by_channel.transpose(0, 1, 3, 2)).transpose(0, 2, 1, 3)  # [q, k, c, j]
+            gram = self._gram = np.concatenate([gram, more.reshape(P + 1 - done, self.K, 3 * self.K)])
+        return gram[: P + 1]
 
     def gram_diagonal(self, P: int) -> np.ndarray:
         """The diagonals of :meth:`gram`, (P+1, 3, K): Σ_l T_lq² per (q, channel, node)."""
