@@ -4,7 +4,7 @@ import numpy as np
 
 from shrmkit.brdf_io.halfdiff import halfdiff_to_directions
 from shrmkit.brdf_io.specs import load_brdf
-from shrmkit.render.brdf_glsl import _lookup_mask, table_angles, tabulate_brdf
+from shrmkit.render._brdf_table import _lookup_mask, table_angles, tabulate_brdf
 
 
 def _slow_table(brdf, shape, periodic):
