@@ -15,19 +15,14 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 
 if TYPE_CHECKING:
-    from .view_bands import ViewProfile
+    from ._view_profile import ViewProfile
 
-__all__ = ["CHANNEL_FLOOR", "mult_q", "live_channels", "bands_inside", "BandTotals", "profile_totals",
+__all__ = ["CHANNEL_FLOOR", "live_channels", "bands_inside", "BandTotals", "profile_totals",
            "eps_from_band_residual"]
 
 #: In the point-light tables a channel counts in a band when its energy there is at least this
 #: fraction of the band's strongest channel (1 % in amplitude).
 CHANNEL_FLOOR = 1e-4
-
-
-def mult_q(n: int) -> np.ndarray:
-    """Multiplicity of the azimuthal orders q = 0..n−1 of a real field: 1 for q = 0, else 2 (n,)."""
-    return np.where(np.arange(n) == 0, 1.0, 2.0)
 
 
 def live_channels(total: np.ndarray) -> np.ndarray:

@@ -18,11 +18,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ._band_eps import bands_inside, eps_from_band_residual, mult_q, profile_totals
+from ._band_eps import bands_inside, eps_from_band_residual, profile_totals
+from ._view_profile import mult_q
 from .brdf_coeffs import BRDFCoefficients
 
 if TYPE_CHECKING:
-    from .view_bands import ViewProfile
+    from ._view_profile import ViewProfile
 
 __all__ = ["OUTSIDE_WEIGHT", "FIT_PASSES", "fit_view_coefficients", "band_eps_column", "profile_shaped"]
 
