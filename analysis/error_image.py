@@ -33,6 +33,7 @@ __all__ = [
     "view_angle",
     "channel_norm",
     "predicted_error",
+    "stated_view_bands",
 ]
 
 #: Largest relative error reported: where the radiance is ~0 any absolute error is "everything".
@@ -77,8 +78,19 @@ class BandSignal:
         return 0.5 * (self.edges_deg[:-1] + self.edges_deg[1:])
 
 
-def _bands(shrm: Any) -> tuple[ViewBand, ...]:
+def stated_view_bands(shrm: Any) -> tuple[ViewBand, ...]:
+    """The SHRM's statements per view band (:class:`~shrmkit.analysis.records.ViewBand`): its ``info``,
+    or read from its ``meta`` (an object that holds only the serialized form, as an SHRM-like stand-in
+    may).
+
+    Raises
+    ------
+    ValueError
+        Neither states per-band errors.
+    """
     info = getattr(shrm, "info", None)
+    if not isinstance(info, PrefilterInfo) and isinstance(getattr(shrm, "meta", None), dict):
+        info = PrefilterInfo.from_meta(shrm.meta)
     bands = info.view_bands if isinstance(info, PrefilterInfo) else ()
     if not bands:
         raise ValueError("this SHRM states no per-band errors (meta['view_bands']): prefilter it with shrmkit")
@@ -150,7 +162,7 @@ def band_signal(shrm: Any, *, pairs_per_band: int = SIGNAL_PAIRS_PER_BAND, seed:
         return _CACHE[shrm]
     if pairs_per_band < 1:
         raise ValueError(f"pairs_per_band must be >= 1, got {pairs_per_band}")
-    edges = _edges(_bands(shrm))
+    edges = _edges(stated_view_bands(shrm))
     R, V, theta_v, _ = sample_pairs_focused(int(pairs_per_band), edges, seed=int(seed))
     norm = channel_norm(_radiance(shrm, R, V, lights=False))
     band = np.repeat(np.arange(edges.size - 1), int(pairs_per_band))  # the sampler's order: band by band
@@ -170,7 +182,7 @@ def band_errors(
     ``bound=True`` takes the ``bound_*`` statement divided by √``level``. A band whose statement
     is missing or not finite gets ``inf`` (the pixels there get the cap).
     """
-    bands = _bands(shrm)
+    bands = stated_view_bands(shrm)
     if bound and not 0.0 < level <= 1.0:
         raise ValueError(f"level must be in (0, 1], got {level}")
     signal = band_signal(shrm) if signal is None else signal

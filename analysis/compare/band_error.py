@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from ...brdf_io.latlong import pixel_index, row_edges_cos, row_solid_angles
-from ..error_image import band_errors, channel_norm
+from ..error_image import band_errors, channel_norm, stated_view_bands
 
 __all__ = ["BandSample", "band_sample", "band_error", "pixel_density", "pairs_per_band", "MIN_PAIRS_PER_BAND",
            "DEFAULT_SCALES_DEG", "DEFAULT_UNIFORM", "pixels_statement"]
@@ -386,7 +386,7 @@ def pixels_statement(shrm, values: np.ndarray, theta_v_deg: np.ndarray, *, signa
     absolute = {kind: band_errors(shrm, bound=kind == "bound", level=1.0, signal=signal)
                 for kind in ("predicted", "bound")}
     out = []
-    for k, band in enumerate(shrm.info.view_bands):
+    for k, band in enumerate(stated_view_bands(shrm)):
         lo, hi = band.theta_v_deg
         sel = (theta >= lo) & (theta < hi)
         rms_pix = float(np.sqrt(np.mean(channel_norm(values[sel]) ** 2))) if sel.any() else 0.0
