@@ -15,6 +15,7 @@ carries a band's statement to the pixels of one render.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -387,12 +388,13 @@ def pixels_statement(shrm, values: np.ndarray, theta_v_deg: np.ndarray, *, signa
                 for kind in ("predicted", "bound")}
     out = []
     for k, band in enumerate(stated_view_bands(shrm)):
-        lo, hi = band.theta_v_deg
+        lo, hi = band.theta_v_deg or (math.nan, math.nan)  # a band without its edges holds no pixel
         sel = (theta >= lo) & (theta < hi)
         rms_pix = float(np.sqrt(np.mean(channel_norm(values[sel]) ** 2))) if sel.any() else 0.0
         record: dict[str, Any] = {"theta_v_deg": [float(lo), float(hi)], "pixels": int(sel.sum())}
         for kind in ("predicted", "bound"):
-            r = float(band.predicted_rel_rms if kind == "predicted" else band.bound_rel_rms)
+            stated = band.predicted_rel_rms if kind == "predicted" else band.bound_rel_rms
+            r = math.nan if stated is None else float(stated)  # not stated: never read as 0
             spread = float(absolute[kind][k]) / rms_pix if rms_pix > 0.0 else float("inf")
             record[f"{kind}_rel_rms"] = max(r, spread) if sel.any() else r
             record[f"stated_{kind}_rel_rms"] = r
