@@ -176,8 +176,9 @@ def _fold_theta_i(values: np.ndarray) -> np.ndarray:
 def _parity_legendre(F0: int, P0: int, n_nodes: int) -> tuple[np.ndarray, np.ndarray]:
     """The weighted f_lq(θ_i') w_i of :func:`weighted_legendre` on the first ⌈n/2⌉ nodes, for even
     and for odd l: ((P0+1, ⌈n/2⌉, ⌈(F0+1)/2⌉), (P0+1, ⌈n/2⌉, ⌊(F0+1)/2⌋)) [q, i, l], read-only
-    (computed once per size, as ``weighted_legendre``)."""
-    fi = weighted_legendre(F0, P0, n_nodes)[:, :, : (n_nodes + 1) // 2]
+    (computed once per size and kept; the whole table it is cut from is not kept beside it: it is
+    ``weighted_legendre``'s, uncached, as only the 3-D projection of ``rho_lpq`` reads it whole)."""
+    fi = weighted_legendre.__wrapped__(F0, P0, n_nodes)[:, :, : (n_nodes + 1) // 2]
     out = tuple(np.ascontiguousarray(fi[parity::2].transpose(1, 2, 0)) for parity in (0, 1))
     for a in out:
         a.setflags(write=False)
