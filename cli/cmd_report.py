@@ -49,8 +49,7 @@ def options_from_args(args: argparse.Namespace):
         if value is not None:
             changes[key] = value
     options = profile("quick" if args.quick else "full", **changes)
-    # one order rule: the profile's (quick caps F at 96) with the rule options given; set through the
-    # rule's keywords, which ReportOptions.with_changes applies over its rule (a rule= would not win)
+    # one order rule: the profile's (quick caps F at 96) with the rule options given
     rule = resolve_rule(options.rule, override=True, eps=args.eps, max_F=args.max_F, criterion=args.criterion,
                         max_view_deg=args.max_view_deg)
     return options.with_changes(**rule.to_json())

@@ -253,18 +253,24 @@ def fast_exit(code: int) -> None:
     children = sys.modules.get("multiprocessing")
     if children is not None and children.active_children():
         return
-    try:
-        sys.stdout.flush()
-        sys.stderr.flush()
-    except (OSError, ValueError):
+    if not _flushed():
         return
     atexit._run_exitfuncs()
-    try:
-        sys.stdout.flush()
-        sys.stderr.flush()
-    except (OSError, ValueError):
+    if not _flushed():
         return
     os._exit(code)
+
+
+def _flushed() -> bool:
+    """Flush stdout and stderr; False if one cannot be (a closed pipe, a full disk). A stream that
+    is None (its descriptor was closed when the process started) has nothing to flush."""
+    try:
+        for stream in (sys.stdout, sys.stderr):
+            if stream is not None:
+                stream.flush()
+    except (OSError, ValueError):
+        return False
+    return True
 
 
 def console_main() -> None:

@@ -12,7 +12,8 @@ _HARNESS = """
 import atexit, os, sys, threading, time
 real = os._exit
 def marked(code):
-    sys.stderr.write("FAST-EXIT\\n"); sys.stderr.flush(); real(code)
+    out = sys.stderr or sys.stdout
+    out.write("FAST-EXIT\\n"); out.flush(); real(code)
 os._exit = marked
 atexit.register(lambda: print("atexit ran", file=sys.stderr))
 {setup}
@@ -50,3 +51,12 @@ def test_a_live_thread_gets_the_ordinary_exit() -> None:
     assert proc.returncode == 0
     assert "thread finished" in proc.stderr and "atexit ran" in proc.stderr
     assert "FAST-EXIT" not in proc.stderr
+
+
+def test_closed_stderr_keeps_the_exit_code() -> None:
+    """stderr closed when the process started (``2>&-``: sys.stderr is None): an error still exits 2
+    and a success 0 (flushing None raised AttributeError, and the exit code became 1)."""
+    proc = _run(["orders", "no-such-model:x=1"], setup="sys.stderr = None")
+    assert proc.returncode == 2 and "no-such-model" in proc.stdout and "FAST-EXIT" in proc.stdout
+    assert _run([], setup="sys.stderr = None").returncode == 0
+
