@@ -92,15 +92,20 @@ class CoefficientFit:
 
 
 class _Banded:
-    """A matrix with a few entries a row, ``out[i] = Σ_j weight[i, j] · x[index[i, j]]``, summed in
-    increasing j from the first product: the arithmetic, in that order, of SciPy's CSR product with
-    the row's entries sorted by column (the view page imports no SciPy: ~0.3–0.4 s CPU of every
-    report and ``shrm view``). Padding entries have weight 0 and repeat a column of the row.
+    """A matrix with a few entries a row, ``out[i] = Σ_j weight[i, j] · x[index[i, j]]`` over the
+    entries of nonzero weight, summed in increasing j from the first product: the arithmetic, in
+    that order, of SciPy's CSR product with the row's entries sorted by column (the view page
+    imports no SciPy: ~0.3–0.4 s CPU of every report and ``shrm view``). Only the ``stored`` entries
+    count, those SciPy's matrix would hold: padding and merged duplicates are skipped, so an
+    infinite value they point at does not become 0 · inf = NaN.
 
-    ``index`` (rows, band) int, ``weight`` (rows, band); ``dtype``: the products' type."""
+    ``index`` (rows, band) int, ``weight`` (rows, band), ``stored`` (rows, band) bool; ``dtype``:
+    the products' type."""
 
-    def __init__(self, index: np.ndarray, weight: np.ndarray, dtype: type = np.float64) -> None:
+    def __init__(self, index: np.ndarray, weight: np.ndarray, stored: np.ndarray,
+                 dtype: type = np.float64) -> None:
         self.index: np.ndarray = index
+        self.stored: np.ndarray = stored
         self.weight: np.ndarray = weight.astype(dtype)
         self.dtype = dtype
 
@@ -108,11 +113,20 @@ class _Banded:
         """(rows, ...) product with ``x`` (n, ...), in ``dtype`` (only the rows read are converted)."""
         x = np.asarray(x)
         shape = (-1,) + (1,) * (x.ndim - 1)
-        out = np.multiply(x[self.index[:, 0]], self.weight[:, 0].reshape(shape), dtype=self.dtype)
+        if self.stored[:, 0].all():
+            out = np.multiply(x[self.index[:, 0]], self.weight[:, 0].reshape(shape), dtype=self.dtype)
+            first = 1
+        else:
+            out = np.zeros((self.index.shape[0], *x.shape[1:]), dtype=self.dtype)
+            first = 0
         term = np.empty_like(out)
-        for j in range(1, self.index.shape[1]):
-            np.multiply(x[self.index[:, j]], self.weight[:, j].reshape(shape), out=term, dtype=self.dtype)
-            out += term
+        for j in range(first, self.index.shape[1]):
+            on = self.stored[:, j]
+            if on.all():
+                np.multiply(x[self.index[:, j]], self.weight[:, j].reshape(shape), out=term, dtype=self.dtype)
+                out += term
+            elif on.any():
+                out[on] += np.multiply(x[self.index[on, j]], self.weight[on, j].reshape(shape), dtype=self.dtype)
         return out
 
 
@@ -130,7 +144,8 @@ def _overlap(src: np.ndarray, dst: np.ndarray, dtype: type = np.float32) -> _Ban
     index = np.minimum(first[:, None] + np.arange(band)[None, :], m.shape[1] - 1)
     inside = np.arange(band)[None, :] < count[:, None]
     rows = np.arange(m.shape[0])[:, None]
-    return _Banded(np.where(inside, index, first[:, None]), np.where(inside, m[rows, index], 0.0), dtype)
+    # csr_matrix(m) stores the nonzero entries only
+    return _Banded(np.where(inside, index, first[:, None]), np.where(inside, m[rows, index], 0.0), inside, dtype)
 
 
 def _area_resample(maps: np.ndarray, h: int, w: int, chunk: int = 16) -> np.ndarray:
@@ -164,7 +179,8 @@ def _lookup_matrix(dirs: np.ndarray, height: int, width: int) -> _Banded:
     """(N, H·W) matrix of the bilinear lookup (``brdf_io.latlong.bilinear_lookup``) of an H × W
     lat-long map at unit vectors (N, 3): four weights a row, summing to 1, in float64. Entries of a
     row on the same texel (θ clamped at a pole, or one column wide) are one entry, their weights
-    summed in column order, as a sparse matrix built from the four would hold them."""
+    summed in column order, as a sparse matrix built from the four would hold them (a merged
+    duplicate's slot keeps weight 0 and is skipped)."""
     y0, y1, x0, x1, fy, fx = bilinear_corners(dirs, height, width)
     cols = np.stack([y0 * width + x0, y0 * width + x1, y1 * width + x0, y1 * width + x1], axis=1)
     weights = np.stack([(1 - fy) * (1 - fx), (1 - fy) * fx, fy * (1 - fx), fy * fx], axis=1)
@@ -179,7 +195,7 @@ def _lookup_matrix(dirs: np.ndarray, height: int, width: int) -> _Banded:
         on = repeat[:, j]
         merged[rows[on], head[on, j]] += weights[on, j]
         merged[on, j] = 0.0
-    return _Banded(cols, merged)
+    return _Banded(cols, merged, ~repeat)  # a bilinear weight of 0 is stored, as SciPy's COO → CSR keeps it
 
 
 def _lookup(maps: np.ndarray, dirs: np.ndarray, chunk: int = 16) -> np.ndarray:

@@ -60,3 +60,23 @@ def test_a_view_page_imports_no_scipy() -> None:
             "print(sorted(m for m in sys.modules if m == 'scipy' or m.startswith('scipy.')))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
     assert out == "[]"
+
+
+def test_an_infinite_pixel_reaches_only_the_pixels_that_overlap_it() -> None:
+    """Entries a banded row does not hold (padding, merged duplicates) are skipped, not multiplied
+    by 0: an infinite texel gives inf where it is read and nothing (not NaN) elsewhere."""
+    maps = np.ones((1, 7, 11, 3), dtype=np.float32)
+    maps[0, 3, 5] = np.inf
+    out = _area_resample(maps, 3, 4)[0]
+    mu, mu_new = 1.0 - row_edges_cos(7), 1.0 - row_edges_cos(3)
+    rows = [(mu_new[i] < mu[4]) and (mu_new[i + 1] > mu[3]) for i in range(3)]
+    cols = [(j / 4 < 6 / 11) and ((j + 1) / 4 > 5 / 11) for j in range(4)]
+    hit = np.outer(rows, cols)
+    assert np.isposinf(out[hit]).all() and np.isfinite(out[~hit]).all()
+    every_other = np.ones((1, 7, 11, 3), dtype=np.float32)
+    every_other[0, :, ::2] = np.inf  # the first column of padded rows: padding read it as 0 · inf = NaN
+    assert np.isposinf(_area_resample(every_other, 3, 4)).all()
+    # the lookups follow bilinear_lookup there too (a neighbour's weight 0 times inf is NaN in both)
+    dirs = pixel_directions(7, 11).reshape(-1, 3)
+    with np.errstate(invalid="ignore"):
+        np.testing.assert_array_equal(_lookup(maps, dirs)[:, 0], bilinear_lookup(maps[0].astype(float), dirs))
