@@ -398,7 +398,8 @@ def pixels_statement(shrm, values: np.ndarray, theta_v_deg: np.ndarray, *, signa
             spread = float(absolute[kind][k]) / rms_pix if rms_pix > 0.0 else float("inf")
             record[f"{kind}_rel_rms"] = max(r, spread) if sel.any() else r
             record[f"stated_{kind}_rel_rms"] = r
-        record["factor"] = (record["predicted_rel_rms"] / record["stated_predicted_rel_rms"]
-                            if record["stated_predicted_rel_rms"] > 0.0 else 1.0)
+        stated = record["stated_predicted_rel_rms"]
+        record["factor"] = (record["predicted_rel_rms"] / stated if stated > 0.0
+                            else math.nan if math.isnan(stated) else 1.0)  # not stated: no factor
         out.append(record)
     return out

@@ -50,3 +50,13 @@ def test_pixels_statement_takes_the_larger_of_the_relative_and_the_spread_error(
     np.testing.assert_allclose(out[0]["predicted_rel_rms"], 0.01)
     with pytest.raises(ValueError, match=r"values \(n, 3\)"):
         pixels_statement(shrm, values, theta[:2], signal=signal)
+
+
+def test_a_band_without_a_statement_has_no_factor():
+    """A band that states nothing (None) reads as NaN — its r and its factor — never 0 or 1."""
+    shrm = _Constant(2.0)
+    shrm.meta["view_bands"][1]["predicted_rel_rms"] = None
+    signal = band_signal(_Constant(2.0), pairs_per_band=8)
+    out = pixels_statement(shrm, np.array([[1.0] * 3, [1.0] * 3]), np.array([10.0, 45.0]), signal=signal)
+    assert np.isnan(out[1]["stated_predicted_rel_rms"]) and np.isnan(out[1]["factor"])
+    assert out[0]["factor"] > 0.0 and not np.isnan(out[0]["factor"])
