@@ -32,6 +32,9 @@ from typing import Any
 import numpy as np
 
 from ..brdf_io.errors import BadInputError
+
+# the `NAME as NAME` imports: public here before the split, importable from here still (patch them where read)
+from ._undershoot import OBLIQUE_VIEWS as OBLIQUE_VIEWS
 from ._undershoot import (
     UNDERSHOOT_MAX_VIEW_DEG,
     gibbs_negative,
@@ -39,6 +42,7 @@ from ._undershoot import (
     undershoot_samples,
     undershoot_views,
 )
+from ._window_search import MAX_BISECTIONS as MAX_BISECTIONS
 from ._window_search import (
     WindowChoice,
     _auto_at_orders,

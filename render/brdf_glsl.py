@@ -22,6 +22,9 @@ from ..analysis.lights import LightSet
 from ..brdf_io.brdf import BRDF
 from ..brdf_io.errors import BadInputError
 from ..brdf_io.models import CookTorrance, Lafortune, Lambert, PhongLobe, SimplifiedMicrofacet
+
+# the `NAME as NAME` imports: public here before the split, importable from here still (patch them where read)
+from ._brdf_table import TABLE_COS_FLOOR as TABLE_COS_FLOOR
 from ._brdf_table import (
     TABLE_FACTORS,
     TABLE_GRID,
@@ -35,6 +38,8 @@ from ._brdf_table import (
     table_lookup,
     tabulate_brdf,
 )
+from ._brdf_table import atlas_texels as atlas_texels
+from ._brdf_table import table_angles as table_angles
 
 __all__ = [
     "BrdfShader",

@@ -32,6 +32,9 @@ from ..brdf_io.atomic import atomic_path
 from ..brdf_io.envmap import EnvironmentMap
 from ..brdf_io.errors import BadInputError
 from ._page_fit import CoefficientFit, ViewBudget, fit_coefficients
+
+# the `NAME as NAME` imports: public here before the split, importable from here still (patch them where read)
+from ._page_payload import HALF_TARGET as HALF_TARGET
 from ._page_payload import (
     PageEnvironment,
     _b64_len,

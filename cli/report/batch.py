@@ -31,7 +31,16 @@ from ...brdf_io.errors import BadInputError
 from ...brdf_io.specs import BRDF_FILE_TYPES
 from ...render.preview import resolve_preview_mode
 from ._cost import estimate_cost, largest_first
+
+# the `NAME as NAME` imports: public here before the split, importable from here still (patch them where read)
+from ._dask_engine import DASK_POLL_SECONDS as DASK_POLL_SECONDS
+from ._dask_engine import DASK_SCHEDULER_LOST_SECONDS as DASK_SCHEDULER_LOST_SECONDS
+from ._dask_engine import DASK_START_TOPIC as DASK_START_TOPIC
 from ._dask_engine import _dask
+from ._pool import PARENT_POLL_SECONDS as PARENT_POLL_SECONDS
+from ._pool import STOP_SECONDS as STOP_SECONDS
+from ._pool import WATCH_THREAD_NAME as WATCH_THREAD_NAME
+from ._pool import WORKER_TARGET as WORKER_TARGET
 from ._pool import _processes
 from ._run_folder import _failed_row, _lock_run, _remove_stale_temporaries, _unlock_run, _write_index
 from ._task import TASK_TRIES, BatchProgress, ReportOutcome, ReportTask, run_task
