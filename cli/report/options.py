@@ -7,6 +7,7 @@ Everything that changes the numbers of a report is an option here and is recorde
 from __future__ import annotations
 
 import copy
+import inspect
 import math
 from dataclasses import dataclass, field, fields, replace
 from typing import Any
@@ -124,7 +125,13 @@ class ReportOptions(RuleFields):
     profile: str = field(default="full")
     rule: OrderRule = OrderRule()
 
-    def __init__(self, **options: Any) -> None:
+    def __init__(self, *args: Any, **options: Any) -> None:
+        if len(args) > len(_KEYWORDS):
+            raise TypeError(f"ReportOptions() takes at most {len(_KEYWORDS)} positional arguments")
+        for name, value in zip(_KEYWORDS[: len(args)], args, strict=True):  # eps first, as before the rule
+            if name in options:
+                raise TypeError(f"ReportOptions() got multiple values for argument {name!r}")
+            options[name] = value
         init_options(self, options, {name: name for name in RULE_FIELDS})
         self.__post_init__()
 
@@ -180,6 +187,12 @@ _KEYWORDS = ("eps", "tolerances", "envs", "env_height", "env_up", "env_flip", "e
              "preview_size", "mesh", "albedo_nodes", "window", "criterion", "max_view_deg", "lights", "plots",
              "explorer_plots", "profile")
 assert set(_KEYWORDS) == {f.name for f in fields(ReportOptions) if f.name != "rule"} | set(RULE_FIELDS)
+# what help() and editors show: every keyword with its default (the rule's fields: None, the rule's own)
+ReportOptions.__signature__ = inspect.Signature(  # type: ignore[attr-defined]
+    [inspect.Parameter(name, inspect.Parameter.POSITIONAL_OR_KEYWORD,
+                       default=None if name in RULE_FIELDS else ReportOptions.__dataclass_fields__[name].default)
+     for name in _KEYWORDS]
+    + [inspect.Parameter("rule", inspect.Parameter.KEYWORD_ONLY, default=OrderRule())])
 
 
 def profile(name: str = "full", **changes: Any) -> ReportOptions:

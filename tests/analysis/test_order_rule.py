@@ -7,6 +7,7 @@ constructor keywords of the options classes (their ``as_dict`` output must not c
 from __future__ import annotations
 
 import dataclasses
+import inspect
 import warnings
 
 import pytest
@@ -101,6 +102,9 @@ def test_options_hold_one_rule() -> None:
     assert report.with_changes(rule=other).rule == other == dataclasses.replace(report, rule=other).rule
     with pytest.raises(TypeError):
         ReportOptions(tolerance=0.1)
+    # positional eps as before the rule, and help() lists the keywords
+    assert ReportOptions(0.05).rule.eps == 0.05
+    assert list(inspect.signature(ReportOptions).parameters)[:3] == ["eps", "tolerances", "envs"]
 
 
 def test_render_options_hold_one_rule() -> None:
