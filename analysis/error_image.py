@@ -88,10 +88,7 @@ def stated_view_bands(shrm: Any) -> tuple[ViewBand, ...]:
     ValueError
         Neither states per-band errors.
     """
-    info = getattr(shrm, "info", None)
-    if not isinstance(info, PrefilterInfo) and isinstance(getattr(shrm, "meta", None), dict):
-        info = PrefilterInfo.from_meta(shrm.meta)
-    bands = info.view_bands if isinstance(info, PrefilterInfo) else ()
+    bands = PrefilterInfo.of(shrm).view_bands
     if not bands:
         raise ValueError("this SHRM states no per-band errors (meta['view_bands']): prefilter it with shrmkit")
     return bands

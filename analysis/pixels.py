@@ -276,8 +276,7 @@ def pixel_statement(
 def pixel_line(info: PrefilterInfo | Mapping[str, Any]) -> str:
     """One line for a terminal from an SHRM's ``info`` (or its ``meta``; ``pixel_errors``,
     ``pixel_rule``): the per-direction statement and what the pixel rule did."""
-    if not isinstance(info, PrefilterInfo):
-        info = PrefilterInfo.from_meta(info)
+    info = PrefilterInfo.of(info)
     stated = info.pixel_errors or {}
     if stated.get("p90") is None:
         text = "per pixel: not measured (no higher order than F to measure against)"

@@ -256,6 +256,19 @@ class PrefilterInfo:
         }
 
     @classmethod
+    def of(cls, source: Any) -> PrefilterInfo:
+        """The record of ``source``: a :class:`PrefilterInfo` itself, an SHRM (its ``info``), an
+        object holding only the serialized ``meta`` dict (an SHRM-like stand-in), or that dict.
+        Anything else gives the empty record (it states nothing)."""
+        if isinstance(source, cls):
+            return source
+        info = getattr(source, "info", None)
+        if isinstance(info, cls):
+            return info
+        meta = source if isinstance(source, Mapping) else getattr(source, "meta", None)
+        return cls.from_meta(meta if isinstance(meta, Mapping) else None)
+
+    @classmethod
     def from_meta(cls, meta: Mapping[str, Any] | None) -> PrefilterInfo:
         """The record of a ``meta`` dict (a prefiltered SHRM's, or a file's: keys a file lacks
         read as None, or empty for the lists); never raises on missing keys."""

@@ -122,3 +122,21 @@ def test_stated_band_is_the_worst_band_marked_inside() -> None:
     assert (worst.theta_v_deg, worst.predicted_rel_rms, worst.bound_rel_rms) == ((10, 20), 0.05, 0.06)
     assert PrefilterInfo.from_meta({"view_bands": bands[3:]}).stated_band() is None
     assert PrefilterInfo.from_meta({}).stated_band() is None
+
+
+def test_record_of_an_shrm_a_stand_in_or_a_meta_dict() -> None:
+    """PrefilterInfo.of: the record itself, an object's ``info``, an object holding only ``meta``, the
+    dict; anything else states nothing."""
+    meta = {"view_bands": [{"theta_v_deg": [0, 10], "predicted_rel_rms": 0.02, "inside": True}]}
+    record = PrefilterInfo.from_meta(meta)
+
+    class WithInfo:
+        info = record
+
+    class OnlyMeta:
+        def __init__(self) -> None:
+            self.meta = meta
+
+    assert PrefilterInfo.of(record) is record and PrefilterInfo.of(WithInfo()) is record
+    assert PrefilterInfo.of(OnlyMeta()) == record == PrefilterInfo.of(meta)
+    assert PrefilterInfo.of(object()).view_bands == ()
