@@ -24,7 +24,6 @@ from .options import ReportOptions, load_report_env
 
 __all__ = ["unique_names"]
 
-BAND_EDGES = DEFAULT_BAND_EDGES_DEG
 #: ``progress(stage)``: told the name of each stage as it starts
 Progress = Callable[[str], None]
 
@@ -60,8 +59,8 @@ def _environments(brdf: BRDF, options: ReportOptions, choices: dict[float, Order
         _stage(progress, f"reference {env.name}")
         # per view band: pairs drawn per band, R importance-sampled from the map's bright pixels and
         # stratified, so the standard error matches the spread over seeds (analysis.compare.band_error)
-        sample = band_sample(env.radiance, pairs_per_band(options.n_pairs, len(BAND_EDGES) - 1), BAND_EDGES,
-                             seed=options.seed)
+        sample = band_sample(env.radiance, pairs_per_band(options.n_pairs, len(DEFAULT_BAND_EDGES_DEG) - 1),
+                             DEFAULT_BAND_EDGES_DEG, seed=options.seed)
         t0, c0 = time.perf_counter(), time.thread_time()
         reference = reference_radiance(env, brdf, R, V)
         ref_seconds = time.perf_counter() - t0

@@ -38,7 +38,6 @@ from ...analysis.fit import FitResult, fit_brdf
 from ...analysis.fit.representation import choose_representation
 from ...analysis.orders import OrderChoice, choose_orders_many
 from ...analysis.reciprocity import RECIPROCITY_TOLERANCE
-from ...analysis.view_bands import DEFAULT_BAND_EDGES_DEG
 from ...brdf_io.brdf import BRDF
 from ...brdf_io.errors import BadInputError
 from ...brdf_io.jsonutil import to_jsonable
@@ -66,7 +65,6 @@ __all__ = [
 
 REPORT_FORMAT = "shrmkit-report"
 REPORT_FORMAT_VERSION = 1
-BAND_EDGES = DEFAULT_BAND_EDGES_DEG
 SLICE_VIEWS_DEG = (0.0, 30.0, 60.0, 75.0)
 _SLICE_THETA_DEG = np.arange(-85.0, 85.0 + 1e-9, 2.5)
 #: Significant digits of every float in report.json (``to_jsonable(..., digits=)``).
