@@ -165,23 +165,33 @@ def global_shrm_latlong(
     theta, phi = pixel_angles(height, width)
     out = np.zeros(((P + 1) ** 2, height, width, 3), dtype=np.float32)
     root2 = np.sqrt(2.0)
+    # work buffers sized for p = P, reused by every p (views of their first elements): fresh
+    # temporaries per p cost as much in first-touch page faults as the arithmetic itself
+    n_max = height * (P + 1) * width * 3
+    buffers = {name: np.empty(n_max, np.float32) for name in ("re", "im", "t_re", "t_im", "v_re", "v_im")}
+
+    def view(name: str, rows: int) -> np.ndarray:
+        return buffers[name][: height * rows * width * 3].reshape(height, rows, width * 3)
+
     terms = itertools.groupby(_spin_terms(lighting, coefficients, F, P), key=lambda term: term[0])
     for p, p_terms in terms:
         # real and imaginary parts of B_{p,−s}, s = 0..p, laid out (row, s, column, channel): each
         # row's (p+1) × (column·channel) block is one right-hand side of the rotation below. The
         # rotation runs in float32, the maps' storage type (relative rounding ~(p+1)·2⁻²⁴): it is
         # memory-bound, and float32 halves the traffic
-        re = np.zeros((height, p + 1, width, 3), dtype=np.float32)
-        im = np.zeros((height, p + 1, width, 3), dtype=np.float32)
+        re, im = view("re", p + 1), view("im", p + 1)
+        re.fill(0.0)
+        im.fill(0.0)
+        re4, im4 = re.reshape(height, p + 1, width, 3), im.reshape(height, p + 1, width, 3)
         for _, s, c, alm, lmax in p_terms:
             if azimuth_free and s > 0:
                 continue
             field = _synthesize_latlong(alm, s, lmax, height, width, nthreads)
-            re[:, s, :, c] = field[0]
+            re4[:, s, :, c] = field[0]
             if s:
-                im[:, s, :, c] = field[1]
+                im4[:, s, :, c] = field[1]
         if p == 0:
-            out[0] = re[:, 0]
+            out[0] = re4[:, 0]
             continue
         # Σ_q B_pq d̃_sq with B_{p,q>0} = (−1)^q conj(B_{p,−q}): the q > 0 columns fold onto the
         # q < 0 ones, + for the real part and − for the imaginary part
@@ -193,22 +203,22 @@ def global_shrm_latlong(
         fold_re = fold_re.astype(np.float32)
         fold_im = (d_neg[:, :, 1:] - d_pos).astype(np.float32)  # the q = 0 imaginary part is 0
         # one (p+1) × (p+1) matrix per row times that row's fields: a batched product (BLAS)
-        t_re = fold_re @ re.reshape(height, p + 1, width * 3)  # (H, s, column·channel)
-        t_im = fold_im @ im[:, 1:].reshape(height, p, width * 3)
-        del re, im
+        t_re, t_im = view("t_re", p + 1), view("t_im", p + 1)
+        np.matmul(fold_re, re, out=t_re)  # (H, s, column·channel)
+        np.matmul(fold_im, im[:, 1:], out=t_im)
         s_phi = np.arange(p + 1)[:, None] * phi[None, :]  # e^{−isβ}, per (s, column·channel)
         cos_sb = np.repeat(np.cos(s_phi), 3, axis=1).astype(np.float32)
         sin_sb = np.repeat(np.sin(s_phi), 3, axis=1).astype(np.float32)
-        value_re = t_re * cos_sb
-        value_re += t_im * sin_sb
-        value_im = t_im * cos_sb
-        value_im -= t_re * sin_sb
-        del t_re, t_im
+        value_re, value_im, tmp = view("v_re", p + 1), view("v_im", p + 1), re  # re is free again
+        np.multiply(t_re, cos_sb, out=value_re)
+        value_re += np.multiply(t_im, sin_sb, out=tmp)
+        np.multiply(t_im, cos_sb, out=value_im)
+        value_im -= np.multiply(t_re, sin_sb, out=tmp)
         out[real_index(p, 0)] = value_re[:, 0].reshape(height, width, 3)
         for s in range(1, p + 1):
             sign = -1.0 if s % 2 else 1.0
-            out[real_index(p, s)] = (np.float32(root2 * sign) * value_re[:, s]).reshape(height, width, 3)
-            out[real_index(p, -s)] = (np.float32(-root2 * sign) * value_im[:, s]).reshape(height, width, 3)
+            np.multiply(value_re[:, s], np.float32(root2 * sign), out=out[real_index(p, s)].reshape(height, -1))
+            np.multiply(value_im[:, s], np.float32(-root2 * sign), out=out[real_index(p, -s)].reshape(height, -1))
     return out
 
 
