@@ -275,6 +275,9 @@ def _flushed() -> bool:
 
 def console_main() -> None:
     """The ``shrm`` console script: :func:`main`, then :func:`fast_exit` with its exit code."""
+    from .report import shared_state
+
+    shared_state.CONSOLE_PROCESS = True  # this process shows no library docstrings (lean_matplotlib)
     code = main()
     fast_exit(code)
     sys.exit(code)

@@ -22,12 +22,14 @@ from .explorer import LiveView, ReportImage
 from .html import index_html, report_html
 from .markdown import report_markdown
 from .plot_names import plots_wanted
+from .shared_state import lean_matplotlib
 
 __all__ = ["report_files", "write_folder", "summary_row", "summary_columns", "write_summary"]
 
 
 def _draw(doc: dict[str, Any], keys: Sequence[str]) -> dict[str, bytes]:
     """``plots.make_plots``: matplotlib (~0.5 s CPU of import) is loaded by the first report that draws."""
+    lean_matplotlib()  # the console script's process: no docstring tables (before matplotlib's import)
     from .plots import make_plots  # matplotlib: only for a report that draws plots
 
     return make_plots(doc, keys)
