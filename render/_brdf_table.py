@@ -1,12 +1,13 @@
 """A measured (or any) BRDF as a table texture on half/difference angles [Rus98] at MERL's spacing
 [MERL03]: the grid (:func:`table_grid_for`), the tabulation (:func:`tabulate_brdf`), the texture's
-lookup on the CPU (:func:`table_lookup`), its error on the lights' reflection (:func:`table_error`)
-and the coarsest grid within the target (:func:`choose_table`). The shaders that read it:
-``render.brdf_glsl``.
+lookup on the CPU (:func:`table_lookup`), its error on the lights' reflection (:func:`table_error`),
+the coarsest grid within the target (:func:`choose_table`) and the θ_d rows a render's views can
+read (:func:`theta_d_ranges`, :func:`theta_d_rows`). The shaders that read it: ``render.brdf_glsl``.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Callable, Sequence
@@ -38,6 +39,10 @@ __all__ = [
     "choose_table",
     "table_light_radiance",
     "table_error",
+    "THETA_D_MARGIN_ROWS",
+    "theta_d_ranges",
+    "theta_d_rows",
+    "table_covers",
 ]
 
 
@@ -70,9 +75,17 @@ class BrdfTable:
         The texture holds ``values × scale`` (1 for float32 textures; a power of two for the
         page's half floats).
     missing
-        Grid samples the BRDF had no data for (``eval_counted``) or gave NaN (set to 0).
+        Grid samples the BRDF had no data for (``eval_counted``) or gave NaN (set to 0); of a table
+        tabulated in part (``rows``, ``tabulate_brdf(only=)``), among the samples evaluated only.
     seconds
         Time to tabulate.
+    rows
+        None: every texel tabulated. Else the table holds only what its views can read
+        (:func:`choose_table`'s ``theta_d``): these θ_d rows, as inclusive (first, last) index runs,
+        whole in θ_h and φ_d, and the texels its error pairs read; every other texel is 0 and no
+        lookup from those views reads it.
+    tabulated
+        Texels tabulated (NH·ND·NP for a whole table).
     """
 
     values: np.ndarray
@@ -80,6 +93,12 @@ class BrdfTable:
     missing: int = 0
     seconds: float = 0.0
     periodic: bool = False
+    rows: tuple[tuple[int, int], ...] | None = None
+    tabulated: int = -1  # -1: every texel (set in __post_init__)
+
+    def __post_init__(self) -> None:
+        if self.tabulated < 0:
+            object.__setattr__(self, "tabulated", int(np.prod(self.values.shape[:3])))
 
     @property
     def shape(self) -> tuple[int, int, int]:
@@ -104,7 +123,7 @@ class BrdfTable:
         return out
 
     def with_values(self, values: np.ndarray, scale: float) -> BrdfTable:
-        return BrdfTable(np.asarray(values, np.float32), float(scale), self.missing, self.seconds, self.periodic)
+        return dataclasses.replace(self, values=np.asarray(values, np.float32), scale=float(scale))
 
 
 def table_angles(shape: tuple[int, int, int], periodic: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -147,7 +166,8 @@ def tabulate_brdf(brdf: BRDF, shape: Sequence[int] | None = None, periodic: bool
 
     ``only``: a boolean (NH, ND, NP) mask of the samples wanted; the others are left 0 and the
     BRDF is evaluated only where the wanted ones read (a candidate grid's error needs the few
-    samples its lookups touch, :func:`choose_table`); ``missing`` then counts those evaluations.
+    samples its lookups touch, :func:`choose_table`); ``missing`` then counts those evaluations and
+    ``tabulated`` the wanted samples.
     """
     default_shape, default_periodic = table_grid_for(brdf)
     shape = default_shape if shape is None else shape
@@ -175,17 +195,22 @@ def tabulate_brdf(brdf: BRDF, shape: Sequence[int] | None = None, periodic: bool
             values[i] = rho[_source_rows(above), np.arange(npd)]
             continue
         j, k = np.nonzero(only[i])
-        src = _source_rows(above)[j, k]
-        pairs, inverse = np.unique(np.stack([src, k], axis=1), axis=0, return_inverse=True)
-        Lp, Vp = L[pairs[:, 0], pairs[:, 1]], V[pairs[:, 0], pairs[:, 1]]
+        source = _source_rows(above)[j, k] * npd + k  # flat index of the sample each wanted one holds
+        evaluated = np.zeros(nd * npd, bool)
+        evaluated[source] = True
+        flat = np.flatnonzero(evaluated)  # each sample once (a fill row's source may be wanted too)
+        position = np.zeros(nd * npd, np.intp)
+        position[flat] = np.arange(flat.size)
+        Lp, Vp = L.reshape(-1, 3)[flat], V.reshape(-1, 3)[flat]
         rho, none = brdf.eval_counted(Lp, Vp)
-        rho = np.asarray(rho, dtype=np.float64).reshape(len(pairs), 3)
+        rho = np.asarray(rho, dtype=np.float64).reshape(flat.size, 3)
         bad = ~np.isfinite(rho)
         missing += int(none) + int(np.any(bad, axis=-1).sum())
         rho[bad] = 0.0
         rho *= (np.maximum(Lp[:, 2], 0.0) * np.maximum(Vp[:, 2], 0.0))[:, None]
-        values[i, j, k] = rho[np.ravel(inverse)]
-    return BrdfTable(values, 1.0, missing, time.perf_counter() - t0, periodic)
+        values[i, j, k] = rho[position[source]]
+    tabulated = -1 if only is None else int(np.count_nonzero(only))
+    return BrdfTable(values, 1.0, missing, time.perf_counter() - t0, periodic, tabulated=tabulated)
 
 
 def _lookup_corners(shape: tuple[int, int, int], periodic: bool, L: np.ndarray, V: np.ndarray):
@@ -270,9 +295,73 @@ def atlas_texels(shape: tuple[int, int, int]) -> int:
     return -(-nh // cols) * nd * cols * npd
 
 
+#: θ_d rows tabulated beyond those a view can read, on each side (:func:`theta_d_rows`): the shader
+#: computes θ_d in float32 from an interpolated surface point, a hair off the exact value; one row
+#: (1° at the default grid) is ~10⁴ times that.
+THETA_D_MARGIN_ROWS = 1
+
+
+def theta_d_ranges(directions: np.ndarray, cones: Sequence[tuple[np.ndarray, float]]) -> np.ndarray:
+    """The θ_d a render can look up: float64 (n_lights · n_cones, 2) [lo, hi] in radians.
+
+    θ_d = ½ ∠(L, V) [Rus98] does not depend on the surface normal. For a light direction L
+    ((n_lights, 3) ``directions``, the frame the lookups are made in) and views V within the cone
+    of half-angle a about the unit axis A (``cones``: (A, a), a in radians, e.g.
+    ``Camera.view_cone``), the triangle inequality on the sphere gives, with γ = ∠(L, A),
+    ∠(L, V) ∈ [max(γ − a, 0), min(γ + a, π)]; row c·n_lights + k is light k in cone c.
+    """
+    L = np.asarray(directions, np.float64).reshape(-1, 3)
+    L = L / np.linalg.norm(L, axis=1, keepdims=True)
+    out = []
+    for axis, half_angle in cones:
+        a = np.asarray(axis, np.float64).reshape(3)
+        gamma = np.arccos(np.clip(L @ (a / np.linalg.norm(a)), -1.0, 1.0))
+        out.append(np.stack([0.5 * np.maximum(gamma - half_angle, 0.0),
+                             0.5 * np.minimum(gamma + half_angle, np.pi)], axis=1))
+    return np.concatenate(out) if out else np.zeros((0, 2))
+
+
+def theta_d_rows(ranges: np.ndarray, nd: int, margin: int = THETA_D_MARGIN_ROWS) -> np.ndarray:
+    """Boolean (``nd``,): the θ_d rows of an ``nd``-row table that lookups at θ_d within ``ranges``
+    ((n, 2) [lo, hi] radians, :func:`theta_d_ranges`) read, ``margin`` more on each side.
+
+    A lookup at v = (ND − 1) θ_d / (π/2) reads rows j0 = min(⌊v⌋, ND − 2) and j0 + 1
+    (``brdf_table.glsl``, :func:`table_lookup`): over [v_lo, v_hi], rows min(⌊v_lo⌋, ND − 2) to
+    ⌊v_hi⌋ + 1, clipped to the table.
+    """
+    rows = np.zeros(int(nd), bool)
+    v = np.asarray(ranges, np.float64).reshape(-1, 2) * ((nd - 1) / (np.pi / 2))
+    for lo, hi in v:
+        first = min(math.floor(lo), nd - 2) - margin
+        last = math.floor(hi) + 1 + margin
+        rows[max(first, 0):max(min(last, nd - 1) + 1, 0)] = True
+    return rows
+
+
+def _runs(mask: np.ndarray) -> tuple[tuple[int, int], ...]:
+    """The inclusive (first, last) index runs of the True entries of a 1-D boolean mask."""
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], mask.astype(np.int8), [0]])))
+    return tuple((int(a), int(b) - 1) for a, b in zip(edges[::2], edges[1::2], strict=True))
+
+
+def table_covers(table: BrdfTable, theta_d: np.ndarray | None) -> bool:
+    """Whether ``table`` holds every texel lookups at θ_d within ``theta_d`` ((n, 2) radians,
+    :func:`theta_d_ranges`; None: any θ_d) read, :data:`THETA_D_MARGIN_ROWS` included: a whole
+    table always, one tabulated for some views (``rows``) when those rows include them."""
+    if table.rows is None:
+        return True
+    if theta_d is None:
+        return False
+    have = np.zeros(table.shape[1], bool)
+    for first, last in table.rows:
+        have[first:last + 1] = True
+    return bool(np.all(have[theta_d_rows(theta_d, table.shape[1])]))
+
+
 def choose_table(brdf: BRDF, lights: LightSet, *, max_view_deg: float = 80.0, max_texels: int | None = None,
                  target: float = TABLE_TARGET_REL_RMS, shape: tuple[int, int, int] | None = None,
-                 store: Callable[[BrdfTable], BrdfTable] | None = None) -> tuple[BrdfTable, dict[str, Any]]:
+                 store: Callable[[BrdfTable], BrdfTable] | None = None,
+                 theta_d: np.ndarray | None = None) -> tuple[BrdfTable, dict[str, Any]]:
     """The table of ``brdf`` for ``lights`` and its measured error (:func:`table_error`).
 
     Grids :data:`TABLE_FACTORS` × the default (:func:`table_grid_for`) are tried coarse to fine,
@@ -285,7 +374,20 @@ def choose_table(brdf: BRDF, lights: LightSet, *, max_view_deg: float = 80.0, ma
     A candidate's error is measured on the samples its lookups read, evaluated alone
     (``tabulate_brdf(only=)``): only the grid taken is tabulated whole, and its error is measured
     again on the whole table as stored.
+
+    ``theta_d``: None (default), the whole table; else (n, 2) [lo, hi] radians, the θ_d the renders
+    can look up (:func:`theta_d_ranges` of their lights and views): the grid taken holds only those
+    rows (:func:`theta_d_rows`, margin included) and the texels the error pairs read, the rest 0
+    (``BrdfTable.rows``, ``tabulated``), so that the error is the whole table's, to the bit; ``missing``
+    counts the samples evaluated. Not with ``store`` (whose rounding may depend on every texel).
+
+    Raises
+    ------
+    ValueError
+        ``theta_d`` and ``store`` both given.
     """
+    if theta_d is not None and store is not None:
+        raise ValueError("choose_table: theta_d (a table for some views) and store (a page's texture) together")
     base, periodic = table_grid_for(brdf)
     grids: list[tuple[int, int, int]] = [shape] if shape is not None else list(dict.fromkeys(
         scaled_grid(base, f, periodic) for f in TABLE_FACTORS))
@@ -306,7 +408,14 @@ def choose_table(brdf: BRDF, lights: LightSet, *, max_view_deg: float = 80.0, ma
             if pairs.error(store(sparse) if store is not None else sparse)["worst_band_rel_rms"] > target:
                 continue
         break
-    table = tabulate_brdf(brdf, tried[-1], periodic)
+    taken: tuple[int, int, int] = (tried[-1][0], tried[-1][1], tried[-1][2])
+    rows = None if theta_d is None else theta_d_rows(theta_d, taken[1])
+    if rows is None or rows.all():
+        table = tabulate_brdf(brdf, taken, periodic)
+    else:  # the rows the views read, and the texels of the error pairs (its error the whole table's)
+        wanted = _lookup_mask(taken, periodic, *pairs.local)
+        wanted[:, rows, :] = True
+        table = dataclasses.replace(tabulate_brdf(brdf, taken, periodic, only=wanted), rows=_runs(rows))
     if store is not None:
         table = store(table)
     return table, {**pairs.error(table), "target": float(target), "grids_tried": tried}

@@ -10,7 +10,7 @@ gathers what a renderer binds. Files and uniforms: ``data_specs/render_outputs.m
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from importlib import resources
 from typing import Any
@@ -37,6 +37,7 @@ from ._brdf_table import (
     table_light_radiance,
     table_lookup,
     tabulate_brdf,
+    theta_d_ranges,
 )
 from ._brdf_table import atlas_texels as atlas_texels
 from ._brdf_table import table_angles as table_angles
@@ -197,7 +198,8 @@ class LightShading:
     defines
         {macro: value} of the BRDF and ``SHRM_NLIGHTS``.
     table
-        The BRDF table (measured BRDFs), bound as ``shrmBrdfTex``; else None.
+        The BRDF table (measured BRDFs), bound as ``shrmBrdfTex``; else None. Made for some views
+        (``light_shading(views=)``), it holds only the θ_d rows they read (``BrdfTable.rows``).
     table_error
         :func:`table_error` of the table (None without one).
     """
@@ -222,6 +224,10 @@ class LightShading:
         if self.table is not None:
             nh, nd, npd = self.table.shape
             text += f" (BRDF table {nh}x{nd}x{npd} in theta_h, theta_d, phi_d"
+            if self.table.rows is not None:  # tabulated for the frames' views only
+                runs = ", ".join(f"{a}-{b}" for a, b in self.table.rows)
+                text += (f"; tabulated in theta_d rows {runs or 'none'}, the views', "
+                         f"{100 * self.table.tabulated / (nh * nd * npd):.2g} % of its texels")
             if self.table_error is not None:
                 text += (f"; its error on the lights' reflection {100 * self.table_error['rel_rms']:.2g} % relative "
                          f"RMS, worst view band {100 * self.table_error['worst_band_rel_rms']:.2g} %")
@@ -244,13 +250,20 @@ def light_uniforms(lights: LightSet) -> dict[str, Uniform]:
 
 
 def light_shading(shrm: Any, *, table_shape: tuple[int, int, int] | None = None,
-                  table: BrdfTable | None = None, measure: bool = True) -> LightShading | None:
+                  table: BrdfTable | None = None, measure: bool = True,
+                  views: Sequence[tuple[np.ndarray, float]] | None = None) -> LightShading | None:
     """The :class:`LightShading` of an SHRM's lights, or None when it has none (then the shaders
     hold no light code at all: no cost).
 
     A BRDF without a GLSL model (:func:`brdf_shader_for`) is tabulated at the resolution its error
     needs (:func:`choose_table`; on ``table_shape`` if given), or ``table`` is used (its error
     measured with ``measure``).
+
+    ``views``: None (default), the whole table; else every direction V toward the eye the frames
+    will shade, as cones (unit axis (3,), half-angle in radians; ``Camera.view_cone``) in the
+    lights' frame (the unrotated environment's: ``brdf_io.env_rotation.to_map_frame``): the table
+    is tabulated only in the θ_d rows they can read (:func:`theta_d_ranges`; ``BrdfTable.rows``),
+    and draws those frames as the whole table does, bit for bit; its error is the whole table's.
     """
     if not getattr(shrm, "has_lights", False):
         return None
@@ -265,7 +278,8 @@ def light_shading(shrm: Any, *, table_shape: tuple[int, int, int] | None = None,
         stated = shrm.info.max_view_deg
         max_view = DEFAULT_MAX_VIEW_DEG if stated is None else float(stated)
         if table is None:
-            table, error = choose_table(brdf, lights, max_view_deg=max_view, shape=table_shape)
+            theta_d = None if views is None else theta_d_ranges(lights.directions, views)
+            table, error = choose_table(brdf, lights, max_view_deg=max_view, shape=table_shape, theta_d=theta_d)
         elif measure:
             error = table_error(table, brdf, lights, max_view_deg=max_view)
         uniforms.update(shader.uniforms(table))

@@ -132,6 +132,23 @@ class Camera:
         d = self.eye - np.asarray(point, dtype=np.float64).reshape(3)
         return d / np.linalg.norm(d)
 
+    def view_cone(self, center: ArrayLike, radius: float) -> tuple[np.ndarray, float]:
+        """The cone of the directions toward the camera from the points within ``radius`` of
+        ``center``: (unit axis (3,), half-angle in radians).
+
+        ortho: (−forward, 0), every ray parallel. perspective: the axis toward the eye from
+        ``center`` and asin(radius / d), d the eye's distance (the ball seen from the eye fills the
+        cone of that half-angle, so eye − P of a point P in it is within it); π when the eye is
+        within the ball.
+        """
+        if self.projection == "ortho":
+            return -self.forward, 0.0
+        d = self.eye - np.asarray(center, dtype=np.float64).reshape(3)
+        dist = float(np.linalg.norm(d))
+        if not dist > radius:
+            return (d / dist if dist > 0 else -self.forward), float(np.pi)
+        return d / dist, float(np.arcsin(radius / dist))
+
     def apply_to(self, vtk_camera, near_far: tuple[float, float]) -> None:
         """Set a vtkCamera to this camera (world frame = z-up frame, no conversion)."""
         vtk_camera.SetPosition(*self.eye)

@@ -24,7 +24,7 @@ checked by ``tests/cli/test_cli_startup.py``). Citation keys: ``data_specs/bibli
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -52,6 +52,7 @@ from ..brdf_io.brdf import BRDF
 from ..brdf_io.env_rotation import check_env_rotation
 from ..brdf_io.envmap import EnvironmentMap
 from ..brdf_io.errors import BadInputError
+from .brdf_glsl import LightShading
 from .gaussian_shader import gaussian_shading
 from .glsl import Shading
 from .mesh import Mesh
@@ -227,6 +228,8 @@ class RenderMode:
     self_shadow: bool = False
     uses_orders: bool = False
     method: str | None = None
+    #: its ``shading`` takes ``views=`` (the SHRM modes' lights: a measured BRDF's table only for them)
+    light_views: bool = False
 
     @property
     def published(self) -> Method | None:
@@ -235,9 +238,16 @@ class RenderMode:
         return None if self.method is None else METHODS[self.method]
 
     def prepare(
-        self, model: Any, mesh: Mesh, visibility_sh: np.ndarray | None = None, normalized_visibility: bool = True
+        self, model: Any, mesh: Mesh, visibility_sh: np.ndarray | None = None, normalized_visibility: bool = True,
+        *, views: Sequence[tuple[np.ndarray, float]] | None = None,
     ) -> Shading:
         """Check ``model`` and ``visibility_sh`` against the mode and make its :class:`Shading`.
+
+        ``views``: None, or every direction toward the eye the frames will shade, as cones (unit
+        axis, half-angle in radians) in the unrotated environment's frame
+        (``pipeline.view_cones``): a mode with ``light_views`` then tabulates a measured BRDF's
+        table only in the θ_d rows they read (``brdf_glsl.light_shading(views=)``); the Shading
+        draws no other views correctly. The other modes ignore it.
 
         Raises ValueError for a model of another type, or visibility in a mode without
         self-shadowing, or visibility that is not finite (n_vertices, 25).
@@ -246,7 +256,7 @@ class RenderMode:
             names = " or ".join(t.__name__ for t in self.models)
             raise ValueError(f"mode {self.name!r} takes a {names}, got {type(model).__name__}")
         if visibility_sh is None:
-            return self.shading(model, mesh)
+            return self.shading(model, mesh, views=views) if self.light_views else self.shading(model, mesh)
         if not self.self_shadow:
             raise ValueError(f"visibility_sh (self-shadowing) is only supported in mode "
                              f"{' or '.join(repr(m) for m in self_shadow_modes())}, not {self.name!r}")
@@ -287,9 +297,22 @@ def lights_info(shrm: SHRM, *, per_pixel: bool = True) -> tuple[dict[str, Any], 
     assert shading is not None  # has_lights
     info.update({"shaded": "per pixel", "brdf_glsl": shading.shader.source})
     if shading.table is not None:
-        info["brdf_table"] = {"shape": list(shading.table.shape), "missing": shading.table.missing,
-                              "seconds": shading.table.seconds, **(shading.table_error or {})}
+        info["brdf_table"] = _table_info(shading)
     return info, line + shading.describe()
+
+
+def _table_info(shading: LightShading) -> dict[str, Any]:
+    """``info["lights"]["brdf_table"]`` of a shading with a table (``data_specs/render_outputs.md``):
+    its ``shape``, ``missing`` (of the samples evaluated), ``seconds``, what it covers —
+    ``theta_d_rows`` (inclusive [first, last] θ_d row runs tabulated whole; every row for a whole
+    table) and ``texels`` (tabulated, of ``shape``'s product) — and its error dict
+    (``choose_table``)."""
+    table = shading.table
+    assert table is not None  # a shading with a table
+    nd = table.shape[1]
+    rows = [[0, nd - 1]] if table.rows is None else [list(run) for run in table.rows]
+    return {"shape": list(table.shape), "missing": table.missing, "seconds": table.seconds,
+            "theta_d_rows": rows, "texels": table.tabulated, **(shading.table_error or {})}
 
 
 def _shrm_settings(eps: float, options: RenderOptions) -> dict[str, Any]:
@@ -394,13 +417,15 @@ def build_gaussian_lobes(
 
 _MODES = (
     RenderMode("distant", "distant viewer (RH02 eq. 12): one SHRM map per frame, looked up by R",
-               build_shrm, (SHRM,), distant_shading, distant_update, uses_orders=True, method="shrm"),
+               build_shrm, (SHRM,), distant_shading, distant_update, uses_orders=True, method="shrm",
+               light_views=True),
     RenderMode("perpixel", "per-pixel view direction (RH02 eq. 8): the SHRM summed in the fragment shader",
-               build_shrm, (SHRM,), perpixel_shading, uses_orders=True, method="shrm"),
+               build_shrm, (SHRM,), perpixel_shading, uses_orders=True, method="shrm", light_views=True),
     RenderMode("rsibr", "Cabral et al. 1999: 12 maps at the icosahedron's vertices, blended per frame",
                build_rsibr, (RSIBRMaps, SHRM), rsibr_shading, rsibr_update, uses_orders=True, method="rsibr"),
     RenderMode("kautz-mccool", "Kautz & McCool 2000: the azimuth-free (q = 0) SHRM on the SHRM's (F, P), per pixel",
-               build_kautz_mccool, (SHRM,), perpixel_shading, uses_orders=True, method="kautz_mccool"),
+               build_kautz_mccool, (SHRM,), perpixel_shading, uses_orders=True, method="kautz_mccool",
+               light_views=True),
     RenderMode("gaussian-lobes", "Green et al. 2007: K Gaussian lobes per view elevation over an SG mip stack",
                build_gaussian_lobes, (GaussianLobeModel,), gaussian_shading, self_shadow=True,
                method="gaussian_lobes"),

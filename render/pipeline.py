@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..brdf_io.env_rotation import check_env_rotation, rotation_about_z
+from ..brdf_io.env_rotation import check_env_rotation, rotation_about_z, to_map_frame
 from .camera import Camera, orbit_camera
 from .defaults import BACKGROUNDS  # numpy-free home, for the CLI's parsers
 from .mesh import Mesh
@@ -24,7 +24,8 @@ from .modes import DEFAULT_MODE
 from .output import composite, environment_background
 from .vtk_renderer import SHRMRenderer
 
-__all__ = ["Frame", "FrameTimings", "BACKGROUNDS", "turntable_cameras", "light_turntable_rotations", "render_frames"]
+__all__ = ["Frame", "FrameTimings", "BACKGROUNDS", "turntable_cameras", "light_turntable_rotations", "view_cones",
+           "render_frames"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -87,6 +88,24 @@ def _rotations(env_rotation: Any, n: int) -> list[np.ndarray | None]:
     return rotations
 
 
+def view_cones(mesh: Mesh, cameras: Sequence[Camera], env_rotation: Any = None) -> list[tuple[np.ndarray, float]]:
+    """Every direction V toward the eye that frames of ``mesh`` from ``cameras`` shade, in the
+    unrotated environment's frame (Qᵀ V, ``brdf_io.env_rotation``: where the lights are), as one
+    cone (unit axis (3,), half-angle in radians) per camera: ``Camera.view_cone`` of the mesh's
+    bounding sphere (the centre of its box, as the renderer's), its axis turned by that frame's
+    rotation (``env_rotation`` as :func:`render_frames`'). What ``SHRMRenderer.add_object(views=)``
+    takes.
+    """
+    vertices = np.asarray(mesh.vertices, dtype=np.float64)
+    centre = 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))
+    radius = float(np.max(np.linalg.norm(vertices - centre, axis=1)))
+    cones = []
+    for cam, q in zip(cameras, _rotations(env_rotation, len(cameras)), strict=True):
+        axis, half_angle = cam.view_cone(centre, radius)
+        cones.append((to_map_frame(axis, q), half_angle))
+    return cones
+
+
 def render_frames(
     mesh: Mesh,
     model: Any,
@@ -133,7 +152,9 @@ def render_frames(
     rotations = _rotations(env_rotation, len(cameras))
     t0 = time.perf_counter()
     with SHRMRenderer(size, size) as renderer:
-        renderer.add_object(mesh, model, mode=mode, visibility_sh=visibility_sh)
+        # only these cameras are drawn: a measured BRDF's table holds only the rows their views read
+        renderer.add_object(mesh, model, mode=mode, visibility_sh=visibility_sh,
+                            views=view_cones(mesh, cameras, env_rotation))
         results = [renderer.render(cameras[0], env_rotation=rotations[0])]
         first = time.perf_counter() - t0
         results += [renderer.render(cam, env_rotation=q) for cam, q in zip(cameras[1:], rotations[1:], strict=True)]

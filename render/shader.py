@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 import weakref
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -34,6 +35,7 @@ import numpy as np
 from ..analysis.baselines.rsibr import RSIBRMaps, rsibr_from_shrm
 from ..analysis.sh import real_sph_harm
 from ..analysis.shrm import SHRM
+from ._brdf_table import table_covers, theta_d_ranges
 from .brdf_glsl import LightShading, light_shading
 from .glsl import (
     LATLONG_GLSL,
@@ -49,15 +51,28 @@ from .mesh import Mesh
 _LIGHT_SHADINGS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
-def cached_light_shading(shrm: SHRM) -> LightShading | None:
-    """:func:`~shrmkit.render.brdf_glsl.light_shading` of ``shrm``, made once per SHRM object
-    (a measured BRDF's table and its error are computed once for the build's description and
-    the shaders); the same result as a fresh call."""
+def cached_light_shading(shrm: SHRM, views: Sequence[tuple[np.ndarray, float]] | None = None
+                         ) -> LightShading | None:
+    """:func:`~shrmkit.render.brdf_glsl.light_shading` of ``shrm`` for ``views``, made once per SHRM
+    object and views (a measured BRDF's table and its error are computed once for the build's
+    description and the shaders); the same images as a fresh call.
+
+    ``views`` (``light_shading(views=)``; None: any view, the whole table): a shading made before
+    is reused when its table holds every θ_d row these views read (a whole table, or one made for
+    views whose rows include theirs, ``_brdf_table.table_covers``); else one is made for them.
+    """
     if not shrm.has_lights:
         return None
-    if shrm not in _LIGHT_SHADINGS:
-        _LIGHT_SHADINGS[shrm] = light_shading(shrm)
-    return _LIGHT_SHADINGS[shrm]
+    assert shrm.lights is not None  # has_lights
+    made: list[LightShading] = _LIGHT_SHADINGS.setdefault(shrm, [])
+    theta_d = None if views is None else theta_d_ranges(shrm.lights.directions, views)
+    for earlier in made:
+        if earlier.table is None or table_covers(earlier.table, theta_d):
+            return earlier
+    shading = light_shading(shrm, views=views)
+    assert shading is not None  # has_lights
+    made.append(shading)
+    return shading
 
 __all__ = [
     "atlas_layout",
@@ -216,13 +231,14 @@ def _view_map_shading(height: int, width: int, state: Any, lights: LightShading 
     )
 
 
-def distant_shading(shrm: SHRM, mesh: Mesh) -> Shading:
+def distant_shading(shrm: SHRM, mesh: Mesh, *, views: Sequence[tuple[np.ndarray, float]] | None = None) -> Shading:
     """Distant viewer (RH02 eq. 12): the per-frame map Σ B̃_pq Y^r_pq(Ṽ); state = (P, flat coefficients).
     The SHRM's explicit lights are added per fragment with the pixel's own V (the map holds the
-    SHRM part only, ``SHRM.view_map``: a light's highlight is sharper than it resolves)."""
+    SHRM part only, ``SHRM.view_map``: a light's highlight is sharper than it resolves); a measured
+    BRDF's table only for ``views`` when given (:func:`cached_light_shading`: then draw no other)."""
     n, h, w, _ = shrm.coeffs.shape
     flat = np.ascontiguousarray(shrm.coeffs.reshape(n, -1), dtype=np.float32)
-    return _view_map_shading(h, w, (shrm.P, flat), cached_light_shading(shrm))
+    return _view_map_shading(h, w, (shrm.P, flat), cached_light_shading(shrm, views))
 
 
 def distant_update(state: tuple[int, np.ndarray], view: np.ndarray, out: np.ndarray) -> None:
@@ -236,15 +252,16 @@ def distant_update(state: tuple[int, np.ndarray], view: np.ndarray, out: np.ndar
     np.maximum(out, 0.0, out=out)  # as SHRM.view_map: no negative radiance (the window's leftover undershoot)
 
 
-def perpixel_shading(shrm: SHRM, mesh: Mesh) -> Shading:
+def perpixel_shading(shrm: SHRM, mesh: Mesh, *, views: Sequence[tuple[np.ndarray, float]] | None = None) -> Shading:
     """Per-pixel view (RH02 eq. 8): the (P+1)² coefficient maps in one packed RGBA atlas
     (:func:`packed_coefficient_atlas`), the SH of V in the shader; with its deferred screen
-    pass (``Shading.deferred``: the sum once per covered pixel, ``vtk_renderer``)."""
+    pass (``Shading.deferred``: the sum once per covered pixel, ``vtk_renderer``). ``views`` as
+    :func:`distant_shading`'s."""
     n, h, w, _ = shrm.coeffs.shape
     cols, rows = atlas_layout(packed_tiles(n))
     hint = "use mode='distant' or a coarser SHRM"
     check_texture_size((rows * h, cols * w), f"SHRM with P={shrm.P} on {h}x{w}", hint)
-    lights = cached_light_shading(shrm)
+    lights = cached_light_shading(shrm, views)
     return Shading(
         packed_coefficient_atlas(shrm.coeffs),
         vertex_replacements(),

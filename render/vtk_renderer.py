@@ -182,6 +182,7 @@ class SHRMRenderer:
         mode: str = DEFAULT_MODE,
         visibility_sh: np.ndarray | None = None,
         normalized_visibility: bool = True,
+        views: Any = None,
     ) -> int:
         """Add a mesh shaded by ``model`` in render ``mode``; returns the object's index.
 
@@ -191,10 +192,11 @@ class SHRMRenderer:
         modes with self-shadowing, ``visibility_sh`` (n_vertices, 25), the order-4 SH visibility
         of each vertex (``analysis.baselines.selfshadow.vertex_visibility_sh``), turns it on
         (Green et al. 2007 eq. 7), ``normalized_visibility`` as in ``selfshadow.visibility_at``.
+        ``views``: only these views will be drawn (``RenderMode.prepare``; ``pipeline.view_cones``).
         Raises ValueError for an unknown mode or a model or visibility the mode does not take.
         """
         record = get_mode(mode)
-        shading = record.prepare(model, mesh, visibility_sh, normalized_visibility)
+        shading = record.prepare(model, mesh, visibility_sh, normalized_visibility, views=views)
         actor, tex, data, buf = self._actor(mesh, shading)
         self._renderer.AddActor(actor)
         lo, hi = mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)
