@@ -153,6 +153,10 @@ def _source_rows(above: np.ndarray) -> np.ndarray:
     return np.where(has[None, :] & (rows > last[None, :]), last[None, :], rows)
 
 
+#: Samples evaluated per call by ``tabulate_brdf(only=)`` (at most about this many, 48 bytes each in L and V).
+_EVAL_BATCH = 1 << 16
+
+
 def tabulate_brdf(brdf: BRDF, shape: Sequence[int] | None = None, periodic: bool | None = None,
                   *, only: np.ndarray | None = None) -> BrdfTable:
     """ρ of ``brdf`` (its own ``eval``) on a half/difference grid (:class:`BrdfTable`); ``shape`` and
@@ -179,6 +183,25 @@ def tabulate_brdf(brdf: BRDF, shape: Sequence[int] | None = None, periodic: bool
     th, td, pd = table_angles((nh, nd, npd), periodic)
     values = np.zeros((nh, nd, npd, 3), np.float32)
     missing = 0
+    # only=: the samples of several slices evaluated in one call (a call costs ~ms in an RGL reader
+    # whatever its size): (i, j, k, position of each wanted sample among the slice's evaluated, L, V)
+    pending: list[tuple[int, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
+
+    def evaluate() -> None:
+        nonlocal missing
+        Lb, Vb = np.concatenate([p[4] for p in pending]), np.concatenate([p[5] for p in pending])
+        rho, none = brdf.eval_counted(Lb, Vb)
+        rho = np.asarray(rho, dtype=np.float64).reshape(len(Lb), 3)
+        bad = ~np.isfinite(rho)
+        missing += int(none) + int(np.any(bad, axis=-1).sum())
+        rho[bad] = 0.0
+        rho *= (np.maximum(Lb[:, 2], 0.0) * np.maximum(Vb[:, 2], 0.0))[:, None]  # ρ cos θ_L cos θ_V
+        start = 0
+        for i, j, k, position, Lp, _ in pending:
+            values[i, j, k] = rho[start + position]
+            start += len(Lp)
+        pending.clear()
+
     for i in range(nh):  # one θ_h slice at a time: (ND·NP) evaluations
         if only is not None and not only[i].any():
             continue
@@ -201,14 +224,11 @@ def tabulate_brdf(brdf: BRDF, shape: Sequence[int] | None = None, periodic: bool
         flat = np.flatnonzero(evaluated)  # each sample once (a fill row's source may be wanted too)
         position = np.zeros(nd * npd, np.intp)
         position[flat] = np.arange(flat.size)
-        Lp, Vp = L.reshape(-1, 3)[flat], V.reshape(-1, 3)[flat]
-        rho, none = brdf.eval_counted(Lp, Vp)
-        rho = np.asarray(rho, dtype=np.float64).reshape(flat.size, 3)
-        bad = ~np.isfinite(rho)
-        missing += int(none) + int(np.any(bad, axis=-1).sum())
-        rho[bad] = 0.0
-        rho *= (np.maximum(Lp[:, 2], 0.0) * np.maximum(Vp[:, 2], 0.0))[:, None]
-        values[i, j, k] = rho[position[source]]
+        pending.append((i, j, k, position[source], L.reshape(-1, 3)[flat], V.reshape(-1, 3)[flat]))
+        if sum(len(p[4]) for p in pending) >= _EVAL_BATCH:
+            evaluate()
+    if pending:
+        evaluate()
     tabulated = -1 if only is None else int(np.count_nonzero(only))
     return BrdfTable(values, 1.0, missing, time.perf_counter() - t0, periodic, tabulated=tabulated)
 
