@@ -1,11 +1,13 @@
 """The view page's size budget (:class:`ViewBudget`) and its rule for the coefficient maps
 (:func:`fit_coefficients`): the (rows, P) of least estimated error that fits, by solid-angle area
 resampling and bilinear lookups on equal-area directions (``data_specs/view_html.md``), both as
-row-banded products in numpy (:class:`_Banded`).
+row-banded products in numpy (:class:`_Banded`): gathers of long contiguous runs, the maps of a
+chunk held texel-major (:func:`_texel_major`) where texels are gathered.
 """
 
 from __future__ import annotations
 
+import heapq
 import math
 from dataclasses import dataclass
 
@@ -109,24 +111,39 @@ class _Banded:
         self.weight: np.ndarray = weight.astype(dtype)
         self.dtype = dtype
 
-    def __matmul__(self, x: np.ndarray) -> np.ndarray:
-        """(rows, ...) product with ``x`` (n, ...), in ``dtype`` (only the rows read are converted)."""
+    def along(self, x: np.ndarray, axis: int) -> np.ndarray:
+        """The product along ``axis`` of ``x``: ``x.shape`` with ``rows`` entries on ``axis``, in
+        ``dtype`` (only the entries read are converted, each exactly). One gather (``np.take``) and
+        one weighted add a band slot, in ``x``'s own layout: fast where ``x``'s entries past
+        ``axis`` are long contiguous runs."""
         x = np.asarray(x)
-        shape = (-1,) + (1,) * (x.ndim - 1)
-        if self.stored[:, 0].all():
-            out = np.multiply(x[self.index[:, 0]], self.weight[:, 0].reshape(shape), dtype=self.dtype)
-            first = 1
-        else:
-            out = np.zeros((self.index.shape[0], *x.shape[1:]), dtype=self.dtype)
-            first = 0
-        term = np.empty_like(out)
-        for j in range(first, self.index.shape[1]):
+        shape = [1] * x.ndim
+        shape[axis] = -1
+        out_shape = list(x.shape)
+        out_shape[axis] = self.index.shape[0]
+        gathered = np.empty(out_shape, x.dtype)
+        term = gathered if x.dtype == self.dtype else np.empty(out_shape, self.dtype)
+        out: np.ndarray | None = None
+        for j in range(self.index.shape[1]):
             on = self.stored[:, j]
             if on.all():
-                np.multiply(x[self.index[:, j]], self.weight[:, j].reshape(shape), out=term, dtype=self.dtype)
-                out += term
-            elif on.any():
-                out[on] += np.multiply(x[self.index[on, j]], self.weight[on, j].reshape(shape), dtype=self.dtype)
+                np.take(x, self.index[:, j], axis=axis, out=gathered, mode="clip")  # "clip": not buffered
+                if term is not gathered:
+                    np.copyto(term, gathered)  # exact; faster than the product's own cast
+                if out is None:
+                    out = np.multiply(term, self.weight[:, j].reshape(shape))
+                else:
+                    term *= self.weight[:, j].reshape(shape)
+                    out += term
+                continue
+            if out is None:
+                out = np.zeros(out_shape, self.dtype)
+            if on.any():
+                sel = np.flatnonzero(on)
+                at = (slice(None),) * axis + (sel,)
+                out[at] += np.multiply(np.take(x, self.index[sel, j], axis=axis),
+                                       self.weight[sel, j].reshape(shape), dtype=self.dtype)
+        assert out is not None
         return out
 
 
@@ -148,21 +165,46 @@ def _overlap(src: np.ndarray, dst: np.ndarray, dtype: type = np.float32) -> _Ban
     return _Banded(np.where(inside, index, first[:, None]), np.where(inside, m[rows, index], 0.0), inside, dtype)
 
 
+def _texel_major(block: np.ndarray) -> np.ndarray:
+    """(k, h, w, 3) maps → (h·w, 3·k): a texel's values of every map one contiguous row (channel,
+    then map), the layout in which gathering texels moves long runs (a 2-D transpose)."""
+    k, h, w, _ = block.shape
+    return np.ascontiguousarray(np.asarray(block).reshape(k, -1).T).reshape(h * w, 3 * k)
+
+
+def _map_major(texels: np.ndarray, h: int, w: int) -> np.ndarray:
+    """The inverse of :func:`_texel_major`: (h·w, 3·k) → (k, h, w, 3)."""
+    k = texels.shape[1] // 3
+    return np.ascontiguousarray(texels.reshape(h * w * 3, k).T).reshape(k, h, w, 3)
+
+
+class _AreaResample:
+    """The solid-angle area means of H × W lat-long maps on h × w pixels (:func:`_area_resample`):
+    the row and column overlap matrices, built once for every block of maps."""
+
+    def __init__(self, H: int, W: int, h: int, w: int) -> None:
+        self.H, self.W, self.h, self.w = H, W, h, w
+        # in float32, the maps' type (means of a few texels): half the memory traffic of float64
+        self.rows = _overlap(1.0 - row_edges_cos(H), 1.0 - row_edges_cos(h))  # (h, H)
+        self.cols = _overlap(np.linspace(0.0, 1.0, W + 1), np.linspace(0.0, 1.0, w + 1))  # (w, W)
+
+    def texels(self, block: np.ndarray) -> np.ndarray:
+        """(k, H, W, 3) → (h·w, 3·k) float32 (:func:`_texel_major`): the rows first, whole rows of
+        W·3 values gathered from each map; then, texel-major, the columns, runs of 3·k values."""
+        k = block.shape[0]
+        by_row = self.rows.along(np.asarray(block, np.float32).reshape(k, self.H, self.W * 3), 1)
+        by_row = _texel_major(by_row.reshape(k, self.h, self.W, 3)).reshape(self.h, self.W, 3 * k)
+        return self.cols.along(by_row, 1).reshape(self.h * self.w, 3 * k)
+
+
 def _area_resample(maps: np.ndarray, h: int, w: int, chunk: int = 16) -> np.ndarray:
     """(n, H, W, 3) lat-long maps → (n, h, w, 3): each new pixel the solid-angle-weighted mean of
     the old pixels it overlaps (rows weighted in 1 − cos θ, columns in φ)."""
     n, H, W, _ = maps.shape
-    # in float32, the maps' type (means of a few texels): half the memory traffic of float64
-    rows = _overlap(1.0 - row_edges_cos(H), 1.0 - row_edges_cos(h))  # (h, H)
-    cols = _overlap(np.linspace(0.0, 1.0, W + 1), np.linspace(0.0, 1.0, w + 1))  # (w, W)
+    resample = _AreaResample(H, W, h, w)
     out = np.empty((n, h, w, 3), np.float32)
     for s in range(0, n, chunk):
-        block = np.asarray(maps[s:s + chunk], np.float32)
-        k = block.shape[0]
-        by_row = rows @ np.moveaxis(block, 1, 0).reshape(H, -1)  # (h, k·W·3)
-        by_row = np.moveaxis(by_row.reshape(h, k, W, 3), 2, 0).reshape(W, -1)  # (W, h·k·3)
-        both = (cols @ by_row).reshape(w, h, k, 3)
-        out[s:s + k] = np.transpose(both, (2, 1, 0, 3))
+        out[s:s + chunk] = _map_major(resample.texels(maps[s:s + chunk]), h, w)
     return out
 
 
@@ -198,27 +240,11 @@ def _lookup_matrix(dirs: np.ndarray, height: int, width: int) -> _Banded:
     return _Banded(cols, merged, ~repeat)  # a bilinear weight of 0 is stored, as SciPy's COO → CSR keeps it
 
 
-def _lookup(maps: np.ndarray, dirs: np.ndarray, chunk: int = 16) -> np.ndarray:
-    """Bilinear lookups (N, n, 3) float32 of (n, h, w, 3) maps at unit vectors (N, 3): one banded
-    product (float64, as SciPy's sparse product promoted it) per chunk of maps laid out (h·w, k·3)."""
-    n, h, w, _ = maps.shape
-    matrix = _lookup_matrix(dirs, h, w)
-    out = np.empty((len(dirs), n, 3), np.float32)
-    for s in range(0, n, chunk):
-        block = np.ascontiguousarray(np.moveaxis(maps[s:s + chunk], 0, 2)).reshape(h * w, -1)
-        out[:, s:s + chunk] = (matrix @ block).reshape(len(dirs), -1, 3)
-    return out
-
-
-def _squared_difference(maps: np.ndarray, dirs: np.ndarray, given: np.ndarray, chunk: int = 2048) -> float:
-    """Σ over directions, maps and channels of (lookup of ``maps`` at ``dirs`` − ``given``)², a chunk of
-    directions at a time: the (N, n, 3) lookups of the whole set and their difference are not held
-    (2 × 18 MB for a P = 18 SHRM at 4096 directions)."""
-    total = 0.0
-    for s in range(0, len(dirs), chunk):
-        diff = _lookup(maps, dirs[s:s + chunk]) - given[s:s + chunk]
-        total += float(np.einsum("snc,snc->", diff, diff, dtype=np.float64))
-    return total
+def _lookup(texels: np.ndarray, matrix: _Banded) -> np.ndarray:
+    """Bilinear lookups (N, 3·k) float32 of k maps held texel-major (h·w, 3·k)
+    (:func:`_texel_major`) by their grid's :func:`_lookup_matrix` (N rows): the products in float64,
+    as SciPy's sparse product promoted them."""
+    return matrix.along(texels, 0).astype(np.float32)
 
 
 def _atlas_fits(P: int, h: int, w: int, max_bytes: int, max_edge: int) -> bool:
@@ -240,10 +266,12 @@ def fit_coefficients(
     means. Each candidate's error energy (:class:`CoefficientFit`) is estimated on ``samples``
     equal-area directions R (a Fibonacci lattice): the squared difference of the bilinear
     lookups of the resampled and the given maps, plus the energy of the dropped maps (the real
-    SH are orthonormal in V); the least wins, ties to the larger P'. Candidates are tried from
-    P' = P down and the search stops at the first whose dropped energy alone is no less than the
-    best error found (it and every smaller P' lose). Nothing is computed beyond a size check
-    when the maps fit as they are.
+    SH are orthonormal in V); the least wins, ties to the larger P'. The candidates are P' = P
+    down to the first at full resolution (every smaller P' drops more for no gain); each one's
+    maps are measured from the first only until its error passes the least found
+    (:func:`_least_error`, the same choice and error as measuring each whole), and candidates of
+    the same rows share their maps' errors. Nothing is computed beyond a size check when the maps
+    fit as they are.
 
     Raises
     ------
@@ -268,31 +296,98 @@ def fit_coefficients(
     if _atlas_fits(P, H, W, max_bytes, max_edge):
         return CoefficientFit(np.asarray(coeffs, np.float32), P, source)
     dirs = _sphere_samples(samples)
-    given = _lookup(coeffs, dirs)
+    y0, _, x0, _, _, _ = bilinear_corners(dirs, H, W)
+    dirs = dirs[np.argsort(y0 * W + x0, kind="stable")]  # the same set, the texels read in memory order
+    matrix = _lookup_matrix(dirs, H, W)
+    given = np.empty((samples, 3, n), np.float32)  # the given maps' lookups, texel-major as the work's
+    for s in range(0, n, _CHUNK):
+        block = coeffs[s:s + _CHUNK]
+        given[:, :, s:s + len(block)] = _lookup(_texel_major(block), matrix).reshape(samples, 3, -1)
     weight = 4.0 * np.pi / samples
-    energy = weight * np.einsum("snc,snc->n", given, given, dtype=np.float64)
+    energy = weight * np.einsum("scn,scn->n", given, given, dtype=np.float64)
     total = float(energy.sum())
-    best: tuple[float, int, np.ndarray] | None = None
+    candidates: dict[int, tuple[int, int, float]] = {}  # P' → (rows, maps kept, energy of the maps dropped)
     for p in range(P, -1, -1):
         h = rows_for(p)
         if h < min_rows:
             continue
-        m = (p + 1) ** 2
-        dropped = float(energy[m:].sum())  # a lower bound of this candidate's error, growing as p falls
-        if best is not None and dropped >= best[0]:
-            break  # neither this P' nor any smaller one can win (ties go to the larger P')
-        if h >= H:
-            maps, err = np.asarray(coeffs[:m], np.float32), dropped
-        else:
-            maps = _area_resample(coeffs[:m], h, width(h))
-            err = weight * _squared_difference(maps, dirs, given[:, :m]) + dropped
-        if best is None or err < best[0]:
-            best = (err, p, maps)
+        candidates[p] = (h, (p + 1) ** 2, float(energy[(p + 1) ** 2:].sum()))
         if h >= H:
             break  # a smaller P' at full resolution only drops more
-    if best is None:
+    if not candidates:
         raise BadInputError(None, f"the SHRM does not fit the page budget: even one {min_rows}-row map "
                             f"needs more than {max_bytes} bytes")
-    err, p, maps = best
+    work = {h: _RowsWork(coeffs, given, dirs, h, width(h)) for h, _, _ in candidates.values() if h < H}
+    p = _least_error(candidates, work, weight)
+    h, m, dropped = candidates[p]
+    if h >= H:
+        maps, err = np.asarray(coeffs[:m], np.float32), dropped
+    else:
+        maps, err = work[h].maps(m), weight * work[h].squared(m) + dropped
     rel = math.sqrt(err / total) if total > 0 else 0.0
     return CoefficientFit(np.ascontiguousarray(maps), p, source, rel)
+
+
+#: Maps resampled and looked up together: their texel-major rows (3·16 float64 values) long runs,
+#: the float64 lookups of a chunk (4096 × 48 × 8 bytes) about one core's L2 cache.
+_CHUNK = 16
+
+
+class _RowsWork:
+    """The given maps resampled to h × w (:class:`_AreaResample`) and the squared differences of
+    their lookups from the given maps' lookups ``given`` (N, 3, n) at ``dirs``, summed over
+    directions and channels: map by map from the first, as far as :meth:`advance` was asked. A
+    map's error does not depend on P', so the candidates with h rows share this work."""
+
+    def __init__(self, coeffs: np.ndarray, given: np.ndarray, dirs: np.ndarray, h: int, w: int) -> None:
+        self.coeffs, self.given, self.h, self.w = coeffs, given, h, w
+        self.resample = _AreaResample(coeffs.shape[1], coeffs.shape[2], h, w)
+        self.lookup = _lookup_matrix(dirs, h, w)
+        self.done = 0
+        self._texels: list[np.ndarray] = []
+        self._errors: list[np.ndarray] = []
+        self._cumulative = np.zeros(1)
+
+    def advance(self, stop: int) -> None:
+        """Resample and measure the maps up to ``stop`` (exclusive), :data:`_CHUNK` at a time."""
+        for s in range(self.done, stop, _CHUNK):
+            texels = self.resample.texels(self.coeffs[s:min(s + _CHUNK, stop)])
+            k = texels.shape[1] // 3
+            # the products in float64 from maps converted once (fewer values than the gathered ones)
+            looked = _lookup(texels.astype(np.float64), self.lookup).reshape(-1, 3, k)
+            diff = looked - self.given[:, :, s:s + k]
+            self._errors.append(np.einsum("sck,sck->k", diff, diff, dtype=np.float64))
+            self._texels.append(texels)
+        self.done = max(self.done, stop)
+        # summed in map order: the sum of the first d maps never exceeds that of the first m ≥ d
+        self._cumulative = np.concatenate([[0.0], np.cumsum(np.concatenate(self._errors))])
+
+    def squared(self, d: int) -> float:
+        """The squared differences of the first ``d`` maps (at most :attr:`done`), summed."""
+        return float(self._cumulative[d])
+
+    def maps(self, m: int) -> np.ndarray:
+        """The first ``m`` maps resampled (at most :attr:`done`), (m, h, w, 3) float32."""
+        return np.concatenate([_map_major(t, self.h, self.w) for t in self._texels])[:m]
+
+
+def _least_error(candidates: dict[int, tuple[int, int, float]], work: dict[int, _RowsWork], weight: float) -> int:
+    """The P' of least error ``weight`` · (squared differences of its maps) + (energy dropped), ties
+    to the larger P', among ``candidates`` (P' → (rows, maps, energy dropped); full-resolution
+    candidates, with no ``work``, err by the energy dropped alone). A best-first search: the
+    candidate of least lower bound (the error of its first d maps, growing with d; ties to the
+    larger P') measures its next maps (d → 2d, at least 4) until the least is one measured whole,
+    whose error is then no more than any other's bound, so no more than any other's error: the
+    argmin that measuring every candidate whole gives, from a fraction of the maps."""
+    heap = [(dropped, -p, m if h not in work else 0) for p, (h, m, dropped) in candidates.items()]
+    heapq.heapify(heap)
+    while True:
+        _, negative_p, d = heapq.heappop(heap)
+        h, m, dropped = candidates[-negative_p]
+        if d == m:
+            return -negative_p
+        rows = work[h]
+        if rows.done <= d:
+            rows.advance(min(m, max(4, 2 * d)))
+        d = min(rows.done, m)  # further when a candidate of the same rows went further
+        heapq.heappush(heap, (weight * rows.squared(d) + dropped, negative_p, d))
