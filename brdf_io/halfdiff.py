@@ -89,9 +89,9 @@ def halfdiff_to_directions(
     L, V
         Arrays of shape (..., 3) (the broadcast shape of the angles).
     """
-    theta_h, theta_d, phi_d, phi_h = np.broadcast_arrays(
-        *(np.asarray(a, dtype=np.float64) for a in (theta_h, theta_d, phi_d, phi_h))
-    )
+    theta_h, theta_d, phi_d, phi_h = (np.asarray(a, dtype=np.float64) for a in (theta_h, theta_d, phi_d, phi_h))
+    shape = np.broadcast_shapes(theta_h.shape, theta_d.shape, phi_d.shape, phi_h.shape)
+    # the sines and cosines on each angle's own (often much smaller) shape; only products are full size
     sd = np.sin(theta_d)
     dx, dy, dz = sd * np.cos(phi_d), sd * np.sin(phi_d), np.cos(theta_d)
     ct, st = np.cos(theta_h), np.sin(theta_h)
@@ -100,7 +100,10 @@ def halfdiff_to_directions(
     def to_local(x: np.ndarray, y: np.ndarray, z: np.ndarray) -> np.ndarray:
         # Ry(θ_h) then Rz(φ_h)
         x1 = ct * x + st * z
-        z1 = -st * x + ct * z
-        return np.stack((cp * x1 - sp * y, sp * x1 + cp * y, z1), axis=-1)
+        out = np.empty((*shape, 3))
+        out[..., 2] = -st * x + ct * z
+        out[..., 0] = cp * x1 - sp * y
+        out[..., 1] = sp * x1 + cp * y
+        return out
 
     return to_local(dx, dy, dz), to_local(-dx, -dy, dz)

@@ -186,10 +186,13 @@ SAMPLE_BLOCK = 1 << 20
 
 
 def sample_rho_hat(
-    brdf: BRDF, cos_theta_i: np.ndarray, cos_theta_o: np.ndarray, phi: np.ndarray
+    brdf: BRDF, cos_theta_i: np.ndarray, cos_theta_o: np.ndarray, phi: np.ndarray, *, out: np.ndarray | None = None
 ) -> tuple[np.ndarray, int]:
     """ρ̂ on the product of 1-D node sets: values (n_i, n_o, n_phi, 3) and the number of
     points where a tabulated source had no measurement (they hold 0).
+
+    ``out``: an array of that shape (a view, e.g. some φ' columns of a larger grid) to write the
+    values into; it is returned.
 
     Raises
     ------
@@ -199,7 +202,7 @@ def sample_rho_hat(
     ci = np.asarray(cos_theta_i, float)
     co = np.asarray(cos_theta_o, float)
     ph = np.asarray(phi, float)
-    values = np.empty((ci.size, co.size, ph.size, 3))
+    values = np.empty((ci.size, co.size, ph.size, 3)) if out is None else out
     missing = 0
     # blocks of θ_i' rows: the directions and the model's temporaries stay near SAMPLE_BLOCK
     # points (a fine grid of 2·10⁷ samples would otherwise hold several GB of them at once)
@@ -215,11 +218,12 @@ def sample_rho_hat(
 
 
 def sample_rho_hat_half(
-    brdf: BRDF, cos_theta_i: np.ndarray, cos_theta_o: np.ndarray, n_phi: int
+    brdf: BRDF, cos_theta_i: np.ndarray, cos_theta_o: np.ndarray, n_phi: int, *, out: np.ndarray | None = None
 ) -> tuple[np.ndarray, int]:
     """ρ̂ at the uniform φ' nodes 2πk/n_phi with φ' ∈ [0, π] only, k = 0 .. n_phi // 2:
     values (n_i, n_o, n_phi // 2 + 1, 3) and the number of points of the *whole* grid without
     data (each mirrored point counted twice), as :func:`sample_rho_hat_grid` (which mirrors them).
+    ``out``: as for :func:`sample_rho_hat`.
 
     Raises
     ------
@@ -230,15 +234,15 @@ def sample_rho_hat_half(
     ci = np.asarray(cos_theta_i, float)
     co = np.asarray(cos_theta_o, float)
     phi = 2.0 * np.pi * np.arange(n_phi // 2 + 1) / max(n_phi, 1)
-    # the nodes that are their own mirror image (0, and π for even n_phi) count once, the others twice
-    ends = [0, n_phi // 2] if n_phi % 2 == 0 and n_phi > 0 else [0]
-    inner = slice(1, (n_phi + 1) // 2)  # a slice, not an index array: a plain copy into ``values``
-    values = np.empty((ci.size, co.size, phi.size, 3))
-    values[:, :, ends], end_missing = sample_rho_hat(brdf, ci, co, phi[ends])
-    missing = end_missing
-    if phi[inner].size:
-        values[:, :, inner], inner_missing = sample_rho_hat(brdf, ci, co, phi[inner])
-        missing += 2 * inner_missing
+    values = np.empty((ci.size, co.size, phi.size, 3)) if out is None else out
+    # the nodes that are their own mirror image (0, and π for even n_phi) count once, the others
+    # twice; all as slices of ``values`` (plain copies, no index arrays)
+    inner = slice(1, (n_phi + 1) // 2)
+    ends = [slice(0, 1)] + ([slice(n_phi // 2, n_phi // 2 + 1)] if n_phi % 2 == 0 and n_phi > 0 else [])
+    missing = 0
+    for nodes, count in [(end, 1) for end in ends] + [(inner, 2)]:
+        if phi[nodes].size:
+            missing += count * sample_rho_hat(brdf, ci, co, phi[nodes], out=values[:, :, nodes])[1]
     return values, missing
 
 
@@ -260,11 +264,11 @@ def sample_rho_hat_grid(
     if n_phi <= 2:
         ci, co = np.asarray(cos_theta_i, float), np.asarray(cos_theta_o, float)
         return sample_rho_hat(brdf, ci, co, 2.0 * np.pi * np.arange(n_phi) / max(n_phi, 1))
-    half, missing = sample_rho_hat_half(brdf, cos_theta_i, cos_theta_o, n_phi)
-    inner = np.arange(1, (n_phi + 1) // 2)  # 1 .. ceil(n/2) − 1: each stands for itself and n − k
-    values = np.empty(half.shape[:2] + (n_phi, 3))
-    values[:, :, : half.shape[2]] = half
-    values[:, :, n_phi - inner] = half[:, :, inner]
+    values = np.empty((np.size(cos_theta_i), np.size(cos_theta_o), n_phi, 3))
+    half = n_phi // 2 + 1
+    _, missing = sample_rho_hat_half(brdf, cos_theta_i, cos_theta_o, n_phi, out=values[:, :, :half])
+    # node n − k repeats node k for k = 1 .. ceil(n/2) − 1, i.e. nodes n − 1 down to n // 2 + 1
+    values[:, :, n_phi - 1 : n_phi // 2 : -1] = values[:, :, 1 : (n_phi + 1) // 2]
     return values, missing
 
 

@@ -23,13 +23,13 @@ from __future__ import annotations
 import os
 import warnings
 from pathlib import Path
-from typing import Literal
+from typing import Literal, NamedTuple
 
 import numpy as np
 
 from ._rgl_anisotropy import ANISO_PROBES, _anisotropic_message, rgl_anisotropy
 from ._rgl_checks import _checked_tables, _expect
-from ._rgl_warp import _Bilinear, _InverseWarp, _param_weights, _phi_to_u, _theta_to_u, _unit
+from ._rgl_warp import _Bilinear, _InverseWarp, _normalized, _param_weights, _phi_to_u, _theta_to_u
 from ._tensor_file import (  # noqa: F401  (re-exported: the container's names stay importable from here)
     RGL_PEAK_PER_BYTE,
     TENSOR_DTYPES,
@@ -56,7 +56,7 @@ __all__ = [
 ]
 
 _REQUIRED = ("description", "theta_i", "phi_i", "ndf", "sigma", "vndf", "rgb", "jacobian")
-_BLOCK = 1 << 16  # query points per evaluation block
+_BLOCK = 1 << 12  # query points per evaluation block
 
 #: Floor on cos θ of the non-table direction in ρ = R·D/(4σ cos θ): the stored R does
 #: not fall to 0 at the horizon (data_specs/rgl_bsdf.md, "Grazing angles"), so ρ grows
@@ -247,35 +247,60 @@ class RGLBRDF(BRDF):
         square, with ``W_i`` the table direction (L when ``table_direction="light"``):
         the half vector's unit coordinates u (N, 2) and the inverse-warped sample
         s = W⁻¹_{θ_i}(u) (N, 2), each as (x = θ part, y = φ part)."""
-        u, s, _, _ = self._coordinates(*_unit(W_i, W_o))
-        return u, s
+        W_i, W_o = (np.asarray(w, dtype=np.float64).reshape(-1, 3) for w in (W_i, W_o))
+        c = self._coordinates(_columns(W_i), _columns(W_o))
+        return np.stack(c.u, axis=-1), np.stack(c.s, axis=-1)
 
-    def _coordinates(
-        self, Wi: np.ndarray, Wo: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]:
-        """Half-vector unit coordinates u, warped sample s, the θ_i interpolation weights
-        and the table direction's unit coordinates, for unit Wi, Wo (N, 3) above the surface."""
-        H = _unit(Wi + Wo)[0]  # H_z > 0: never zero
-        theta_i = np.arctan2(np.hypot(Wi[:, 0], Wi[:, 1]), Wi[:, 2])
-        phi_i = np.arctan2(Wi[:, 1], Wi[:, 0])
-        theta_h = np.arctan2(np.hypot(H[:, 0], H[:, 1]), H[:, 2])
-        phi_h = np.arctan2(H[:, 1], H[:, 0])
+    def _coordinates(self, wi: _Vectors, wo: _Vectors) -> _Coordinates:
+        """The block's coordinates (:class:`_Coordinates`) for the table direction wi and the
+        other direction wo, as components (x, y, z) (each (N,)), not necessarily unit, both above
+        the surface."""
+        xi, yi, zi, phi_i, param, four_sigma = self._incident(wi)
+        xo, yo, zo = _normalized(*wo)
+        xo += xi  # the half vector, unnormalized: Wi + Wo (H_z > 0: never zero)
+        yo += yi
+        zo_unit, zo = zo, zo + zi
+        hx, hy, hz = _normalized(xo, yo, zo)
+        theta_h = np.arctan2(np.hypot(hx, hy), hz, out=hz)
+        phi_h = np.arctan2(hy, hx, out=hx)
         # isotropic: the half vector's azimuth is taken relative to the incident one
-        u = np.stack((_theta_to_u(theta_h), _phi_to_u(phi_h - phi_i)), axis=-1)
-        param = _param_weights(self.theta_i, theta_i)
-        s = np.stack(self._warp(u[:, 0], u[:, 1], param), axis=-1)
-        return u, s, param, (_theta_to_u(theta_i), _phi_to_u(phi_i))
+        u = (_theta_to_u(theta_h, out=theta_h), _phi_to_u(np.subtract(phi_h, phi_i, out=phi_h), out=phi_h))
+        s = self._warp(u[0], u[1], param)
+        return _Coordinates(u, s, param, four_sigma, zo_unit)
 
-    def _eval_block(self, Wi: np.ndarray, Wo: np.ndarray) -> np.ndarray:
-        """ρ for unit Wi (table direction), Wo (N, 3), both above the surface."""
-        u, s, param, u_i = self._coordinates(Wi, Wo)
-        value = self._rgb(s[:, 0], s[:, 1], param)  # R
-        if self.jacobian:
-            none = _param_weights(np.zeros(1), u[:, 0])  # ndf, sigma: no θ_i dependence
-            d = self._ndf(u[:, 0], u[:, 1], none)[:, 0]
-            sig = self._sigma(u_i[0], u_i[1], none)[:, 0]
-            value *= (d / (4.0 * sig))[:, None]  # R · D / (4σ) = ρ cos θ_o
-        value /= np.maximum(Wo[:, 2:3], GRAZING_COS)
+    def _incident(self, wi: _Vectors) -> _Incident:
+        """The table direction's quantities (:class:`_Incident`) for components wi (each (N,)),
+        computed once per run of bitwise-equal consecutive directions (:func:`_run_starts`: the
+        reparameterized grid and the brute-force reference repeat the view) and repeated over the run."""
+        starts = _run_starts(wi)
+        x, y, z = _normalized(*(wi if starts is None else (c[starts] for c in wi)))
+        theta = np.arctan2(np.hypot(x, y), z)
+        phi = np.arctan2(y, x)
+        param = _param_weights(self.theta_i, theta)
+        four_sigma = None
+        if self.jacobian:  # σ(ω_i) has no θ_i-slice dependence
+            four_sigma = self._sigma.columns(_theta_to_u(theta, out=theta), _phi_to_u(phi))[0]
+            four_sigma *= 4.0
+        if starts is None:
+            return _Incident(x, y, z, phi, param, four_sigma)
+        counts = np.diff(starts, append=wi[0].shape[0])
+        x, y, z, phi, lo, hi, w = (np.repeat(a, counts) for a in (x, y, z, phi, *param))
+        return _Incident(x, y, z, phi, (lo, hi, w), None if four_sigma is None else np.repeat(four_sigma, counts))
+
+    def _eval_block(self, wi: _Vectors, wo: _Vectors) -> list[np.ndarray]:
+        """ρ per channel (3 arrays (N,)) for the table direction wi and the other direction wo as
+        in :meth:`_coordinates`."""
+        c = self._coordinates(wi, wo)
+        value = self._rgb.columns(c.s[0], c.s[1], c.param)  # R
+        d = None
+        if c.four_sigma is not None:  # the jacobian flag: R · D / (4σ) = ρ cos θ_o
+            d = self._ndf.columns(c.u[0], c.u[1])[0]  # D; the ndf has no θ_i dependence
+            d /= c.four_sigma
+        cos_o = np.maximum(c.z_o, GRAZING_COS, out=c.z_o)
+        for channel in value:
+            if d is not None:
+                channel *= d
+            channel /= cos_o
         return value
 
     def eval(self, L: np.ndarray, V: np.ndarray) -> np.ndarray:
@@ -295,11 +320,81 @@ class RGLBRDF(BRDF):
             raise ValueError("directions must be finite")
         Wi, Wo = (V, L) if self.table_direction == "view" else (L, V)
         out = np.zeros((L.shape[0], 3))
-        above = np.flatnonzero((L[:, 2] > 0) & (V[:, 2] > 0))
-        for start in range(0, above.size, _BLOCK):
-            sel = above[start : start + _BLOCK]
-            out[sel] = self._eval_block(*_unit(Wi[sel], Wo[sel]))
+        above = (L[:, 2] > 0) & (V[:, 2] > 0)
+        # blocks of consecutive points (each point's value depends on that point alone); the pairs
+        # below the surface are left out of a block and keep their 0
+        for start in range(0, L.shape[0], _BLOCK):
+            block = slice(start, start + _BLOCK)
+            keep = above[block]
+            if np.all(keep):
+                for c, value in enumerate(self._eval_block(_columns(Wi[block]), _columns(Wo[block]))):
+                    out[block, c] = value
+            elif np.any(keep):
+                wi, wo = (_compressed(keep, w[block]) for w in (Wi, Wo))
+                for c, value in enumerate(self._eval_block(wi, wo)):
+                    out[block, c][keep] = value
         return out.reshape(*shape, 3)
+
+
+#: A block of direction vectors as their components (x, y, z), each (N,).
+_Vectors = tuple[np.ndarray, np.ndarray, np.ndarray]
+
+
+def _columns(W: np.ndarray) -> _Vectors:
+    """The components (x, y, z) of direction rows W (N, 3), as (strided) views."""
+    return W[:, 0], W[:, 1], W[:, 2]
+
+
+def _compressed(keep: np.ndarray, W: np.ndarray) -> _Vectors:
+    """The components (x, y, z) of the rows of W (N, 3) where ``keep`` (N,) is true, contiguous."""
+    return np.compress(keep, W[:, 0]), np.compress(keep, W[:, 1]), np.compress(keep, W[:, 2])
+
+
+class _Coordinates(NamedTuple):
+    """Where a block of direction pairs falls in the tables (each array (N,)): the half vector's
+    unit coordinates ``u`` = (x, y), the inverse-warped sample ``s`` = W⁻¹_{θ_i}(u), the θ_i
+    slice weights ``param`` (:func:`._rgl_warp._param_weights`), 4σ(ω_i) (``None`` without the
+    jacobian flag) and cos θ of the other direction ``z_o``."""
+
+    u: tuple[np.ndarray, np.ndarray]
+    s: tuple[np.ndarray, np.ndarray]
+    param: tuple[np.ndarray, np.ndarray, np.ndarray]
+    four_sigma: np.ndarray | None
+    z_o: np.ndarray
+
+
+class _Incident(NamedTuple):
+    """The table direction's quantities per point (each (N,)): its unit vector (x, y, z), azimuth
+    φ_i, θ_i slice weights ``param`` and 4σ(ω_i) (``None`` without the jacobian flag)."""
+
+    x: np.ndarray
+    y: np.ndarray
+    z: np.ndarray
+    phi: np.ndarray
+    param: tuple[np.ndarray, np.ndarray, np.ndarray]
+    four_sigma: np.ndarray | None
+
+
+#: Fewest rows a run of equal table directions must average for :func:`_run_starts` to share them.
+_MIN_RUN = 4
+
+
+def _run_starts(w: _Vectors) -> np.ndarray | None:
+    """First index of each run of bitwise-equal consecutive directions, given as components w
+    (x, y, z) (each (N,)), or ``None`` when the runs average fewer than :data:`_MIN_RUN`
+    directions (computing per run would not pay). Bitwise: −0.0 and 0.0 differ (their azimuths can)."""
+    n = w[0].shape[0]
+    if n < 2 * _MIN_RUN:
+        return None
+    new = np.zeros(n - 1, dtype=bool)
+    for component in w:
+        bits = component.view(np.int64)
+        new |= bits[1:] != bits[:-1]
+    if (np.count_nonzero(new) + 1) * _MIN_RUN > n:
+        return None
+    starts = np.flatnonzero(new)
+    starts += 1
+    return np.concatenate(([0], starts))
 
 
 # --------------------------------------------------------------------------------------
