@@ -106,6 +106,28 @@ def test_theta_d_rows_are_exactly_the_rows_lookups_in_the_view_cones_read():
             np.testing.assert_array_equal(theta_d_rows(ranges, nd), wide)
 
 
+def test_view_cone_holds_every_direction_to_the_eye_and_no_wider():
+    """``Camera.view_cone`` against brute force: the directions toward the eye from points in and on
+    the ball (centre, r) lie within the cone, and the tangent points reach its half-angle asin(r/d);
+    ortho: −forward, half-angle 0; the eye inside the ball: every direction (π)."""
+    from shrmkit.render.camera import Camera
+
+    rng = np.random.default_rng(2)
+    centre, r = np.array([0.3, -0.2, 0.1]), 0.7
+    cam = Camera.looking_at(center=centre, view=(1.0, 0.35, 0.45), radius=r, distance=2.0)
+    axis, a = cam.view_cone(centre, r)
+    assert a == pytest.approx(np.arcsin(r / 2.0), abs=1e-12)
+    p = rng.normal(size=(20000, 3))
+    p = centre + r * p / np.linalg.norm(p, axis=1, keepdims=True) * rng.uniform(0, 1, (len(p), 1)) ** 0.25
+    v = cam.eye - p
+    ang = np.arccos(np.clip((v / np.linalg.norm(v, axis=1, keepdims=True)) @ axis, -1, 1))
+    assert ang.max() <= a + 1e-12 and ang.max() > a - 0.01
+    ortho = Camera.looking_at(center=centre, view=(1.0, 0.35, 0.45), radius=r, projection="ortho")
+    np.testing.assert_array_equal(ortho.view_cone(centre, r)[0], -ortho.forward)
+    assert ortho.view_cone(centre, r)[1] == 0.0
+    assert cam.view_cone(cam.eye + [0.1, 0.0, 0.0], 0.5)[1] == np.pi
+
+
 def _sun_only(brdf):
     """A lights-only SHRM (black maps) of builtin:sky's sun at 32 rows (the quick report's map)."""
     import shrmkit
@@ -215,7 +237,7 @@ def test_render_frames_with_the_views_table_equal_the_whole_tables(offscreen):
             out, _ = render_frames(sphere, shrm, cameras, size=32, mode=mode, background="black", fps_frames=0,
                                    env_rotation=rotations)
             frames.append(np.stack([f.linear for f in out]))
-            made = cached_light_shading(shrm, [])  # what the render used (any of the SHRM's tables covers no views)
+            made = cached_light_shading(shrm, [])  # no views: the SHRM's first shading, the one rendered
             assert (made.table.rows is None) == whole, name
         assert frames[0].max() > 0, name
         np.testing.assert_array_equal(frames[1], frames[0], err_msg=name)
