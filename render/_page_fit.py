@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import heapq
 import math
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -240,11 +241,16 @@ def _lookup_matrix(dirs: np.ndarray, height: int, width: int) -> _Banded:
     return _Banded(cols, merged, ~repeat)  # a bilinear weight of 0 is stored, as SciPy's COO → CSR keeps it
 
 
-def _lookup(texels: np.ndarray, matrix: _Banded) -> np.ndarray:
+def _lookup(texels: np.ndarray, matrix: _Banded, out: np.ndarray | None = None) -> np.ndarray:
     """Bilinear lookups (N, 3·k) float32 of k maps held texel-major (h·w, 3·k)
     (:func:`_texel_major`) by their grid's :func:`_lookup_matrix` (N rows): the products in float64,
-    as SciPy's sparse product promoted them."""
-    return matrix.along(texels, 0).astype(np.float32)
+    as SciPy's sparse product promoted them, rounded to float32 once (into ``out`` when given: any
+    float32 array of N · 3·k values in that order, e.g. a strided view)."""
+    looked = matrix.along(texels, 0)
+    if out is None:
+        return looked.astype(np.float32)
+    out[...] = looked.reshape(out.shape)
+    return out
 
 
 def _atlas_fits(P: int, h: int, w: int, max_bytes: int, max_edge: int) -> bool:
@@ -302,7 +308,7 @@ def fit_coefficients(
     given = np.empty((samples, 3, n), np.float32)  # the given maps' lookups, texel-major as the work's
     for s in range(0, n, _CHUNK):
         block = coeffs[s:s + _CHUNK]
-        given[:, :, s:s + len(block)] = _lookup(_texel_major(block), matrix).reshape(samples, 3, -1)
+        _lookup(_texel_major(block), matrix, out=given[:, :, s:s + len(block)])
     weight = 4.0 * np.pi / samples
     energy = weight * np.einsum("scn,scn->n", given, given, dtype=np.float64)
     total = float(energy.sum())
@@ -317,8 +323,8 @@ def fit_coefficients(
     if not candidates:
         raise BadInputError(None, f"the SHRM does not fit the page budget: even one {min_rows}-row map "
                             f"needs more than {max_bytes} bytes")
-    work = {h: _RowsWork(coeffs, given, dirs, h, width(h)) for h, _, _ in candidates.values() if h < H}
-    p = _least_error(candidates, work, weight)
+    work = _WorkByRows(coeffs, given, dirs, width)
+    p = _least_error(candidates, work, H, weight)
     h, m, dropped = candidates[p]
     if h >= H:
         maps, err = np.asarray(coeffs[:m], np.float32), dropped
@@ -371,15 +377,29 @@ class _RowsWork:
         return np.concatenate([_map_major(t, self.h, self.w) for t in self._texels])[:m]
 
 
-def _least_error(candidates: dict[int, tuple[int, int, float]], work: dict[int, _RowsWork], weight: float) -> int:
+class _WorkByRows(dict[int, _RowsWork]):
+    """The :class:`_RowsWork` of each number of rows, made when first asked for (a candidate whose
+    energy dropped alone loses costs nothing); ``width(h)``: the columns at h rows."""
+
+    def __init__(self, coeffs: np.ndarray, given: np.ndarray, dirs: np.ndarray, width: Callable[[int], int]) -> None:
+        super().__init__()
+        self.coeffs, self.given, self.dirs, self.width = coeffs, given, dirs, width
+
+    def __missing__(self, h: int) -> _RowsWork:
+        self[h] = work = _RowsWork(self.coeffs, self.given, self.dirs, h, self.width(h))
+        return work
+
+
+def _least_error(candidates: dict[int, tuple[int, int, float]], work: Mapping[int, _RowsWork], full_rows: int,
+                 weight: float) -> int:
     """The P' of least error ``weight`` · (squared differences of its maps) + (energy dropped), ties
-    to the larger P', among ``candidates`` (P' → (rows, maps, energy dropped); full-resolution
-    candidates, with no ``work``, err by the energy dropped alone). A best-first search: the
+    to the larger P', among ``candidates`` (P' → (rows, maps, energy dropped); candidates of
+    ``full_rows`` err by the energy dropped alone). A best-first search: the
     candidate of least lower bound (the error of its first d maps, growing with d; ties to the
     larger P') measures its next maps (d → 2d, at least 4) until the least is one measured whole,
     whose error is then no more than any other's bound, so no more than any other's error: the
     argmin that measuring every candidate whole gives, from a fraction of the maps."""
-    heap = [(dropped, -p, m if h not in work else 0) for p, (h, m, dropped) in candidates.items()]
+    heap = [(dropped, -p, m if h >= full_rows else 0) for p, (h, m, dropped) in candidates.items()]
     heapq.heapify(heap)
     while True:
         _, negative_p, d = heapq.heappop(heap)
