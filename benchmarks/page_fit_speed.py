@@ -79,13 +79,18 @@ def cpu(modules: tuple[ModuleType, ModuleType], shrm: SHRM, max_bytes: int, repe
     return seconds, fits
 
 
+def positive(text: str) -> int:
+    """``--repeats``: an integer of at least 1."""
+    if not text.isdigit() or int(text) < 1:
+        raise argparse.ArgumentTypeError(f"must be an integer of at least 1, got {text!r}")
+    return int(text)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--against", default="bfe2357", help="git revision to compare with (default bfe2357)")
-    parser.add_argument("--repeats", type=int, default=3, help="interleaved runs per case (default 3)")
+    parser.add_argument("--repeats", type=positive, default=3, metavar="N", help="interleaved runs per case (default 3)")
     args = parser.parse_args(argv)
-    if args.repeats < 1:
-        parser.error("--repeats must be at least 1")
     table = Table(title=f"fit_coefficients CPU, now vs {args.against} (min of {args.repeats}, interleaved)")
     for column in ("BRDF", "rows", "SHRM maps", "page", "bytes", f"{args.against} (P', h×w)", "now (P', h×w)",
                    "added rel. RMS", f"{args.against} ms", "now ms", "ratio", "max Δ maps", "Δ error"):
