@@ -89,7 +89,8 @@ def positive(text: str) -> int:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--against", default="bfe2357", help="git revision to compare with (default bfe2357)")
-    parser.add_argument("--repeats", type=positive, default=3, metavar="N", help="interleaved runs per case (default 3)")
+    parser.add_argument("--repeats", type=positive, default=3, metavar="N",
+                        help="interleaved runs per case (default 3)")
     args = parser.parse_args(argv)
     table = Table(title=f"fit_coefficients CPU, now vs {args.against} (min of {args.repeats}, interleaved)")
     for column in ("BRDF", "rows", "SHRM maps", "page", "bytes", f"{args.against} (P', h×w)", "now (P', h×w)",
