@@ -318,21 +318,21 @@ class RGLBRDF(BRDF):
         L, V = L.reshape(-1, 3), V.reshape(-1, 3)
         if not (np.all(np.isfinite(L)) and np.all(np.isfinite(V))):
             raise ValueError("directions must be finite")
-        Wi, Wo = (V, L) if self.table_direction == "view" else (L, V)
+        Wi, Wo = (np.ascontiguousarray(W) for W in ((V, L) if self.table_direction == "view" else (L, V)))
         out = np.zeros((L.shape[0], 3))
         above = (L[:, 2] > 0) & (V[:, 2] > 0)
-        # blocks of consecutive points (each point's value depends on that point alone); the pairs
-        # below the surface are left out of a block and keep their 0
-        for start in range(0, L.shape[0], _BLOCK):
-            block = slice(start, start + _BLOCK)
-            keep = above[block]
-            if np.all(keep):
+        if np.all(above):  # blocks of consecutive points (each point's value depends on that point alone)
+            for start in range(0, L.shape[0], _BLOCK):
+                block = slice(start, start + _BLOCK)
                 for c, value in enumerate(self._eval_block(_columns(Wi[block]), _columns(Wo[block]))):
                     out[block, c] = value
-            elif np.any(keep):
-                wi, wo = (_compressed(keep, w[block]) for w in (Wi, Wo))
+        else:  # blocks of the pairs above the surface; the others keep their 0
+            rows = np.flatnonzero(above)
+            for start in range(0, rows.size, _BLOCK):
+                sel = rows[start : start + _BLOCK]
+                wi, wo = (_columns(W, sel) for W in (Wi, Wo))
                 for c, value in enumerate(self._eval_block(wi, wo)):
-                    out[block, c][keep] = value
+                    out[sel, c] = value
         return out.reshape(*shape, 3)
 
 
@@ -340,14 +340,12 @@ class RGLBRDF(BRDF):
 _Vectors = tuple[np.ndarray, np.ndarray, np.ndarray]
 
 
-def _columns(W: np.ndarray) -> _Vectors:
-    """The components (x, y, z) of direction rows W (N, 3), as (strided) views."""
+def _columns(W: np.ndarray, rows: np.ndarray | None = None) -> _Vectors:
+    """The components (x, y, z) of direction rows W (N, 3, C-contiguous), or of its rows at the
+    indices ``rows``, as strided views."""
+    if rows is not None:
+        W = np.take(W, rows, axis=0)
     return W[:, 0], W[:, 1], W[:, 2]
-
-
-def _compressed(keep: np.ndarray, W: np.ndarray) -> _Vectors:
-    """The components (x, y, z) of the rows of W (N, 3) where ``keep`` (N,) is true, contiguous."""
-    return np.compress(keep, W[:, 0]), np.compress(keep, W[:, 1]), np.compress(keep, W[:, 2])
 
 
 class _Coordinates(NamedTuple):
