@@ -109,3 +109,18 @@ def test_broadcasting_shapes() -> None:
     assert th.shape == td.shape == pd.shape == (3, 4)
     L2, V2 = halfdiff_to_directions(th, td, pd, 0.0)
     assert L2.shape == V2.shape == (3, 4, 3)
+
+
+def test_broadcast_angles_give_the_pointwise_directions() -> None:
+    """Angles of different shapes (the sines and cosines are taken on each angle's own shape)
+    give, bit for bit, the directions of each element's angles passed alone."""
+    rng = np.random.default_rng(4)
+    th, td = rng.uniform(0, 1.5, (4, 1, 1)), rng.uniform(0, 1.5, (1, 3, 1))
+    pd, ph = rng.uniform(-3, 3, (1, 1, 5)), rng.uniform(-3, 3, (4, 3, 5))
+    L, V = halfdiff_to_directions(th, td, pd, ph)
+    assert L.shape == V.shape == (4, 3, 5, 3)
+    for i, j, k in np.ndindex(4, 3, 5):
+        l1, v1 = halfdiff_to_directions(th[i, 0, 0], td[0, j, 0], pd[0, 0, k], ph[i, j, k])
+        assert l1.shape == (3,) and np.array_equal(L[i, j, k], l1) and np.array_equal(V[i, j, k], v1)
+    L0, _ = halfdiff_to_directions(0.3, td, pd)  # φ_h defaults to 0: a scalar
+    assert L0.shape == (1, 3, 5, 3)

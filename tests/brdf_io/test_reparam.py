@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import shrmkit
+from shrmkit.brdf_io.brdf import BRDF
 from shrmkit.brdf_io.reparam import ReparamGrid, reparam_directions, reparameterize
 
 
@@ -83,3 +84,34 @@ def test_merl_file_matches_analytic(tmp_path):
     direct = reparameterize(model, grid).values
     near = theta_v <= 20
     assert np.sqrt(np.mean((tab.values - direct)[:, near] ** 2)) / peak <= 0.01
+
+
+class _CountingTable(BRDF):
+    """A tabulated stand-in: ρ = 1 + L_x² (even in φ'), and every pair counted as without data."""
+
+    name, kind = "counting", "tabulated"
+
+    def eval(self, L, V):
+        L, V = np.broadcast_arrays(L, V)
+        return np.repeat(1.0 + L[..., :1] ** 2, 3, axis=-1)
+
+    def eval_counted(self, L, V):
+        rho = self.eval(L, V)
+        return rho, rho.size // 3
+
+
+@pytest.mark.parametrize("n_phi", [7, 8])
+def test_grid_mirrors_the_half_and_counts_the_whole_grid(n_phi):
+    """sample_rho_hat_grid evaluates φ' ∈ [0, π] and copies the mirror nodes 2π − φ': the same
+    values as every node evaluated (to rounding), and the points without data of the whole grid."""
+    from shrmkit.brdf_io.reparam import sample_rho_hat, sample_rho_hat_grid
+
+    xi, xo = np.cos(np.linspace(0.1, 3.0, 5)), np.cos(np.linspace(0.1, 3.0, 4))
+    phi = 2.0 * np.pi * np.arange(n_phi) / n_phi
+    direct, direct_missing = sample_rho_hat(_CountingTable(), xi, xo, phi)
+    values, missing = sample_rho_hat_grid(_CountingTable(), xi, xo, n_phi)
+    np.testing.assert_allclose(values, direct, rtol=1e-13, atol=1e-15)
+    assert missing == direct_missing == 5 * 4 * n_phi
+    out = np.full((5, 4, 3, 3), np.nan)
+    assert sample_rho_hat(_CountingTable(), xi, xo, phi[:3], out=out)[0] is out
+    np.testing.assert_array_equal(out, direct[:, :, :3])

@@ -770,3 +770,57 @@ def test_anisotropic_file_refused_with_its_anisotropy(tmp_path: Path) -> None:
     flat = write_tensor_file(tmp_path / "flat_rgb.bsdf", _anisotropic_fields(0.0))
     with pytest.raises(BadInputError, match=r"anisotropy 0 "):
         read_rgl(flat)
+
+
+def _pointwise(brdf: RGLBRDF, L: np.ndarray, V: np.ndarray) -> np.ndarray:
+    """ρ of each pair evaluated alone (a block of one: no blocks, no runs to share)."""
+    return np.array([brdf.eval(l, v) for l, v in zip(L, V, strict=True)])
+
+
+@pytest.mark.parametrize("table_direction", ["view", "light"])
+def test_eval_is_pointwise_whatever_the_blocks_and_runs(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, table_direction: str
+) -> None:
+    """A call's blocks and its shared runs of equal table directions change no bit of any pair's ρ:
+    runs of repeated directions (as the reparameterized grid repeats the view), −0.0 beside 0.0 in
+    one run (azimuth −π against π), pairs below the surface between them, grazing and unnormalized
+    directions; the block size 5 cuts runs in two."""
+    brdf = read_rgl(_write(tmp_path), table_direction=table_direction)
+    rng = np.random.default_rng(11)
+    table = np.array([[-0.6, 0.0, 0.8], [-0.6, -0.0, 0.8], [0.3, 0.4, 2.0], [0.0, 0.0, 1.0], [1.0, -0.2, 1e-9]])
+    repeated = np.repeat(table, 9, axis=0)  # runs of 9
+    other = _hemisphere(rng, repeated.shape[0]) * rng.uniform(0.5, 2.0, (repeated.shape[0], 1))
+    other[3::11, 2] = 1e-12  # grazing
+    other[::7, 2] = -np.abs(other[::7, 2])  # some pairs below the surface
+    Wi, Wo = repeated, other
+    L, V = (Wo, Wi) if table_direction == "view" else (Wi, Wo)
+    expected = _pointwise(brdf, L, V)
+    assert np.all(expected[::7] == 0) and np.all(np.isfinite(expected)) and np.any(expected > 0)
+    assert np.array_equal(brdf.eval(L, V), expected)
+    monkeypatch.setattr(rgl, "_BLOCK", 5)
+    assert np.array_equal(brdf.eval(L, V), expected)
+    every_pair_above = other[:, 2] > 0
+    assert np.array_equal(brdf.eval(L[every_pair_above], V[every_pair_above]), expected[every_pair_above])
+
+
+def test_tables_with_equal_rows_are_linear_in_x() -> None:
+    """``ndf`` and ``sigma`` of an isotropic file repeat one row: the interpolant is then the
+    linear one along x (np.interp), between parameter slices too, whatever y is."""
+    from shrmkit.brdf_io._rgl_warp import _Bilinear, _param_weights
+
+    rng = np.random.default_rng(5)
+    rows = rng.uniform(0.1, 2.0, (3, 1, 9, 2))  # T=3 slices, W=9 vertices, C=2 channels
+    table = _Bilinear(np.repeat(rows, 4, axis=1))
+    x, y = rng.uniform(-0.1, 1.1, 200), rng.uniform(0.0, 1.0, 200)
+    grid = np.array([0.0, 0.5, 1.2])
+    lo, hi, w = param = _param_weights(grid, rng.uniform(-0.2, 1.4, 200))
+    got = table(x, y, param)
+    nodes = np.linspace(0.0, 1.0, 9)
+    for c in range(2):
+        at = np.array([[np.interp(x[k], nodes, rows[t, 0, :, c]) for t in range(3)] for k in range(200)])
+        expected = (1 - w) * at[np.arange(200), lo] + w * at[np.arange(200), hi]
+        np.testing.assert_allclose(got[:, c], expected, rtol=1e-14)
+    uneven = np.repeat(rows, 4, axis=1)
+    uneven[:, 2] *= 1.5
+    assert table._constant_in_y and not _Bilinear(uneven)._constant_in_y
+    np.testing.assert_array_equal(_Bilinear(uneven)(x, np.zeros(200), param), table(x, np.zeros(200), param))
