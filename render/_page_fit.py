@@ -398,8 +398,14 @@ def _least_error(candidates: dict[int, tuple[int, int, float]], work: Mapping[in
     candidate of least lower bound (the error of its first d maps, growing with d; ties to the
     larger P') measures its next maps (d → 2d, at least 4) until the least is one measured whole,
     whose error is then no more than any other's bound, so no more than any other's error: the
-    argmin that measuring every candidate whole gives, from a fraction of the maps."""
-    heap = [(dropped, -p, m if h >= full_rows else 0) for p, (h, m, dropped) in candidates.items()]
+    argmin that measuring every candidate whole gives, from a fraction of the maps. An error that is
+    not a number (maps holding NaN or inf) orders as +inf: such a candidate never wins over one with
+    a number, and when none has one the largest P' wins, as the sequential rule gave."""
+
+    def key(error: float) -> float:
+        return math.inf if math.isnan(error) else error
+
+    heap = [(key(dropped), -p, m if h >= full_rows else 0) for p, (h, m, dropped) in candidates.items()]
     heapq.heapify(heap)
     while True:
         _, negative_p, d = heapq.heappop(heap)
@@ -410,4 +416,4 @@ def _least_error(candidates: dict[int, tuple[int, int, float]], work: Mapping[in
         if rows.done <= d:
             rows.advance(min(m, max(4, 2 * d)))
         d = min(rows.done, m)  # further when a candidate of the same rows went further
-        heapq.heappush(heap, (weight * rows.squared(d) + dropped, negative_p, d))
+        heapq.heappush(heap, (key(weight * rows.squared(d) + dropped), negative_p, d))
