@@ -4,9 +4,12 @@ An RGL material stores its tables on unit squares, one slice per measured incide
 :class:`_Bilinear` interpolates such a table (bilinear in the square, linear between slices,
 clamped outside them) and :class:`_InverseWarp` inverts the continuous marginal/conditional
 sampling map of a bilinear density, which takes a half vector's unit coordinates to the warped
-square the RGB table lives on. Per-patch quantities are kept as contiguous columns (structure of
-arrays) so that a gather per quantity is cheap. :mod:`.rgl` evaluates the material with them;
-the formulas are in ``data_specs/rgl_bsdf.md``, "The VNDF warp" and "Evaluation".
+square the RGB table lives on. A patch's quantities (its corners' values, the warp's sums) are
+kept together in one row of a table (array of structures), so that one gather per parameter
+slice fetches them all from one or two cache lines; the arithmetic keeps the order of operations
+of the formulas below, so the values do not depend on the layout (bit for bit). :mod:`.rgl`
+evaluates the material with them; the formulas are in ``data_specs/rgl_bsdf.md``, "The VNDF
+warp" and "Evaluation".
 
 Reference: [DJ18]; [Mitsuba3] ``include/mitsuba/core/distr_2d.h`` (``Marginal2D``, continuous
 variant). Citation keys: ``data_specs/bibliography.md``.

@@ -56,7 +56,11 @@ __all__ = [
 ]
 
 _REQUIRED = ("description", "theta_i", "phi_i", "ndf", "sigma", "vndf", "rgb", "jacobian")
-_BLOCK = 1 << 12  # query points per evaluation block
+#: Query points per evaluation block: each temporary of a block (a few dozen arrays of 32 KiB and
+#: the gathered per-patch rows, ≤ 400 KiB) stays below the allocator's thresholds, so that freeing a
+#: block's memory and taking it again does not fault its pages in again (at 65536 points a block,
+#: page faults cost as much CPU as the arithmetic on this machine: benchmarks/rgl_eval_speed.py).
+_BLOCK = 1 << 12
 
 #: Floor on cos θ of the non-table direction in ρ = R·D/(4σ cos θ): the stored R does
 #: not fall to 0 at the horizon (data_specs/rgl_bsdf.md, "Grazing angles"), so ρ grows
