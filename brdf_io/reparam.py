@@ -238,9 +238,9 @@ def sample_rho_hat_half(
     # the nodes that are their own mirror image (0, and π for even n_phi) count once, the others
     # twice; all as slices of ``values`` (plain copies, no index arrays)
     inner = slice(1, (n_phi + 1) // 2)
-    ends = [slice(0, 1)] + ([slice(n_phi // 2, n_phi // 2 + 1)] if n_phi % 2 == 0 and n_phi > 0 else [])
+    ends = slice(0, n_phi // 2 + 1, n_phi // 2) if n_phi % 2 == 0 and n_phi > 1 else slice(0, 1)  # 0 (and π)
     missing = 0
-    for nodes, count in [(end, 1) for end in ends] + [(inner, 2)]:
+    for nodes, count in ((ends, 1), (inner, 2)):
         if phi[nodes].size:
             missing += count * sample_rho_hat(brdf, ci, co, phi[nodes], out=values[:, :, nodes])[1]
     return values, missing
