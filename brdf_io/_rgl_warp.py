@@ -42,6 +42,14 @@ def _phi_to_u(phi: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     return out
 
 
+def _clip01(x: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+    """``x`` clipped to [0, 1], into ``out`` (default: in place); the ufuncs themselves, without
+    ``np.clip``'s Python layers (several µs a call, and a block makes a dozen calls)."""
+    out = x if out is None else out
+    np.maximum(x, 0.0, out=out)
+    return np.minimum(out, 1.0, out=out)
+
+
 def _param_weights(grid: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Lower/upper grid index and the weight of the upper one for linear interpolation in
     a sorted 1-D parameter grid; clamped (constant) outside the grid."""
@@ -51,17 +59,18 @@ def _param_weights(grid: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndar
         return zero, zero, np.zeros(x.shape)
     lo = np.searchsorted(grid, x, side="right")
     lo -= 1
-    np.clip(lo, 0, n - 2, out=lo)
+    np.maximum(lo, 0, out=lo)
+    np.minimum(lo, n - 2, out=lo)
     w = np.subtract(x, np.take(grid, lo))
     w /= np.take(grid[1:] - grid[:-1], lo)
-    np.clip(w, 0.0, 1.0, out=w)
+    _clip01(w)
     return lo, lo + 1, w
 
 
 def _cells(u: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
     """Patch index (0..n−2) and fraction of unit coordinates u on an axis of n vertices
     spanning [0, 1]; u is clamped to [0, 1]."""
-    t = np.clip(u, 0.0, 1.0)
+    t = _clip01(u, np.empty(u.shape))
     t *= n - 1
     i = t.astype(np.intp)
     np.minimum(i, n - 2, out=i)
@@ -87,7 +96,7 @@ def _gather(rows: np.ndarray, slice_size: int, cell: np.ndarray,
     at = lo * slice_size
     at += cell
     out = np.take(rows, at, axis=0)
-    if np.any(w > 0):
+    if (w > 0).any():
         np.multiply(hi, slice_size, out=at)
         at += cell
         upper = np.take(rows, at, axis=0)
@@ -241,7 +250,7 @@ class _InverseWarp:
         sy *= fy
         sy /= H - 1
         sy += m0
-        return np.clip(sx, 0.0, 1.0, out=sx), np.clip(sy, 0.0, 1.0, out=sy)
+        return _clip01(sx), _clip01(sy)
 
 
 def _normalized(x: np.ndarray, y: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

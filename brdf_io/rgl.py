@@ -325,7 +325,7 @@ class RGLBRDF(BRDF):
         Wi, Wo = (np.ascontiguousarray(W) for W in ((V, L) if self.table_direction == "view" else (L, V)))
         out = np.zeros((L.shape[0], 3))
         above = (L[:, 2] > 0) & (V[:, 2] > 0)
-        if np.all(above):  # blocks of consecutive points (each point's value depends on that point alone)
+        if above.all():  # blocks of consecutive points (each point's value depends on that point alone)
             for start in range(0, L.shape[0], _BLOCK):
                 block = slice(start, start + _BLOCK)
                 for c, value in enumerate(self._eval_block(_columns(Wi[block]), _columns(Wo[block]))):
