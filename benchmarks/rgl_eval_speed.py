@@ -7,7 +7,8 @@ the surface, lengths 0.5-2: the normalization and the horizon test are exercised
 ``--repeats`` runs. Then the workloads that call it in a report: the order choice's reparameterized
 grid (``sample_rho_hat_grid`` on ``ReparamGrid.for_orders(100, 40)``, 224 x 96 x 176 nodes, half of
 them evaluated), the brute-force reference's pattern (3000 map directions against each of 40
-fixed views) and ``halfdiff_to_directions`` on the GL preview table's slices (90 x 90 x 180).
+fixed views), ``eval`` called on 100 pairs at a time (the fixed cost of a call) and
+``halfdiff_to_directions`` on the GL preview table's slices (90 x 90 x 180).
 
 ``--against DIR``: also time the ``shrmkit`` checkout in DIR (e.g. ``git worktree add /tmp/old
 HEAD~3``), interleaved with this one in the same process (old, new, old, new, ...), and print the
@@ -78,8 +79,8 @@ def best_of(runs: dict[str, Callable[[], np.ndarray]], repeats: int) -> dict[str
 
 
 def difference(a: np.ndarray, b: np.ndarray) -> str:
-    """Largest |a − b| / |a| (where a ≠ 0), or 'bit-identical'."""
-    if np.array_equal(a, b):
+    """Largest |a − b| / |a| (where a ≠ 0), or 'bit-identical' (the same bytes: −0.0 ≠ 0.0)."""
+    if a.shape == b.shape and a.dtype == b.dtype and a.tobytes() == b.tobytes():
         return "bit-identical"
     nonzero = a != 0
     rel = np.abs(a - b)[nonzero] / np.abs(a[nonzero])
@@ -93,6 +94,8 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--against", metavar="DIR", help="an older shrmkit checkout to compare with")
     parser.add_argument("--quick", action="store_true", help="one file, 3 repeats")
     args = parser.parse_args(argv)
+    if args.points < 100 or args.repeats < 1:
+        parser.error("--points must be at least 100 and --repeats at least 1")
     warnings.filterwarnings("ignore", message=".*RGB values are negative")  # either checkout's warning class
     files = sorted(RGL.glob("*.bsdf"))[: 1 if args.quick else None]
     repeats = 3 if args.quick else args.repeats
@@ -139,6 +142,8 @@ def main(argv: list[str] | None = None) -> None:
             "order choice's reparam grid (224x96x176)": lambda: rp.sample_rho_hat_grid(brdf, xi, xo, grid.n_phi)[0],
             "reference pattern (3000 dirs x 40 views)": lambda: np.stack(
                 [brdf.eval(map_dirs, np.broadcast_to(v, map_dirs.shape)) for v in views]),
+            "eval of 100 pairs, 200 calls (fixed cost)": lambda: np.stack(
+                [brdf.eval(L[k : k + 100], V[k : k + 100]) for k in range(0, min(20000, L.shape[0] - 99), 100)]),
             "halfdiff_to_directions (90 slices 90x180)": lambda: np.stack(
                 [np.stack(hd.halfdiff_to_directions(t, td, pd)) for t in th]),
         }
