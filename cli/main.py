@@ -37,6 +37,7 @@ from pathlib import Path
 
 from .._version import __version__
 from ..brdf_io.errors import ShrmError
+from .report import shared_state
 from .terms import in_cli_terms
 
 HERE = Path(__file__).parent
@@ -275,8 +276,6 @@ def _flushed() -> bool:
 
 def console_main() -> None:
     """The ``shrm`` console script: :func:`main`, then :func:`fast_exit` with its exit code."""
-    from .report import shared_state
-
     shared_state.CONSOLE_PROCESS = True  # this process shows no library docstrings (lean_matplotlib)
     code = main()
     fast_exit(code)

@@ -23,8 +23,9 @@ LAYERS = {"brdf_io": 0, "analysis": 1, "render": 2, "cli": 3}
 #: and trimesh and scipy.stats (0.9 s and 0.5 s CPU at start-up, for every verb that never uses them)
 LAZY_ALLOWED = ("vtkmodules", "vtk", "pyvista", "dask", "distributed", "embreex", "trimesh", "scipy")
 #: our modules that are a heavy dependency's front: the report's plots (matplotlib, ~0.5 s CPU that a report
-#: without plots does not pay)
-LAZY_ALLOWED_MODULES = ("shrmkit.cli.report.plots",)
+#: without plots does not pay), and matplotlib.artist itself (the console script's lean import,
+#: cli/report/shared_state.py)
+LAZY_ALLOWED_MODULES = ("shrmkit.cli.report.plots", "matplotlib.artist")
 
 
 def _modules() -> dict[str, Path]:

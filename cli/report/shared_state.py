@@ -49,6 +49,6 @@ def lean_matplotlib() -> None:
     user's process (``shrmkit.report`` in a notebook) is left alone."""
     if not CONSOLE_PROCESS or "matplotlib.artist" in sys.modules:
         return
-    import matplotlib.artist
+    import matplotlib.artist  # matplotlib (~0.5 s): only when a report draws its plots
 
     matplotlib.artist.kwdoc = _no_property_table
