@@ -275,7 +275,14 @@ def _flushed() -> bool:
 
 
 def console_main() -> None:
-    """The ``shrm`` console script: :func:`main`, then :func:`fast_exit` with its exit code."""
+    """The ``shrm`` console script: :func:`main`, then :func:`fast_exit` with its exit code.
+
+    BLAS gets one thread unless ``OPENBLAS_NUM_THREADS`` is set (before NumPy loads it): the
+    heavy stages already run single-threaded BLAS (``analysis.threads``), and each switch back to
+    two threads woke OpenBLAS's second thread to spin: 0.25 s CPU of a 3 s quick report, no wall
+    time gained (benchmarks/prefilter_speed.py, target rows). ducc0's threads are unaffected."""
+    if "numpy" not in sys.modules:
+        os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     shared_state.CONSOLE_PROCESS = True  # this process shows no library docstrings (lean_matplotlib)
     code = main()
     fast_exit(code)

@@ -4,6 +4,7 @@ live thread or child process gets the ordinary exit."""
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 
@@ -60,3 +61,32 @@ def test_closed_stderr_keeps_the_exit_code() -> None:
     assert proc.returncode == 2 and "no-such-model" in proc.stdout and "FAST-EXIT" in proc.stdout
     assert _run([], setup="sys.stderr = None").returncode == 0
 
+
+
+_BLAS = """
+import os, sys
+{env}
+sys.argv = ["shrm", "orders", "lambert", "--json"]
+from shrmkit.cli.main import console_main
+import shrmkit.cli.main as m
+real = m.main
+def main():
+    from threadpoolctl import threadpool_info
+    code = real()
+    blas = [p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"]
+    print("BLAS", os.environ.get("OPENBLAS_NUM_THREADS"), blas, file=sys.stderr)
+    return code
+m.main = main
+console_main()
+"""
+
+
+def test_console_script_gives_blas_one_thread_unless_the_user_set_it() -> None:
+    def blas(env: str) -> str:
+        proc = subprocess.run([sys.executable, "-c", _BLAS.format(env=env)], capture_output=True, text=True,
+                              timeout=120, env={k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"})
+        assert proc.returncode == 0, proc.stderr
+        return next(line for line in proc.stderr.splitlines() if line.startswith("BLAS"))
+
+    assert blas("") == "BLAS 1 [1]"
+    assert blas("os.environ['OPENBLAS_NUM_THREADS'] = '2'") == "BLAS 2 [2]"
