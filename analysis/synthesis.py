@@ -168,7 +168,7 @@ def global_shrm_latlong(
     # work buffers sized for p = P, reused by every p (views of their first elements): fresh
     # temporaries per p cost as much in first-touch page faults as the arithmetic itself
     n_max = height * (P + 1) * width * 3
-    buffers = {name: np.empty(n_max, np.float32) for name in ("re", "im", "t_re", "t_im", "v_re", "v_im")}
+    buffers = {name: np.empty(n_max, np.float32) for name in ("re", "im", "t_re", "t_im", "v_re")}
 
     def view(name: str, rows: int) -> np.ndarray:
         return buffers[name][: height * rows * width * 3].reshape(height, rows, width * 3)
@@ -209,16 +209,21 @@ def global_shrm_latlong(
         s_phi = np.arange(p + 1)[:, None] * phi[None, :]  # e^{−isβ}, per (s, column·channel)
         cos_sb = np.repeat(np.cos(s_phi), 3, axis=1).astype(np.float32)
         sin_sb = np.repeat(np.sin(s_phi), 3, axis=1).astype(np.float32)
-        value_re, value_im, tmp = view("v_re", p + 1), view("v_im", p + 1), re  # re is free again
-        np.multiply(t_re, cos_sb, out=value_re)
-        value_re += np.multiply(t_im, sin_sb, out=tmp)
-        np.multiply(t_im, cos_sb, out=value_im)
-        value_im -= np.multiply(t_re, sin_sb, out=tmp)
-        out[real_index(p, 0)] = value_re[:, 0].reshape(height, width, 3)
+        # B̃_ps = e^{−isβ} (t_re + i t_im), written into the output maps one s at a time (the row blocks
+        # stay in cache; the maps' first touch is this write)
+        row = view("v_re", 1)[:, 0]  # (H, column·channel) scratch
+        out[real_index(p, 0)] = t_re[:, 0].reshape(height, width, 3) * cos_sb[0].reshape(width, 3) + \
+            t_im[:, 0].reshape(height, width, 3) * sin_sb[0].reshape(width, 3)
         for s in range(1, p + 1):
-            sign = -1.0 if s % 2 else 1.0
-            np.multiply(value_re[:, s], np.float32(root2 * sign), out=out[real_index(p, s)].reshape(height, -1))
-            np.multiply(value_im[:, s], np.float32(-root2 * sign), out=out[real_index(p, -s)].reshape(height, -1))
+            scale = np.float32(root2 * (-1.0 if s % 2 else 1.0))
+            target = out[real_index(p, s)].reshape(height, -1)
+            np.multiply(t_re[:, s], cos_sb[s], out=target)
+            target += np.multiply(t_im[:, s], sin_sb[s], out=row)
+            target *= scale
+            target = out[real_index(p, -s)].reshape(height, -1)
+            np.multiply(t_im[:, s], cos_sb[s], out=target)
+            target -= np.multiply(t_re[:, s], sin_sb[s], out=row)
+            target *= -scale
     return out
 
 
