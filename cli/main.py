@@ -37,7 +37,7 @@ from pathlib import Path
 
 from .._version import __version__
 from ..brdf_io.errors import ShrmError
-from .report import shared_state
+from . import console_state
 from .terms import in_cli_terms
 
 HERE = Path(__file__).parent
@@ -283,7 +283,7 @@ def console_main() -> None:
     time gained (benchmarks/prefilter_speed.py, target rows). ducc0's threads are unaffected."""
     if "numpy" not in sys.modules:
         os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-    shared_state.CONSOLE_PROCESS = True  # this process shows no library docstrings (lean_matplotlib)
+    console_state.CONSOLE_PROCESS = True  # this process shows no library docstrings (lean_matplotlib)
     code = main()
     fast_exit(code)
     sys.exit(code)

@@ -22,7 +22,9 @@ from __future__ import annotations
 import sys
 import threading
 
-__all__ = ["MATPLOTLIB_LOCK", "OPENGL_LOCK", "CONSOLE_PROCESS", "lean_matplotlib"]
+from .. import console_state
+
+__all__ = ["MATPLOTLIB_LOCK", "OPENGL_LOCK", "lean_matplotlib"]
 
 #: Held while any matplotlib figure of a report is created, drawn and saved.
 MATPLOTLIB_LOCK = threading.RLock()
@@ -30,24 +32,19 @@ MATPLOTLIB_LOCK = threading.RLock()
 #: Held while a preview is rendered (VTK offscreen context or the CPU fallback).
 OPENGL_LOCK = threading.RLock()
 
-#: True in the ``shrm`` console script's own process (set by ``cli.main.console_main``): nothing
-#: there shows matplotlib's docstrings (:func:`lean_matplotlib`).
-CONSOLE_PROCESS = False
-
-
 def _no_property_table(artist: object) -> str:
     return ""
 
 
 def lean_matplotlib() -> None:
     """Before matplotlib is first imported, and only in the console script's process
-    (:data:`CONSOLE_PROCESS`): skip the property tables matplotlib writes into the docstring of
+    (``cli.console_state.CONSOLE_PROCESS``): skip the property tables matplotlib writes into the docstring of
     every ``Artist`` subclass's ``set`` while importing (``matplotlib.artist.kwdoc``: ~0.14 s CPU of
     the ~0.45 s import of ``matplotlib.figure`` and the Agg backend, matplotlib 3.11, this
     project's 2-core machine). Only those docstrings become empty: signatures, properties and
     drawing are unchanged (tests/cli/test_lean_matplotlib.py compares the PNG bytes). A library
     user's process (``shrmkit.report`` in a notebook) is left alone."""
-    if not CONSOLE_PROCESS or "matplotlib.artist" in sys.modules:
+    if not console_state.CONSOLE_PROCESS or "matplotlib.artist" in sys.modules:
         return
     import matplotlib.artist  # matplotlib (~0.5 s): only when a report draws its plots
 

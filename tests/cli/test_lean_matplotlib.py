@@ -7,6 +7,7 @@ import json
 import subprocess
 import sys
 
+from shrmkit.cli import console_state
 from shrmkit.cli.report import shared_state
 
 #: a small report document with the fields the energy and accuracy-by-P plots read
@@ -19,8 +20,9 @@ _DOC = {
 
 _DRAW = """
 import hashlib, json, sys
+from shrmkit.cli import console_state
 from shrmkit.cli.report import shared_state
-shared_state.CONSOLE_PROCESS = {console}
+console_state.CONSOLE_PROCESS = {console}
 shared_state.lean_matplotlib()
 from shrmkit.cli.report.plots import make_plots
 import matplotlib.lines
@@ -48,7 +50,7 @@ def test_lean_import_draws_the_same_bytes_and_only_in_the_console_process() -> N
 
 def test_library_process_is_left_alone() -> None:
     # this test process is not the console script: nothing is patched even when asked
-    assert shared_state.CONSOLE_PROCESS is False
+    assert console_state.CONSOLE_PROCESS is False
     shared_state.lean_matplotlib()
     import matplotlib.artist
 
