@@ -251,7 +251,8 @@ class RGLBRDF(BRDF):
         square, with ``W_i`` the table direction (L when ``table_direction="light"``):
         the half vector's unit coordinates u (N, 2) and the inverse-warped sample
         s = W⁻¹_{θ_i}(u) (N, 2), each as (x = θ part, y = φ part)."""
-        W_i, W_o = (np.asarray(w, dtype=np.float64).reshape(-1, 3) for w in (W_i, W_o))
+        W_i, W_o = (w.reshape(-1, 3) for w in np.broadcast_arrays(np.asarray(W_i, dtype=np.float64),
+                                                                 np.asarray(W_o, dtype=np.float64)))
         c = self._coordinates(_columns(W_i), _columns(W_o))
         return np.stack(c.u, axis=-1), np.stack(c.s, axis=-1)
 

@@ -282,7 +282,8 @@ def fit_coefficients(
     Raises
     ------
     BadInputError
-        When not even one map of ``min_rows`` rows fits.
+        When not even one map of ``min_rows`` rows fits, or when the maps must be reduced and
+        hold NaN or infinite values.
     """
     n, H, W, _ = coeffs.shape
     if n != (P + 1) ** 2:
@@ -301,6 +302,10 @@ def fit_coefficients(
 
     if _atlas_fits(P, H, W, max_bytes, max_edge):
         return CoefficientFit(np.asarray(coeffs, np.float32), P, source)
+    if not (np.isfinite(np.max(coeffs)) and np.isfinite(np.min(coeffs))):
+        # a NaN or inf texel makes every resampled candidate's error NaN: the choice would be the NaN's
+        raise BadInputError(None, "the SHRM's coefficient maps hold NaN or infinite values: they cannot be "
+                            "fitted to the page budget")
     dirs = _sphere_samples(samples)
     y0, _, x0, _, _, _ = bilinear_corners(dirs, H, W)
     dirs = dirs[np.argsort(y0 * W + x0, kind="stable")]  # the same set, the texels read in memory order

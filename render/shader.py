@@ -59,7 +59,9 @@ def cached_light_shading(shrm: SHRM, views: Sequence[tuple[np.ndarray, float]] |
 
     ``views`` (``light_shading(views=)``; None: any view, the whole table): a shading made before
     is reused when its table holds every θ_d row these views read (a whole table, or one made for
-    views whose rows include theirs, ``_brdf_table.table_covers``); else one is made for them.
+    views whose rows include theirs, ``_brdf_table.table_covers``); else one is made for them, or,
+    when a partial table was made before, the whole table, which then replaces it (at most one
+    table per SHRM is kept).
     """
     if not shrm.has_lights:
         return None
@@ -69,9 +71,13 @@ def cached_light_shading(shrm: SHRM, views: Sequence[tuple[np.ndarray, float]] |
     for earlier in made:
         if earlier.table is None or table_covers(earlier.table, theta_d):
             return earlier
+    if made:
+        # views its partial table lacks: the whole table from now on, read by any view (an SHRM rendered
+        # frame by frame from a moving camera would otherwise keep a new partial table per frame)
+        views = None
     shading = light_shading(shrm, views=views)
     assert shading is not None  # has_lights
-    made.append(shading)
+    made[:] = [shading] if views is None else [*made, shading]
     return shading
 
 __all__ = [

@@ -326,6 +326,10 @@ def test_uniform_vndf_is_the_identity_warp_closed_form(tmp_path: Path) -> None:
     expected, u_expected = closed_form(L, V)
     np.testing.assert_allclose(lit.eval(L, V), expected, rtol=1e-5, atol=1e-7)
     np.testing.assert_allclose(lit.warped_coordinates(L, V)[0], u_expected, atol=1e-12)
+    # one direction against many broadcasts as the pairs written out (the reader's callers pass either)
+    u_one, s_one = brdf.warped_coordinates(V[0], L[:5])
+    u_all, s_all = brdf.warped_coordinates(np.repeat(V[:1], 5, axis=0), L[:5])
+    assert np.array_equal(u_one, u_all) and np.array_equal(s_one, s_all) and u_one.shape == (5, 2)
 
 
 def _bilinear_density(vertices: np.ndarray):

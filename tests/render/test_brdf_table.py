@@ -188,8 +188,8 @@ def test_views_table_reads_as_the_whole_one_at_every_pixel_of_the_preview():
 
 def test_light_shading_cache_keys_on_the_views_the_table_was_made_for():
     """``cached_light_shading``: a table made for one camera is not handed to a render from another
-    whose θ_d rows it lacks (a new one is made, covering them); it is reused for views within its
-    rows; without views (any camera) the whole table."""
+    whose θ_d rows it lacks (the whole table is made then, and replaces it); it is reused for views
+    within its rows."""
     from shrmkit.render._brdf_table import table_covers, theta_d_ranges
     from shrmkit.render.camera import Camera
     from shrmkit.render.shader import cached_light_shading
@@ -201,11 +201,16 @@ def test_light_shading_cache_keys_on_the_views_the_table_was_made_for():
     first = cached_light_shading(shrm, ortho)
     assert first.table.rows is not None
     assert not table_covers(first.table, theta_d_ranges(shrm.lights.directions, behind))
+    assert cached_light_shading(shrm, ortho) is first  # made once per views
     second = cached_light_shading(shrm, behind)
     assert second is not first and table_covers(second.table, theta_d_ranges(shrm.lights.directions, behind))
-    assert cached_light_shading(shrm, ortho) is first  # made once per views
-    anyview = cached_light_shading(shrm)
-    assert anyview not in (first, second) and anyview.table.rows is None
+    # a second set of views it lacks: the whole table, which replaces the partial one (one table kept per
+    # SHRM, however many cameras a frame-by-frame caller brings)
+    assert second.table.rows is None
+    assert cached_light_shading(shrm, ortho) is second and cached_light_shading(shrm) is second
+    for k in range(6):  # a camera circling the sphere: nothing new is made
+        around = [Camera.looking_at(view=[np.cos(k), np.sin(k), 0.3], projection="ortho").view_cone(np.zeros(3), 1.0)]
+        assert cached_light_shading(shrm, around) is second
 
 
 @pytest.mark.render

@@ -13,6 +13,7 @@ import sys
 import numpy as np
 import pytest
 
+from shrmkit.brdf_io.errors import BadInputError
 from shrmkit.brdf_io.latlong import bilinear_lookup, pixel_directions, row_edges_cos
 from shrmkit.render._page_fit import (
     _area_resample,
@@ -182,6 +183,13 @@ def test_budget_rule_is_the_least_error_over_every_candidate() -> None:
             np.testing.assert_allclose(fit.coeffs, _dense_resample(coeffs[:(p + 1) ** 2], *shape), rtol=0, atol=2e-6)
         winners.add((p, shape[0] == H))
     assert len(winners) >= 3, winners
+    # one NaN or inf texel would decide the choice (every resampled candidate's error NaN): refused
+    for bad in (np.nan, np.inf, -np.inf):
+        broken = coeffs.copy()
+        broken[8, 3, 5, 1] = bad
+        with pytest.raises(BadInputError, match="NaN or infinite"):
+            fit_coefficients(broken, P, 27648, samples=512)
+    assert fit_coefficients(broken, P, 10**7).P == P  # maps that fit as they are: nothing is fitted
 
 
 def test_a_view_page_imports_no_scipy() -> None:
