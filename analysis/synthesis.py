@@ -110,11 +110,19 @@ def _store_spin_field(out: np.ndarray, p: int, s: int, c: int, P: int, field: np
 
 def _synthesize_latlong(alm: np.ndarray, spin: int, lmax: int, height: int, width: int, nthreads: int) -> np.ndarray:
     """One ducc0 synthesis on the pixel-centred lat-long grid (F1 rings, phi0 = π/W): the real
-    map (spin 0) or Q, U of a gradient-only spin field, shape (1 or 2, H, W)."""
+    map (spin 0) or Q, U of a gradient-only spin field, shape (1 or 2, H, W). Maps of fewer than
+    :data:`THREADED_ROWS` rows are synthesized on one thread, whatever ``nthreads`` says."""
     return ducc0.sht.experimental.synthesis_2d(
         alm=alm[None, :], spin=spin, lmax=lmax, geometry="F1", ntheta=height, nphi=width,
-        phi0=np.pi / width, nthreads=nthreads, mode="STANDARD" if spin == 0 else "GRAD_ONLY",
+        phi0=np.pi / width, nthreads=nthreads if height >= THREADED_ROWS else 1,
+        mode="STANDARD" if spin == 0 else "GRAD_ONLY",
     )
+
+
+#: Below this many rows a synthesis runs on one thread: a second thread of ducc0 cost more CPU than it
+#: saved wall time (88 rows, degree 15: 195 µs CPU on one thread, 204–322 µs on two, the same wall time;
+#: 125 rows, degree 31: even; 256 rows, degree 64: two threads 9 % faster; this project's 2-core machine)
+THREADED_ROWS = 192
 
 
 def local_shrm_fast(
