@@ -80,6 +80,7 @@ from shrmkit.analysis.shrm import SHRM, prefilter
 from shrmkit.analysis.view_bands import DEFAULT_BAND_EDGES_DEG
 from shrmkit.brdf_io.envmap import EnvironmentMap, load_env
 from shrmkit.brdf_io.latlong import pixel_angles, pixel_directions
+from shrmkit.brdf_io.merl import write_merl
 from shrmkit.brdf_io.specs import load_brdf
 
 __all__ = ["main"]
@@ -100,6 +101,8 @@ QUICK_TASKS = [("sky", "microfacet:sigma=0.1"), ("sky", "phong:s=512"), ("venice
 ANALYTIC_TARGET_S, RGL_TARGET_S, RATIO_TARGET = 0.3, 3.0, 3.0
 #: `shrm report --quick`: CPU seconds (analytic spec, measured table) and peak memory (issue 22)
 QUICK_ANALYTIC_S, QUICK_TABLE_S, QUICK_PEAK_MB = 3.0, 5.0, 512
+#: the analytic model tabulated at MERL's size for the MERL row of the quick-report targets
+MERL_TABLE_SPEC = "cook-torrance:alpha=0.1,dist=ggx"
 #: what every report loads before it computes anything (the floor under its CPU time)
 REPORT_IMPORTS = ("import shrmkit.cli.cmd_report, shrmkit.cli.report.collect, shrmkit.cli.report.writer, "
                   "shrmkit.render.vtk_renderer, matplotlib.figure, matplotlib.backends.backend_agg, "
@@ -667,6 +670,12 @@ def targets_table(args: argparse.Namespace) -> list[Target]:
         sharpest = next((f for f in files if f.name == SHARPEST_RGL), files[0])
         rows.append(target_quick_report(str(sharpest), f"RGL table {sharpest.name}", QUICK_TABLE_S, repeats))
         console.print("  done quick report (RGL)", style="dim")
+    # a MERL-size table (90 × 90 × 180 samples, 35 MB): issue 22's row "quick report of a MERL-size GGX
+    # table", written here from the model (no MERL file is in ../shared/data)
+    with tempfile.TemporaryDirectory() as folder:
+        merl = write_merl(Path(folder) / "ggx_alpha0.1.binary", load_brdf(MERL_TABLE_SPEC))
+        rows.append(target_quick_report(str(merl), f"MERL table of {MERL_TABLE_SPEC}", QUICK_TABLE_S, repeats))
+    console.print("  done quick report (MERL)", style="dim")
     table = Table(title="(c) targets of issue 22 (measured in this run)", box=None, title_justify="left")
     for col in ("what", "measured", "target", "met", "why not (measured)"):
         table.add_column(col, justify="left", overflow="fold")
