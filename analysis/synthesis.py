@@ -176,7 +176,8 @@ def global_shrm_latlong(
     # work buffers sized for p = P, reused by every p (views of their first elements): fresh
     # temporaries per p cost as much in first-touch page faults as the arithmetic itself
     n_max = height * (P + 1) * width * 3
-    buffers = {name: np.empty(n_max, np.float32) for name in ("re", "im", "t_re", "t_im", "v_re")}
+    buffers = {name: np.empty(n_max, np.float32) for name in ("re", "im", "t_re", "t_im")}
+    row = np.empty((height, width * 3), np.float32)  # scratch of one s's (row, column·channel) products
 
     def view(name: str, rows: int) -> np.ndarray:
         return buffers[name][: height * rows * width * 3].reshape(height, rows, width * 3)
@@ -219,7 +220,6 @@ def global_shrm_latlong(
         sin_sb = np.repeat(np.sin(s_phi), 3, axis=1).astype(np.float32)
         # B̃_ps = e^{−isβ} (t_re + i t_im), written into the output maps one s at a time (the row blocks
         # stay in cache; the maps' first touch is this write)
-        row = view("v_re", 1)[:, 0]  # (H, column·channel) scratch
         out[real_index(p, 0)] = t_re[:, 0].reshape(height, width, 3) * cos_sb[0].reshape(width, 3) + \
             t_im[:, 0].reshape(height, width, 3) * sin_sb[0].reshape(width, 3)
         for s in range(1, p + 1):

@@ -326,18 +326,13 @@ class RGLBRDF(BRDF):
         Wi, Wo = (np.ascontiguousarray(W) for W in ((V, L) if self.table_direction == "view" else (L, V)))
         out = np.zeros((L.shape[0], 3))
         above = (L[:, 2] > 0) & (V[:, 2] > 0)
-        if above.all():  # blocks of consecutive points (each point's value depends on that point alone)
-            for start in range(0, L.shape[0], _BLOCK):
-                block = slice(start, start + _BLOCK)
-                for c, value in enumerate(self._eval_block(_columns(Wi[block]), _columns(Wo[block]))):
-                    out[block, c] = value
-        else:  # blocks of the pairs above the surface; the others keep their 0
-            rows = np.flatnonzero(above)
-            for start in range(0, rows.size, _BLOCK):
-                sel = rows[start : start + _BLOCK]
-                wi, wo = (_columns(W, sel) for W in (Wi, Wo))
-                for c, value in enumerate(self._eval_block(wi, wo)):
-                    out[sel, c] = value
+        # blocks of the pairs above the surface (the others keep their 0): slices of consecutive pairs when
+        # all are (views, no copy), else of their indices
+        rows = None if above.all() else np.flatnonzero(above)
+        for start in range(0, L.shape[0] if rows is None else rows.size, _BLOCK):
+            sel = slice(start, start + _BLOCK) if rows is None else rows[start : start + _BLOCK]
+            for c, value in enumerate(self._eval_block(_columns(Wi, sel), _columns(Wo, sel))):
+                out[sel, c] = value
         return out.reshape(*shape, 3)
 
 
@@ -345,10 +340,12 @@ class RGLBRDF(BRDF):
 _Vectors = tuple[np.ndarray, np.ndarray, np.ndarray]
 
 
-def _columns(W: np.ndarray, rows: np.ndarray | None = None) -> _Vectors:
-    """The components (x, y, z) of direction rows W (N, 3, C-contiguous), or of its rows at the
-    indices ``rows``, as strided views."""
-    if rows is not None:
+def _columns(W: np.ndarray, rows: np.ndarray | slice | None = None) -> _Vectors:
+    """The components (x, y, z) of direction rows W (N, 3, C-contiguous), or of its rows ``rows``
+    (a slice: a view; indices: a copy), as strided views."""
+    if isinstance(rows, slice):
+        W = W[rows]
+    elif rows is not None:
         W = np.take(W, rows, axis=0)
     return W[:, 0], W[:, 1], W[:, 2]
 

@@ -153,6 +153,17 @@ def _source_rows(above: np.ndarray) -> np.ndarray:
     return np.where(has[None, :] & (rows > last[None, :]), last[None, :], rows)
 
 
+def _rho_cos_cos(brdf: BRDF, L: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, int]:
+    """ρ cos θ_L cos θ_V (float64 (n, 3), what the table holds) at (n, 3) L, V, 0 where the BRDF has
+    no data or gives NaN, and the count of those samples."""
+    rho, none = brdf.eval_counted(L, V)
+    rho = np.asarray(rho, dtype=np.float64).reshape(len(L), 3)
+    bad = ~np.isfinite(rho)
+    rho[bad] = 0.0
+    rho *= (np.maximum(L[:, 2], 0.0) * np.maximum(V[:, 2], 0.0))[:, None]
+    return rho, int(none) + int(np.any(bad, axis=-1).sum())
+
+
 #: Samples evaluated per call by ``tabulate_brdf(only=)`` (at most about this many, 48 bytes each in L and V).
 _EVAL_BATCH = 1 << 16
 
@@ -189,13 +200,8 @@ def tabulate_brdf(brdf: BRDF, shape: Sequence[int] | None = None, periodic: bool
 
     def evaluate() -> None:
         nonlocal missing
-        Lb, Vb = np.concatenate([p[4] for p in pending]), np.concatenate([p[5] for p in pending])
-        rho, none = brdf.eval_counted(Lb, Vb)
-        rho = np.asarray(rho, dtype=np.float64).reshape(len(Lb), 3)
-        bad = ~np.isfinite(rho)
-        missing += int(none) + int(np.any(bad, axis=-1).sum())
-        rho[bad] = 0.0
-        rho *= (np.maximum(Lb[:, 2], 0.0) * np.maximum(Vb[:, 2], 0.0))[:, None]  # ρ cos θ_L cos θ_V
+        rho, none = _rho_cos_cos(brdf, np.concatenate([p[4] for p in pending]), np.concatenate([p[5] for p in pending]))
+        missing += none
         start = 0
         for i, j, k, position, Lp, _ in pending:
             values[i, j, k] = rho[start + position]
@@ -208,12 +214,9 @@ def tabulate_brdf(brdf: BRDF, shape: Sequence[int] | None = None, periodic: bool
         L, V = halfdiff_to_directions(th[i], td[:, None], pd[None, :])
         above = (L[..., 2] > 0.0) & (V[..., 2] > 0.0)
         if only is None:
-            rho, none = brdf.eval_counted(L.reshape(-1, 3), V.reshape(-1, 3))
-            rho = np.asarray(rho, dtype=np.float64).reshape(nd, npd, 3)
-            bad = ~np.isfinite(rho)
-            missing += int(none) + int(np.any(bad, axis=-1).sum())
-            rho[bad] = 0.0
-            rho *= (np.maximum(L[..., 2], 0.0) * np.maximum(V[..., 2], 0.0))[..., None]  # ρ cos θ_L cos θ_V
+            rho, none = _rho_cos_cos(brdf, L.reshape(-1, 3), V.reshape(-1, 3))
+            missing += none
+            rho = rho.reshape(nd, npd, 3)
             # below the surface: the nearest sample above it along θ_d (θ_d rises toward the horizon)
             values[i] = rho[_source_rows(above), np.arange(npd)]
             continue

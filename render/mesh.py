@@ -83,10 +83,22 @@ class Mesh:
     def n_triangles(self) -> int:
         return int(self.faces.shape[0])
 
+    def bounding_sphere(self) -> tuple[np.ndarray, float]:
+        """(centre (3,), radius): :func:`bounding_sphere` of the vertices."""
+        return bounding_sphere(self.vertices)
+
     def transformed(self, *, scale: float = 1.0, translate: ArrayLike = (0.0, 0.0, 0.0)) -> Mesh:
         """A copy scaled uniformly about the origin and translated (placing objects in a scene)."""
         t = np.asarray(translate, dtype=np.float64).reshape(3)
         return Mesh(self.vertices * float(scale) + t, self.faces, self.normals, self.name)
+
+
+def bounding_sphere(vertices: np.ndarray) -> tuple[np.ndarray, float]:
+    """The sphere about the centre of the vertices' box through the farthest vertex: (centre (3,),
+    radius). What framing, culling and a render's cone of views all take as a mesh's extent."""
+    v = np.asarray(vertices, dtype=np.float64)
+    centre = 0.5 * (v.min(axis=0) + v.max(axis=0))
+    return centre, float(np.max(np.linalg.norm(v - centre, axis=1)))
 
 
 def _face_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
@@ -135,8 +147,7 @@ def make_mesh(
         n = n[used]
     n = _unit_normals(v, f, n)
     if normalize:
-        center = 0.5 * (v.min(axis=0) + v.max(axis=0))
-        radius = float(np.max(np.linalg.norm(v - center, axis=1)))
+        center, radius = bounding_sphere(v)
         v = (v - center) / radius
     return Mesh(v, f, n, name)
 

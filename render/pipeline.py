@@ -96,9 +96,7 @@ def view_cones(mesh: Mesh, cameras: Sequence[Camera], env_rotation: Any = None) 
     rotation (``env_rotation`` as :func:`render_frames`'). What ``SHRMRenderer.add_object(views=)``
     takes.
     """
-    vertices = np.asarray(mesh.vertices, dtype=np.float64)
-    centre = 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))
-    radius = float(np.max(np.linalg.norm(vertices - centre, axis=1)))
+    centre, radius = mesh.bounding_sphere()  # the renderer's (SHRMRenderer.add_object)
     cones = []
     for cam, q in zip(cameras, _rotations(env_rotation, len(cameras)), strict=True):
         axis, half_angle = cam.view_cone(centre, radius)

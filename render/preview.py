@@ -122,8 +122,7 @@ def render_previews(
 
 def unit_mesh(mesh: Mesh) -> Mesh:
     """The mesh moved and scaled into the unit sphere about the origin (what the camera frames)."""
-    centre = 0.5 * (mesh.vertices.min(axis=0) + mesh.vertices.max(axis=0))
-    radius = float(np.max(np.linalg.norm(mesh.vertices - centre, axis=1)))
+    centre, radius = mesh.bounding_sphere()
     return mesh.transformed(scale=1.0 / radius, translate=-centre / radius) if radius > 0 else mesh
 
 

@@ -66,18 +66,17 @@ def cached_light_shading(shrm: SHRM, views: Sequence[tuple[np.ndarray, float]] |
     if not shrm.has_lights:
         return None
     assert shrm.lights is not None  # has_lights
-    made: list[LightShading] = _LIGHT_SHADINGS.setdefault(shrm, [])
-    theta_d = None if views is None else theta_d_ranges(shrm.lights.directions, views)
-    for earlier in made:
+    earlier: LightShading | None = _LIGHT_SHADINGS.get(shrm)
+    if earlier is not None:
+        theta_d = None if views is None else theta_d_ranges(shrm.lights.directions, views)
         if earlier.table is None or table_covers(earlier.table, theta_d):
             return earlier
-    if made:
         # views its partial table lacks: the whole table from now on, read by any view (an SHRM rendered
         # frame by frame from a moving camera would otherwise keep a new partial table per frame)
         views = None
     shading = light_shading(shrm, views=views)
     assert shading is not None  # has_lights
-    made[:] = [shading] if views is None else [*made, shading]
+    _LIGHT_SHADINGS[shrm] = shading
     return shading
 
 __all__ = [

@@ -199,9 +199,7 @@ class SHRMRenderer:
         shading = record.prepare(model, mesh, visibility_sh, normalized_visibility, views=views)
         actor, tex, data, buf = self._actor(mesh, shading)
         self._renderer.AddActor(actor)
-        lo, hi = mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)
-        center = 0.5 * (lo + hi)
-        radius = float(np.max(np.linalg.norm(mesh.vertices - center, axis=1)))
+        center, radius = mesh.bounding_sphere()
         obj = _Object(mesh, model, record, actor, tex, data, buf, shading.state, center, radius, closed_outward(mesh))
         if self._gbuffer is not None and shading.deferred is not None:
             obj.deferred = _deferred_actors(self._renderer, self._gbuffer, actor, tex, shading, len(self._objects),
