@@ -109,7 +109,7 @@ def _mesh_bytes(n_vertices: int, n_triangles: int) -> int:
 def _mesh_payload(mesh: Mesh) -> dict[str, Any]:
     nv = len(mesh.vertices)
     index_type = "uint16" if nv <= 65535 else "uint32"
-    centre = 0.5 * (mesh.vertices.min(axis=0) + mesh.vertices.max(axis=0))
+    centre, _ = mesh.bounding_sphere()
     return {
         "name": mesh.name,
         "vertices": nv,
